@@ -1,0 +1,3 @@
+from swarmnav.cli import main
+import sys
+sys.exit(main())

@@ -1,0 +1,202 @@
+"""The ``swarmnav`` command: a thin layer over the library.
+
+Bad input (unknown scene, malformed file, unknown ``--set`` key, ...) ends with one line on
+stderr and exit code 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Sequence
+
+from swarmnav.errors import ConfigError, SwarmnavError
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # one line, exit 2 (argparse prints the usage block too)
+        raise ConfigError(f"{self.prog}: {message}")
+
+
+def _parse_sets(items: Sequence[str] | None) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in items or ():
+        key, eq, val = item.partition("=")
+        if not eq or not key.strip():
+            raise ConfigError(f"--set expects key=value, got {item!r}")
+        out[key.strip()] = val.strip()
+    return out
+
+
+def _cmd_scenarios(args) -> int:
+    from swarmnav.world.generators import GENERATORS
+    from swarmnav.world.scenario import builtin_names, load_scenario
+
+    if args.action is None:
+        for name in builtin_names():
+            s = load_scenario(name)
+            print(f"{name:28s} N={s.n:<4d} goal=({s.goal[0]:g}, {s.goal[1]:g}) m  {s.description}")
+        print("generators: " + ", ".join(f"{g}:key=value,..." for g in GENERATORS))
+        return 0
+    if args.action != "show" or not args.name:
+        raise ConfigError("usage: swarmnav scenarios [show NAME [--plot PNG]]")
+    s = load_scenario(args.name)
+    print(json.dumps(s.to_dict(), indent=2))
+    if args.plot:
+        from swarmnav.viz import plot_scene
+
+        print(f"wrote {plot_scene(s, args.plot)}", file=sys.stderr)
+    return 0
+
+
+def _cmd_methods(args) -> int:
+    from swarmnav.methods import registry
+
+    for name in registry.names():
+        print(f"{name:10s} {registry.spec(name).description}")
+    return 0
+
+
+def _cmd_run(args) -> int:
+    from swarmnav.sim import run
+    from swarmnav.world.scenario import load_scenario
+
+    if (args.scenario is None) == (args.scenario_file is None):
+        raise ConfigError("run: give exactly one of --scenario NAME or --scenario-file PATH")
+    if args.steps < 1:
+        raise ConfigError(f"run: --steps must be >= 1, got {args.steps}")
+    params = _parse_sets(args.set)
+    n = params.pop("n", None)
+    scn = load_scenario(args.scenario_file or args.scenario, n=int(n) if n is not None else None)
+    progress = sys.stderr.isatty() and not args.quiet
+    res = run(args.method, scn, seed=args.seed, steps=args.steps, progress=progress, **params)
+    out = res.save(args.out)
+    m = res.metrics
+    print(f"{res.config['method']} on {scn.name}, seed {args.seed}, {args.steps} steps "
+          f"({args.steps * res.config['dt']:g} s simulated, {res.wall_time:.2f} s wall)")
+    print(f"  Y = {m['Y']:.0f}  R_goal = {m['R_goal']:.3f}  E_mean = {m['E_mean']:.3f} m  "
+          f"R_unsafe = {m['R_unsafe']:.3f}  d_clr_min = {m['d_clr_min']:.3f} m  L_mean = {m['L_mean']:.1f} m")
+    if args.plot:
+        from swarmnav.viz import plot_run
+
+        print(f"  figure: {plot_run(res, out / 'trajectory.png')}")
+    print(f"  wrote {out}/metrics.json, trajectory.npz, config.json")
+    return 0
+
+
+def _cmd_plot(args) -> int:
+    from swarmnav.sim import RunResult
+    from swarmnav.viz import plot_run
+
+    res = RunResult.load(args.dir)
+    out = args.out or Path(args.dir) / "trajectory.png"
+    print(f"wrote {plot_run(res, out)}")
+    return 0
+
+
+def _cmd_animate(args) -> int:
+    from swarmnav.sim import RunResult
+    from swarmnav.viz import animate_run
+
+    res = RunResult.load(args.dir)
+    print(f"wrote {animate_run(res, args.out, fps=args.fps)}")
+    return 0
+
+
+def _cmd_experiment(args) -> int:
+    from swarmnav.experiments import builtin_names, load_experiment, run_experiment
+
+    if args.list or not (args.name or args.spec):
+        for name in builtin_names():
+            print(name)
+        return 0
+    if args.out is None:
+        raise ConfigError("experiment: --out DIR is required")
+    if args.workers < 1:
+        raise ConfigError(f"experiment: --workers must be >= 1, got {args.workers}")
+    exp = load_experiment(args.spec or args.name, overrides=_parse_sets(args.set), seeds=args.seeds)
+    rows, summary = run_experiment(exp, args.out, workers=args.workers, save_runs=args.save_runs,
+                                   progress=not args.quiet)
+    failed = sum(r["status"] != "done" for r in rows)
+    print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/runs.csv, {args.out}/summary.csv")
+    for s in summary:
+        keys = [k for k in ("Y_mean", "R_goal_mean", "E_mean_mean", "R_unsafe_mean") if k in s]
+        print(f"  {s['variant']:32s} " + "  ".join(f"{k}={s[k]:.3f}" for k in keys))
+    return 1 if failed else 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from swarmnav._version import __version__
+
+    p = _Parser(prog="swarmnav", description="Simulate and compare multi-UAV swarm navigation (HES, SPH, HWVEM).")
+    p.add_argument("--version", action="version", version=f"swarmnav {__version__}")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+
+    s = sub.add_parser("scenarios", help="list built-in scenes, or show one")
+    s.add_argument("action", nargs="?", choices=["show"])
+    s.add_argument("name", nargs="?")
+    s.add_argument("--plot", metavar="PNG", help="draw the scene to this PNG file")
+    s.set_defaults(fn=_cmd_scenarios)
+
+    s = sub.add_parser("methods", help="list registered methods")
+    s.set_defaults(fn=_cmd_methods)
+
+    s = sub.add_parser("run", help="run one simulation and write a run directory")
+    s.add_argument("--method", required=True)
+    s.add_argument("--scenario", metavar="NAME", help="built-in scene or generator spec")
+    s.add_argument("--scenario-file", metavar="PATH", help="a .toml scene file")
+    s.add_argument("--seed", type=int, default=1)
+    s.add_argument("--steps", type=int, default=1000)
+    s.add_argument("--out", required=True, metavar="DIR")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE", help="method parameter (repeatable); n=N resizes the swarm")
+    s.add_argument("--plot", action="store_true", help="also draw DIR/trajectory.png")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.set_defaults(fn=_cmd_run)
+
+    s = sub.add_parser("plot", help="draw a run directory like HES Figure 3")
+    s.add_argument("dir")
+    s.add_argument("--out", metavar="PNG")
+    s.set_defaults(fn=_cmd_plot)
+
+    s = sub.add_parser("animate", help="render a run directory as .gif or .mp4")
+    s.add_argument("dir")
+    s.add_argument("--out", required=True, metavar="FILE")
+    s.add_argument("--fps", type=int, default=20)
+    s.set_defaults(fn=_cmd_animate)
+
+    s = sub.add_parser("experiment", help="run a declared experiment over seeds")
+    s.add_argument("name", nargs="?")
+    s.add_argument("--spec", metavar="FILE", help="a user experiment spec (.toml)")
+    s.add_argument("--list", action="store_true")
+    s.add_argument("--seeds", help="e.g. 1-10 or 1,3,5 (default: the spec's)")
+    s.add_argument("--workers", type=int, default=1)
+    s.add_argument("--set", action="append", metavar="KEY=VALUE", help="override for every variant; a|b|c sweeps")
+    s.add_argument("--out", metavar="DIR")
+    s.add_argument("--save-runs", action="store_true", help="also keep every run directory under DIR/runs")
+    s.add_argument("--quiet", action="store_true")
+    s.set_defaults(fn=_cmd_experiment)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        if not getattr(args, "fn", None):
+            parser.print_help()
+            return EXIT_USAGE
+        return args.fn(args)
+    except SwarmnavError as e:
+        print(f"swarmnav: error: {e}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("swarmnav: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,162 @@
+"""Declarative experiment specs: a named set of run configurations (variants) x seeds.
+
+A spec is a TOML file (shipped ones live in ``swarmnav/experiments/specs``)::
+
+    name = "apf-scenes"
+    method = "apf"             # defaults inherited by every variant
+    scenario = "default_corridor"
+    steps = 1000
+    seeds = "1-10"
+    [params]                   # method parameters common to all variants
+    k_att = 2.0
+    [[variants]]
+    name = "gates"
+    scenario = "narrow_alternating_gates"
+    [variants.params]
+    k_rep = 4.0
+
+``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
+``n`` (swarm size) or a method parameter. ``key=a|b|c`` sweeps: every variant is repeated for
+each value, and the value is appended to the variant name.
+"""
+
+from __future__ import annotations
+
+import itertools
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from swarmnav.errors import ConfigError
+
+_SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "seeds", "n", "params", "variants"}
+_VARIANT_KEYS = {"name", "method", "scenario", "steps", "n", "params"}
+_RUN_KEYS = {"method", "scenario", "steps", "n"}
+
+
+@dataclass(frozen=True, slots=True)
+class Variant:
+    """One run configuration; runs are ``(variant, seed)`` pairs."""
+
+    name: str
+    method: str
+    scenario: str
+    steps: int
+    n: int | None = None
+    params: dict[str, Any] = field(default_factory=dict)
+
+    def columns(self) -> dict[str, Any]:
+        """Config columns of runs.csv for this variant."""
+        cols = {"variant": self.name, "method": self.method, "scenario": self.scenario, "steps": self.steps,
+                "n": self.n if self.n is not None else ""}
+        cols.update({f"param.{k}": v for k, v in sorted(self.params.items())})
+        return cols
+
+
+@dataclass(frozen=True, slots=True)
+class Experiment:
+    name: str
+    description: str
+    variants: tuple[Variant, ...]
+    seeds: tuple[int, ...]
+
+
+def builtin_names() -> list[str]:
+    files = resources.files("swarmnav.experiments").joinpath("specs").iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
+def load_experiment(name_or_path: str, *, overrides: dict[str, str] | None = None,
+                    seeds: str | None = None) -> Experiment:
+    """Load a shipped experiment by name or a spec file, apply ``--set`` overrides and seeds."""
+    p = Path(name_or_path)
+    if name_or_path.endswith(".toml") or p.exists():
+        try:
+            text, source = p.read_text(encoding="utf-8"), str(p)
+        except OSError as e:
+            raise ConfigError(f"{p}: cannot read experiment spec: {e}") from None
+    elif name_or_path in builtin_names():
+        text = resources.files("swarmnav.experiments").joinpath("specs", f"{name_or_path}.toml").read_text("utf-8")
+        source = f"{name_or_path}.toml"
+    else:
+        raise ConfigError(f"unknown experiment '{name_or_path}' (known: {', '.join(builtin_names())})")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(f"{source}: malformed TOML: {e}") from None
+    return from_dict(data, source, overrides or {}, seeds)
+
+
+def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | None) -> Experiment:
+    bad = set(data) - _SPEC_KEYS
+    if bad:
+        raise ConfigError(f"{source}: unknown key(s) {sorted(bad)} (allowed: {sorted(_SPEC_KEYS)})")
+    name = data.get("name", Path(source).stem)
+    base = {k: data[k] for k in _RUN_KEYS if k in data}
+    base_params = dict(data.get("params", {}))
+    raw_variants = data.get("variants") or [{"name": "default"}]
+    variants: list[Variant] = []
+    for k, v in enumerate(raw_variants):
+        bad = set(v) - _VARIANT_KEYS
+        if bad:
+            raise ConfigError(f"{source}: variants[{k}] unknown key(s) {sorted(bad)} (allowed: {sorted(_VARIANT_KEYS)})")
+        cfg = {**base, **{kk: v[kk] for kk in _RUN_KEYS if kk in v}}
+        for req in ("method", "scenario", "steps"):
+            if req not in cfg:
+                raise ConfigError(f"{source}: variants[{k}] has no '{req}' (set it in the variant or at top level)")
+        variants.append(Variant(
+            name=str(v.get("name", f"v{k}")), method=str(cfg["method"]), scenario=str(cfg["scenario"]),
+            steps=int(cfg["steps"]), n=cfg.get("n"), params={**base_params, **v.get("params", {})},
+        ))
+    variants = _apply_overrides(variants, overrides)
+    seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
+    return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants), seeds=seed_list)
+
+
+def _apply_overrides(variants: list[Variant], overrides: dict[str, str]) -> list[Variant]:
+    if not overrides:
+        return variants
+    keys = list(overrides)
+    choices = [str(overrides[k]).split("|") for k in keys]
+    swept = [k for k, c in zip(keys, choices) if len(c) > 1]
+    out = []
+    for v in variants:
+        for combo in itertools.product(*choices):
+            cfg = {"method": v.method, "scenario": v.scenario, "steps": v.steps, "n": v.n}
+            params = dict(v.params)
+            for k, val in zip(keys, combo):
+                if k in ("steps", "n"):
+                    try:
+                        cfg[k] = int(val)
+                    except ValueError:
+                        raise ConfigError(f"--set {k}: expected an integer, got {val!r}") from None
+                elif k in ("method", "scenario"):
+                    cfg[k] = val
+                else:
+                    params[k] = val
+            suffix = ",".join(f"{k}={val}" for k, val in zip(keys, combo) if k in swept)
+            name = f"{v.name}[{suffix}]" if suffix else v.name
+            out.append(Variant(name=name, params=params, **cfg))
+    return out
+
+
+def parse_seeds(text: str) -> tuple[int, ...]:
+    """``"1-10"``, ``"1,3,5"``, ``"1-3,7"`` -> tuple of ints (order kept, duplicates removed)."""
+    seeds: list[int] = []
+    try:
+        for part in filter(None, (s.strip() for s in str(text).split(","))):
+            if "-" in part[1:]:
+                a, b = part.split("-", 1) if not part.startswith("-") else (part, "")
+                lo, hi = int(a), int(b)
+                if hi < lo:
+                    raise ValueError
+                seeds.extend(range(lo, hi + 1))
+            else:
+                seeds.append(int(part))
+    except ValueError:
+        raise ConfigError(f"--seeds: expected a list like 1-10 or 1,3,5, got {text!r}") from None
+    if not seeds:
+        raise ConfigError(f"--seeds: no seeds in {text!r}")
+    return tuple(dict.fromkeys(seeds))

@@ -1,0 +1,1 @@
+"""Navigation methods: one module or sub-package per family, registered by name."""

@@ -1,0 +1,50 @@
+"""The method contract: what a navigation method receives each step and what it returns.
+
+A method is a small stateful object that wires pure functions. The rollout loop calls
+``reset`` once and then ``act`` every step; ``act`` returns the command for the method's own
+dynamics model and an ``info`` dict. Metrics-only data goes in ``info``:
+
+- ``labels``: (N,) int sub-swarm id of every agent (omitted: one swarm);
+- ``events``: list of ``{"action", "source", "reason"}`` structural events this step;
+- anything else is ignored by the loop.
+
+``summary()`` returns method-specific run metrics (floats) merged into ``RunResult.metrics``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from swarmnav.world.scenario import Scenario
+
+
+@dataclass(frozen=True, slots=True)
+class Observation:
+    """What every agent knows at step ``step`` (global state; methods restrict themselves)."""
+
+    step: int
+    time: float  # [s]
+    positions: np.ndarray  # (N, 2) [m]
+    velocities: np.ndarray  # (N, 2) [m/s]
+
+
+class Dynamics(Protocol):
+    def step(self, p: np.ndarray, v: np.ndarray, command: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+class Method(Protocol):
+    """A navigation method (see module docstring)."""
+
+    name: str
+    params: Any
+    dynamics: Dynamics
+    dt: float  # integration step [s] the method is designed for
+
+    def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray, rng: np.random.Generator) -> None: ...
+
+    def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]: ...
+
+    def summary(self) -> dict[str, float]: ...

@@ -1,0 +1,49 @@
+"""Methods registered by name; the conformance tests run every registered method."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from swarmnav.errors import ConfigError
+from swarmnav.methods.base import Method
+
+
+@dataclass(frozen=True, slots=True)
+class MethodSpec:
+    name: str
+    factory: Callable[..., Method]
+    description: str
+    navigation: bool = True  # a goal-seeking method (runs on the navigation scenes)
+
+
+_REGISTRY: dict[str, MethodSpec] = {}
+
+
+def register(name: str, factory: Callable[..., Method], description: str, *, navigation: bool = True) -> None:
+    """Register ``factory(**params) -> Method`` under ``name``."""
+    if name in _REGISTRY:
+        raise ValueError(f"method {name!r} registered twice")
+    _REGISTRY[name] = MethodSpec(name, factory, description, navigation)
+
+
+def _load_builtins() -> None:
+    # Importing the modules registers them (kept here so importing the registry is enough).
+    from swarmnav.methods import apf  # noqa: F401
+
+
+def names() -> list[str]:
+    _load_builtins()
+    return sorted(_REGISTRY)
+
+
+def spec(name: str) -> MethodSpec:
+    _load_builtins()
+    if name not in _REGISTRY:
+        raise ConfigError(f"unknown method '{name}' (known: {', '.join(sorted(_REGISTRY))})")
+    return _REGISTRY[name]
+
+
+def make(name: str, **params: Any) -> Method:
+    """A fresh method instance; unknown parameter names raise ConfigError."""
+    return spec(name).factory(**params)

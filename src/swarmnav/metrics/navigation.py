@@ -1,0 +1,117 @@
+"""Navigation metrics of HES Section 5.1, plus inter-agent spacing and collisions.
+
+Index conventions follow the paper exactly: a run has steps ``k = 0 .. K`` (K + 1 recorded
+states); ``R_unsafe``, ``R_below_*`` and ``d_clr_min`` use ``k = 1 .. K-1``; the path length
+sums ``||p(k) - p(k-1)||`` over ``k = 1 .. K-1``. Statistics over agents are population forms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+
+@dataclass(frozen=True, slots=True)
+class MetricParams:
+    r_succ: float = 8.0  # single-UAV success radius [m], HES Section 5.1
+    tau_ms: float = 0.8  # mission success threshold on R_goal [-], HES Section 5.1
+    d_safe: float = 1.5  # unsafe-clearance threshold [m], HES Table A1
+    r_s: float = 1.5  # clearance normaliser of S_scene [m]; our choice = d_safe, which reproduces
+    #                   the paper's S_scene = 0.885 from its Table 2/3 default-corridor means
+    body_radius: float = 0.2  # UAV body radius [m] for collision counting (our choice)
+
+
+def navigation_metrics(
+    positions: np.ndarray,
+    clearance: np.ndarray,
+    goal: np.ndarray,
+    n_subswarms: np.ndarray | None = None,
+    n_events: int = 0,
+    params: MetricParams = MetricParams(),
+    periodic_box: float | None = None,
+) -> dict[str, float]:
+    """All scalar run metrics.
+
+    Args:
+        positions: (K + 1, N, 2) positions [m].
+        clearance: (K + 1, N) signed distance of every agent to the nearest obstacle [m]
+            (+inf in an obstacle-free world).
+        goal: (2,) goal position [m].
+        n_subswarms: (K + 1,) sub-swarm count per step (None: one swarm throughout).
+        n_events: number of structural (split / merge) events.
+    """
+    K = positions.shape[0] - 1
+    N = positions.shape[1]
+    p = params
+    e = np.linalg.norm(positions[-1] - goal, axis=1)  # terminal goal error e_i [m]
+    R_goal = float(np.mean(e <= p.r_succ))
+    d_min = clearance.min(axis=1)  # d_min(k): min over agents [m]
+    inner = d_min[1:K] if K >= 2 else d_min[:0]
+    frac = (lambda thr: float(np.mean(inner < thr))) if len(inner) else (lambda thr: 0.0)
+    d_clr_min = float(inner.min()) if len(inner) else float(d_min.min())
+    R_unsafe = frac(p.d_safe)
+    steps = np.linalg.norm(np.diff(positions[:K], axis=0), axis=2) if K >= 2 else np.zeros((0, N))
+    if periodic_box is not None:  # minimum-image displacement on the torus
+        d = np.diff(positions[:K], axis=0)
+        d -= periodic_box * np.round(d / periodic_box)
+        steps = np.linalg.norm(d, axis=2)
+    L = steps.sum(axis=0)  # L_i [m]
+    direct = np.linalg.norm(positions[0] - goal, axis=1)
+    stretch = float(np.mean(L / np.maximum(direct, 1e-9)))
+    Y = float(R_goal >= p.tau_ms)
+    clr_term = float(np.clip(d_clr_min / p.r_s, 0.0, 1.0)) if np.isfinite(d_clr_min) else 1.0
+    S_scene = 0.4 * Y + 0.3 * R_goal + 0.15 * (1.0 - R_unsafe) + 0.15 * clr_term
+    min_ij, agent_hits = _inter_agent(positions, 2 * p.body_radius, periodic_box)
+    obstacle_hits = _rising_edges(clearance < p.body_radius)
+    out = {
+        "E_mean": float(e.mean()),
+        "E_90": float(np.percentile(e, 90)),
+        "sigma_E": float(e.std()),
+        "R_goal": R_goal,
+        "Y": Y,
+        "R_unsafe": R_unsafe,
+        "d_clr_min": d_clr_min,
+        "R_below_0_75": frac(0.75),
+        "R_below_0_30": frac(0.30),
+        "L_mean": float(L.mean()),
+        "path_stretch": stretch,
+        "S_scene": float(S_scene),
+        "min_inter_agent_distance": min_ij,
+        "collisions": float(agent_hits + obstacle_hits),
+        "N_swarm": float(np.mean(n_subswarms)) if n_subswarms is not None else 1.0,
+        "N_event": float(n_events),
+    }
+    return out
+
+
+def _rising_edges(flags: np.ndarray) -> int:
+    """Number of False -> True transitions per column of a (K + 1, M) bool array (a contact
+    present at k = 0 counts once)."""
+    if flags.size == 0:
+        return 0
+    prev = np.vstack([np.zeros((1, flags.shape[1]), dtype=bool), flags[:-1]])
+    return int(np.count_nonzero(flags & ~prev))
+
+
+def _inter_agent(positions: np.ndarray, contact: float, box: float | None) -> tuple[float, int]:
+    """Minimum inter-agent distance over the run [m] and the number of agent-agent contacts
+    (a pair closer than ``contact`` counts once per continuous episode)."""
+    K1, N, _ = positions.shape
+    if N < 2:
+        return float("inf"), 0
+    if N <= 64 and box is None:
+        iu, ju = np.triu_indices(N, 1)
+        d = np.linalg.norm(positions[:, iu] - positions[:, ju], axis=2)  # (K+1, pairs)
+        return float(d.min()), _rising_edges(d < contact)
+    best, hits, prev = np.inf, 0, np.zeros(0, dtype=np.int64)
+    for k in range(K1):  # one KD-tree per step: O(N log N), never N x N
+        tree = cKDTree(positions[k], boxsize=box)
+        dd, _ = tree.query(positions[k], k=2)
+        best = min(best, float(dd[:, 1].min()))
+        pairs = tree.query_pairs(contact, output_type="ndarray")
+        key = np.sort(pairs[:, 0].astype(np.int64) * N + pairs[:, 1]) if len(pairs) else np.zeros(0, np.int64)
+        hits += int(len(np.setdiff1d(key, prev, assume_unique=True)))
+        prev = key
+    return best, hits

@@ -1,0 +1,105 @@
+"""The record of one run, and its on-disk form (a run directory)."""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from swarmnav.errors import SwarmnavError
+
+
+@dataclass(eq=False)
+class RunResult:
+    """Everything a run produced.
+
+    Attributes:
+        config: what reproduces the run: version, method, params, scene (as a dict), seed,
+            steps, dt.
+        positions: (K + 1, N, 2) [m].
+        velocities: (K + 1, N, 2) [m/s].
+        clearance: (K + 1, N) signed distance to the nearest obstacle [m] (+inf: none).
+        labels: (K + 1, N) sub-swarm id of each agent.
+        events: structural events, dicts with ``step``, ``action``, ``source``, ``reason``.
+        metrics: scalar metrics (floats).
+        wall_time: seconds spent in the rollout loop [s].
+    """
+
+    config: dict[str, Any]
+    positions: np.ndarray
+    velocities: np.ndarray
+    clearance: np.ndarray
+    labels: np.ndarray
+    events: list[dict[str, Any]] = field(default_factory=list)
+    metrics: dict[str, float] = field(default_factory=dict)
+    wall_time: float = 0.0
+
+    @property
+    def n_subswarms(self) -> np.ndarray:
+        """(K + 1,) number of distinct sub-swarms per step."""
+        lab = np.sort(self.labels, axis=1)
+        return 1 + np.count_nonzero(np.diff(lab, axis=1), axis=1)
+
+    @property
+    def min_clearance(self) -> np.ndarray:
+        """(K + 1,) minimum clearance over agents per step [m]."""
+        return self.clearance.min(axis=1)
+
+    def save(self, out: str | Path) -> Path:
+        """Write ``metrics.json``, ``trajectory.npz``, ``config.json`` and ``events.jsonl``.
+
+        Files are written to a temporary name and renamed, so a killed process never leaves a
+        half-written file under the final name.
+        """
+        d = Path(out)
+        d.mkdir(parents=True, exist_ok=True)
+        _atomic(d / "trajectory.npz", lambda f: np.savez_compressed(
+            f, positions=self.positions, velocities=self.velocities, clearance=self.clearance,
+            labels=self.labels))
+        _atomic(d / "events.jsonl", lambda f: f.write("".join(json.dumps(e) + "\n" for e in self.events).encode()))
+        _atomic(d / "config.json", lambda f: f.write(json.dumps(self.config, indent=2).encode()))
+        metrics = dict(self.metrics, wall_time_s=self.wall_time)
+        _atomic(d / "metrics.json", lambda f: f.write(json.dumps(_jsonable(metrics), indent=2).encode()))
+        return d
+
+    @classmethod
+    def load(cls, out: str | Path) -> RunResult:
+        d = Path(out)
+        try:
+            config = json.loads((d / "config.json").read_text())
+            metrics = json.loads((d / "metrics.json").read_text())
+            with np.load(d / "trajectory.npz") as z:
+                arrays = {k: z[k] for k in z.files}
+        except FileNotFoundError as e:
+            raise SwarmnavError(f"{d}: not a run directory (missing {Path(e.filename).name})") from None
+        except (json.JSONDecodeError, ValueError, OSError) as e:
+            raise SwarmnavError(f"{d}: unreadable run directory: {e}") from None
+        events = []
+        ev = d / "events.jsonl"
+        if ev.exists():
+            events = [json.loads(line) for line in ev.read_text().splitlines() if line.strip()]
+        wall = float(metrics.pop("wall_time_s", 0.0))
+        return cls(config=config, events=events, metrics=metrics, wall_time=wall, **arrays)
+
+
+def _atomic(path: Path, write) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as f:
+        write(f)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def _jsonable(d: dict) -> dict:
+    out = {}
+    for k, v in d.items():
+        v = float(v) if isinstance(v, (np.floating, np.integer, int, float)) and not isinstance(v, bool) else v
+        if isinstance(v, float) and not np.isfinite(v):
+            v = None if np.isnan(v) else ("inf" if v > 0 else "-inf")
+        out[k] = v
+    return out

@@ -1,0 +1,151 @@
+"""Scene generators: random 2-D forests (SPH paper, Table II) and periodic boxes (HWVEM).
+
+Generators are addressable by a spec string ``NAME:key=value,...`` so the CLI and experiment
+specs can name a generated scene exactly like a built-in one; the same spec and seed always
+give the same scene.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable
+
+import numpy as np
+
+from swarmnav.errors import ScenarioError
+from swarmnav.world.obstacles import Box, Circle
+from swarmnav.world.scenario import Scenario, Swarm, validate
+
+
+def random_forest(
+    density: float = 0.25,
+    seed: int = 0,
+    n: int = 15,
+    length: float = 40.0,
+    width: float = 20.0,
+    r_min: float = 0.5,
+    r_max: float = 1.2,
+    min_gap: float = 0.0,
+    max_tries: int = 200_000,
+) -> Scenario:
+    """A planar forest of non-overlapping discs filling ``density`` of a rectangle.
+
+    The forest occupies ``x in [0, length]``, ``y in [-width/2, width/2]`` [m]; solid walls run
+    along both long sides so the swarm must cross the forest rather than fly round it. The
+    swarm spawns in a 6 m x 8 m area left of the forest and the goal lies 6 m beyond it.
+
+    Density is the obstacle area fraction of the forest rectangle, ``d_obs = A_obs / A``
+    (the SPH paper's ``V_obs / V_total`` for vertical trunks). Discs are placed by random
+    sequential addition with radii uniform in ``[r_min, r_max]`` [m] and at least ``min_gap``
+    [m] between discs; this stays feasible up to ~0.5 area fraction (the jamming limit of
+    random sequential addition is ~0.547 for equal discs).
+    """
+    if not 0.0 <= density < 0.55:
+        raise ScenarioError(f"random_forest: density must be in [0, 0.55), got {density}")
+    if not (0 < r_min <= r_max):
+        raise ScenarioError(f"random_forest: need 0 < r_min <= r_max, got {r_min}, {r_max}")
+    rng = np.random.default_rng(seed)
+    target = density * length * width
+    centers = np.zeros((0, 2))
+    radii = np.zeros(0)
+    area, tries = 0.0, 0
+    while area < target:
+        if tries >= max_tries:
+            raise ScenarioError(
+                f"random_forest: could not reach density {density} ({area / (length * width):.3f} "
+                f"placed after {max_tries} tries); lower density or r_max"
+            )
+        # draw a batch; accept sequentially so accepted discs never overlap
+        cand_r = rng.uniform(r_min, r_max, 256)
+        cand_c = np.column_stack(
+            [rng.uniform(0.0 + cand_r, length - cand_r), rng.uniform(-width / 2 + cand_r, width / 2 - cand_r)]
+        )
+        tries += 256
+        for c, r in zip(cand_c, cand_r):
+            if len(radii):
+                d = np.sqrt(np.sum((centers - c) ** 2, axis=1))
+                if np.any(d < radii + r + min_gap):
+                    continue
+            centers = np.vstack([centers, c])
+            radii = np.append(radii, r)
+            area += math.pi * r * r
+            if area >= target:
+                break
+    wall = 1.0
+    obstacles: list = [
+        Box((-10.0, width / 2), (length + 10.0, width / 2 + wall)),
+        Box((-10.0, -width / 2 - wall), (length + 10.0, -width / 2)),
+    ]
+    obstacles += [Circle((float(c[0]), float(c[1])), float(r)) for c, r in zip(centers, radii)]
+    scn = Scenario(
+        name=f"random_forest:density={density:g},seed={seed}",
+        bounds=(-10.0, -width / 2 - wall - 1.0, length + 10.0, width / 2 + wall + 1.0),
+        swarm=Swarm(n=n, spawn=(-8.0, -4.0, -2.0, 4.0)),
+        goal=(length + 6.0, 0.0),
+        obstacles=tuple(obstacles),
+        description=f"Random forest, obstacle area density {density:g}, seed {seed}",
+        source=f"random_forest(density={density:g}, seed={seed})",
+    )
+    return validate(scn)
+
+
+def periodic_box(n: int = 100, rho: float = 4.102, seed: int = 0) -> Scenario:
+    """An obstacle-free periodic square of side ``D = sqrt(n / rho)`` [m] (HWVEM Section 3.1).
+
+    ``rho`` is the agent density [1/m^2]. Agents spawn uniformly over the whole box (no spacing
+    rule: Vicsek agents are points). The goal is unused by the alignment experiments and sits
+    at the box centre. ``seed`` is accepted for a uniform spec grammar; the box has no random
+    geometry.
+    """
+    if n < 1 or rho <= 0:
+        raise ScenarioError(f"periodic_box: need n >= 1 and rho > 0, got n={n}, rho={rho}")
+    side = math.sqrt(n / rho)
+    scn = Scenario(
+        name=f"periodic_box:n={n},rho={rho:g}",
+        bounds=(0.0, 0.0, side, side),
+        swarm=Swarm(n=n, spawn=(0.0, 0.0, side, side), min_spacing=0.0, clearance=0.0),
+        goal=(side / 2, side / 2),
+        periodic=True,
+        description=f"Periodic box, {n} agents at density {rho:g} /m^2 (D = {side:.4g} m)",
+        source=f"periodic_box(n={n}, rho={rho:g})",
+    )
+    return validate(scn)
+
+
+GENERATORS: dict[str, Callable[..., Scenario]] = {
+    "random_forest": random_forest,
+    "periodic_box": periodic_box,
+}
+
+
+def from_spec(spec: str) -> Scenario:
+    """Build a generated scene from ``NAME:key=value,...`` (values parsed as int, float or bool)."""
+    name, _, rest = spec.partition(":")
+    if name not in GENERATORS:
+        raise ScenarioError(f"{spec}: unknown generator '{name}' (known: {', '.join(GENERATORS)})")
+    fn = GENERATORS[name]
+    kwargs: dict[str, Any] = {}
+    for item in filter(None, (s.strip() for s in rest.split(","))):
+        key, eq, val = item.partition("=")
+        if not eq:
+            raise ScenarioError(f"{spec}: expected key=value, got '{item}'")
+        kwargs[key.strip()] = _parse_value(val.strip())
+    allowed = set(fn.__code__.co_varnames[: fn.__code__.co_argcount]) - {"max_tries"}
+    unknown = set(kwargs) - allowed
+    if unknown:
+        raise ScenarioError(f"{spec}: unknown parameter(s) {sorted(unknown)} for {name} (allowed: {sorted(allowed)})")
+    try:
+        return fn(**kwargs)
+    except TypeError as e:
+        raise ScenarioError(f"{spec}: {e}") from None
+
+
+def _parse_value(v: str) -> Any:
+    if v.lower() in ("true", "false"):
+        return v.lower() == "true"
+    for cast in (int, float):
+        try:
+            return cast(v)
+        except ValueError:
+            pass
+    return v

@@ -1,0 +1,86 @@
+"""Metrics of HES Section 5.1 on trajectories whose values are known by hand."""
+
+import numpy as np
+import pytest
+
+from swarmnav.metrics import MetricParams, navigation_metrics
+
+
+def _line_run(K=10):
+    # two agents moving along x at 1 m per step from x = 0 towards a goal at (20, 0)
+    t = np.arange(K + 1, dtype=float)
+    P = np.zeros((K + 1, 2, 2))
+    P[:, 0, 0] = t
+    P[:, 1, 0] = t
+    P[:, 1, 1] = 3.0
+    return P
+
+
+def test_terminal_errors_goal_ratio_and_success():
+    P = _line_run()
+    goal = np.array([14.0, 0.0])  # final x = 10: errors 4 and 5
+    C = np.full((11, 2), 10.0)
+    m = navigation_metrics(P, C, goal)
+    assert m["E_mean"] == pytest.approx(4.5)
+    assert m["sigma_E"] == pytest.approx(0.5)  # population std of {4, 5}
+    assert m["E_90"] == pytest.approx(4.9)  # numpy linear percentile of {4, 5}
+    assert m["R_goal"] == 1.0 and m["Y"] == 1.0
+    m = navigation_metrics(P, C, np.array([14.0, -4.5]))  # errors ~5.66 and ~8.06 -> one in r_succ = 8
+    assert m["R_goal"] == 0.5 and m["Y"] == 0.0
+
+
+def test_clearance_ratios_use_inner_steps_only():
+    P = _line_run(K=10)
+    C = np.full((11, 2), 5.0)
+    C[0] = 0.0  # k = 0 and k = K are excluded by the paper's definition
+    C[10] = 0.0
+    C[3, 1] = 1.0  # < d_safe
+    C[4, 0] = 0.5  # < 0.75
+    C[5, 1] = 0.2  # < 0.30
+    m = navigation_metrics(P, C, np.array([10.0, 0.0]))
+    assert m["R_unsafe"] == pytest.approx(3 / 9)
+    assert m["R_below_0_75"] == pytest.approx(2 / 9)
+    assert m["R_below_0_30"] == pytest.approx(1 / 9)
+    assert m["d_clr_min"] == pytest.approx(0.2)
+    # S_scene = 0.4 Y + 0.3 R_goal + 0.15 (1 - R_unsafe) + 0.15 clip(d_clr_min / 1.5)
+    assert m["S_scene"] == pytest.approx(0.4 + 0.3 + 0.15 * (6 / 9) + 0.15 * (0.2 / 1.5))
+
+
+def test_path_length_and_stretch():
+    P = _line_run(K=10)
+    m = navigation_metrics(P, np.full((11, 2), 9.0), np.array([10.0, 0.0]))
+    assert m["L_mean"] == pytest.approx(9.0)  # sum over k = 1 .. K-1
+    # stretch = mean_i L_i / ||p_i(0) - goal|| = mean(9/10, 9/sqrt(109))
+    assert m["path_stretch"] == pytest.approx(0.5 * (0.9 + 9 / np.sqrt(109)))
+
+
+def test_paper_s_scene_matches_with_r_s_equal_d_safe():
+    # HES Table 2/3 default corridor means reproduce the published S_scene = 0.885 at r_s = 1.5 m
+    s = 0.4 * 1 + 0.3 * 1 + 0.15 * (1 - 0.117) + 0.15 * min(0.523 / MetricParams().r_s, 1)
+    assert s == pytest.approx(0.885, abs=0.001)
+
+
+def test_inter_agent_distance_and_collisions_small_and_large_paths():
+    K, N = 6, 3
+    P = np.zeros((K + 1, N, 2))
+    P[:, 1, 0] = [5, 3, 0.3, 0.3, 3, 0.2, 5]  # agent 1 touches agent 0 twice (0.3 then 0.2)
+    P[:, 2, 0] = 50
+    C = np.full((K + 1, N), 9.0)
+    C[2:4, 2] = 0.1  # agent 2 inside body radius of an obstacle for one episode
+    m = navigation_metrics(P, C, np.zeros(2))
+    assert m["min_inter_agent_distance"] == pytest.approx(0.2)
+    assert m["collisions"] == 3.0
+    # the KD-tree path (N > 64) agrees with the dense path
+    big = np.concatenate([P, 1000 + 10 * np.arange(70)[None, :, None] * np.ones((K + 1, 70, 2))], axis=1)
+    Cb = np.concatenate([C, np.full((K + 1, 70), 9.0)], axis=1)
+    mb = navigation_metrics(big, Cb, np.zeros(2))
+    assert mb["min_inter_agent_distance"] == pytest.approx(0.2)
+    assert mb["collisions"] == 3.0
+
+
+def test_periodic_path_length_uses_minimum_image():
+    P = np.zeros((4, 1, 2))
+    P[:, 0, 0] = [9.5, 0.5, 1.5, 2.5]  # wraps across the period 10
+    m = navigation_metrics(P, np.full((4, 1), np.inf), np.zeros(2), periodic_box=10.0)
+    assert m["L_mean"] == pytest.approx(2.0)
+    assert m["R_unsafe"] == 0.0

@@ -1,0 +1,112 @@
+"""The command line: outputs, reproducibility of config.json, and one-line errors (exit 2)."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from swarmnav.cli import main
+
+
+def _run(*args):
+    return subprocess.run([sys.executable, "-m", "swarmnav.cli", *args], capture_output=True, text=True)
+
+
+def test_run_writes_run_directory_and_is_reproducible(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["run", "--method", "apf", "--scenario", "default_corridor", "--seed", "3", "--steps", "30",
+                 "--out", str(out), "--set", "k_att=1.5"]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    cfg = json.loads((out / "config.json").read_text())
+    z = np.load(out / "trajectory.npz")
+    assert z["positions"].shape == (31, 20, 2)
+    assert cfg["seed"] == 3 and cfg["params"]["k_att"] == 1.5 and cfg["scenario"]["name"] == "default_corridor"
+    assert "swarmnav_version" in cfg and {"Y", "R_goal", "E_mean", "R_unsafe"} <= set(m)
+    # config.json alone reproduces the run
+    from swarmnav import run
+    from swarmnav.world import from_dict
+
+    again = run(cfg["method"], from_dict(cfg["scenario"]), seed=cfg["seed"], steps=cfg["steps"], **cfg["params"])
+    np.testing.assert_array_equal(again.positions, z["positions"])
+
+
+def test_scenario_file_and_plot(tmp_path):
+    f = tmp_path / "s.toml"
+    f.write_text('[swarm]\nn = 3\nspawn = [0, 0, 2, 2]\n[goal]\nposition = [10.0, 0.0]\n'
+                 '[[obstacles]]\ntype = "circle"\ncenter = [5.0, 5.0]\nradius = 1.0\n')
+    assert main(["run", "--method", "apf", "--scenario-file", str(f), "--steps", "20", "--out", str(tmp_path / "o")]) == 0
+    assert main(["plot", str(tmp_path / "o")]) == 0
+    assert (tmp_path / "o" / "trajectory.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["run", "--method", "apf", "--scenario", "nowhere", "--out", "X"], "unknown scene"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "X", "--set", "bogus=1"], "unknown parameter 'bogus'"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "X", "--set", "k_att=abc"], "expected a number"),
+    (["run", "--method", "nope", "--scenario", "default_corridor", "--out", "X"], "unknown method"),
+    (["run", "--method", "apf", "--out", "X"], "exactly one of --scenario"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--steps", "0", "--out", "X"], "--steps must be >= 1"),
+    (["run", "--method", "apf", "--scenario-file", "missing.toml", "--out", "X"], "no such scene file"),
+    (["experiment", "nope", "--out", "X"], "unknown experiment"),
+    (["experiment", "apf-scenes", "--seeds", "x-y", "--out", "X"], "--seeds"),
+    (["plot", "/nonexistent/run"], "not a run directory"),
+    (["run", "--bogus-flag"], "unrecognized arguments"),
+])
+def test_bad_input_is_one_line_exit_2(args, fragment, tmp_path):
+    p = _run(*[a.replace("X", str(tmp_path / "x")) for a in args])
+    assert p.returncode == 2, p.stderr
+    assert "Traceback" not in p.stderr
+    lines = [l for l in p.stderr.splitlines() if l.strip()]
+    assert len(lines) == 1 and fragment in lines[0], p.stderr
+
+
+def test_malformed_scene_file_is_one_line(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text("[swarm\nn = 3\n")
+    p = _run("run", "--method", "apf", "--scenario-file", str(f), "--out", str(tmp_path / "o"))
+    assert p.returncode == 2 and "bad.toml" in p.stderr and "malformed TOML" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
+
+
+def test_scenarios_list_and_show(tmp_path, capsys):
+    assert main(["scenarios"]) == 0
+    out = capsys.readouterr().out
+    for name in ("default_corridor", "narrow_alternating_gates", "dense_cross_blocks", "off_axis_goal"):
+        assert name in out
+    png = tmp_path / "s.png"
+    assert main(["scenarios", "show", "off_axis_goal", "--plot", str(png)]) == 0
+    assert json.loads(capsys.readouterr().out)["goal"]["position"] == [70.0, 7.5]
+    assert png.stat().st_size > 1000
+
+
+def test_experiment_runner_end_to_end(tmp_path):
+    import csv
+
+    out = tmp_path / "e"
+    assert main(["experiment", "apf-scenes", "--seeds", "1-2", "--workers", "2", "--set", "steps=30",
+                 "--out", str(out), "--quiet"]) in (0, 1)
+    runs = list(csv.DictReader(open(out / "runs.csv")))
+    summary = list(csv.DictReader(open(out / "summary.csv")))
+    assert len(runs) == 8 and all(r["status"] == "done" for r in runs)
+    assert len(summary) == 4
+    s = summary[0]
+    assert {"E_mean_mean", "E_mean_std", "d_clr_min_min", "Y_mean"} <= set(s)
+    vals = [float(r["E_mean"]) for r in runs if r["variant"] == s["variant"]]
+    assert float(s["E_mean_mean"]) == pytest.approx(np.mean(vals))
+    assert float(s["E_mean_std"]) == pytest.approx(np.std(vals))
+    # the same seeds serially give identical rows (per-run seeding, no shared state)
+    out2 = tmp_path / "e2"
+    main(["experiment", "apf-scenes", "--seeds", "1-2", "--workers", "1", "--set", "steps=30", "--out", str(out2), "--quiet"])
+    runs2 = list(csv.DictReader(open(out2 / "runs.csv")))
+    strip = lambda rs: [{k: v for k, v in r.items() if k != "wall_time_s"} for r in rs]  # noqa: E731
+    assert strip(runs) == strip(runs2)
+
+
+def test_experiment_sweep_syntax(tmp_path):
+    from swarmnav.experiments import load_experiment
+
+    exp = load_experiment("apf-scenes", overrides={"k_att": "1|2"}, seeds="1")
+    assert len(exp.variants) == 8
+    assert exp.variants[0].name == "default_corridor[k_att=1]"
