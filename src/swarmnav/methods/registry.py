@@ -27,9 +27,17 @@ def register(name: str, factory: Callable[..., Method], description: str, *, nav
     _REGISTRY[name] = MethodSpec(name, factory, description, navigation)
 
 
+#: Modules whose import registers the built-in methods (one line per method family).
+_BUILTIN_MODULES = (
+    "swarmnav.methods.apf",
+)
+
+
 def _load_builtins() -> None:
-    # Importing the modules registers them (kept here so importing the registry is enough).
-    from swarmnav.methods import apf  # noqa: F401
+    import importlib
+
+    for mod in _BUILTIN_MODULES:
+        importlib.import_module(mod)
 
 
 def names() -> list[str]:
