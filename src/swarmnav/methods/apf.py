@@ -75,9 +75,14 @@ class Apf:
         a = p.k_att * to_goal / np.maximum(dist, p.r_att)[:, None]
         geom = self.scenario.geometry
         if not geom.is_empty:
-            d = np.maximum(lidar_ring(geom, x, p.n_rays, p.lidar_range), p.d_floor)  # (N, R)
-            w = np.where(d < p.d0, p.k_rep * (1.0 / d - 1.0 / p.d0) / d**2, 0.0)
-            a -= (2 * np.pi / p.n_rays) * (w @ self._dirs)  # push away from each return
+            ring = lidar_ring(geom, x, p.n_rays, p.lidar_range)  # (N, R)
+            agent, ray = np.nonzero(ring < p.d0)  # only the few returns inside d0 matter
+            if len(agent):
+                d = np.maximum(ring[agent, ray], p.d_floor)
+                w = (2 * np.pi / p.n_rays) * p.k_rep * (1.0 / d - 1.0 / p.d0) / d**2
+                n = len(x)  # push away from each return
+                a[:, 0] -= np.bincount(agent, w * self._dirs[ray, 0], minlength=n)
+                a[:, 1] -= np.bincount(agent, w * self._dirs[ray, 1], minlength=n)
         a += separation(x, p.k_sep, p.r_sep, p.d_floor)
         a -= p.k_damp * v
         return clip_norm(a, p.a_max), {}
@@ -89,15 +94,23 @@ class Apf:
 def separation(x: np.ndarray, k: float, r: float, d_floor: float) -> np.ndarray:
     """Khatib-law inter-agent repulsion, sum over neighbours j with d_ij < r of
     ``k (1/d - 1/r) / d^2 * (x_i - x_j)/d`` [m/s^2]; O(N log N) via neighbour pairs."""
-    i, j = neighbor_pairs(x, r)
+    n = len(x)
+    if n <= 64:  # small swarms: all pairs at once is cheaper than building a tree
+        i, j = np.triu_indices(n, 1)
+        diff = x[i] - x[j]
+        d2 = np.einsum("ij,ij->i", diff, diff)
+        near = d2 < r * r
+        i, j, diff = i[near], j[near], diff[near]
+    else:
+        i, j = neighbor_pairs(x, r)
+        diff = x[i] - x[j]
     out = np.zeros_like(x)
     if len(i) == 0:
         return out
-    diff = x[i] - x[j]
     d = np.maximum(np.sqrt(np.einsum("ij,ij->i", diff, diff)), d_floor)
     f = (k * (1.0 / d - 1.0 / r) / d**3)[:, None] * diff
-    np.add.at(out, i, f)
-    np.add.at(out, j, -f)
+    for c in range(2):
+        out[:, c] = np.bincount(i, f[:, c], minlength=n) - np.bincount(j, f[:, c], minlength=n)
     return out
 
 

@@ -1,0 +1,498 @@
+"""Numba kernels behind the sensing functions: pure functions of flat ``Geometry`` arrays.
+
+Conventions shared by every kernel:
+
+* An obstacle is a *closed* set: a point on a polygon edge or on a circle is in collision.
+  "Strictly inside" a polygon is decided by the even-odd (crossing) rule; the on-edge test
+  is ``cross(a - p, b - p) == 0 and dot(a - p, b - p) <= 0`` in floating point, which is
+  exact for axis-aligned edges (the common box world) and within rounding otherwise.
+* The crossing rule and the on-edge test use the same cross product, so a point is
+  classified consistently by the LiDAR, ``points_inside`` and ``signed_distance``.
+* Empty geometries have zero-length arrays and ``poly_offsets == [0]``; every loop is
+  simply empty then.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+OUTSIDE = 0
+INSIDE = 1
+ON_BOUNDARY = 2
+
+
+def geom_arrays(geom) -> tuple[np.ndarray, ...]:
+    """The seven ``Geometry`` arrays in kernel argument order, contiguous with fixed dtypes.
+
+    A no-op for geometries built by ``Geometry.from_obstacles``; keeps every kernel compiled
+    for a single type signature.
+    """
+    f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    return (
+        f(geom.seg_a).reshape(-1, 2),
+        f(geom.seg_b).reshape(-1, 2),
+        np.ascontiguousarray(geom.poly_offsets, dtype=np.int64).reshape(-1) if len(geom.poly_offsets)
+        else np.zeros(1, dtype=np.int64),
+        f(geom.circ_c).reshape(-1, 2),
+        f(geom.circ_r).reshape(-1),
+        f(geom.bbox_lo).reshape(-1, 2),
+        f(geom.bbox_hi).reshape(-1, 2),
+    )
+
+
+def as_points(x, name: str = "points") -> np.ndarray:
+    """``x`` as a contiguous float64 (M, 2) array, or ValueError naming ``name``."""
+    a = np.ascontiguousarray(x, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 2:
+        raise ValueError(f"{name} must have shape (M, 2), got {a.shape}")
+    return a
+
+
+@njit(cache=True)
+def _polygon_status(px, py, seg_a, seg_b, k0, k1):
+    """Classify ``(px, py)`` against the polygon with edges ``k0:k1``.
+
+    Returns OUTSIDE, INSIDE (even-odd rule) or ON_BOUNDARY.
+    """
+    inside = False
+    for k in range(k0, k1):
+        ax = seg_a[k, 0] - px
+        ay = seg_a[k, 1] - py
+        bx = seg_b[k, 0] - px
+        by = seg_b[k, 1] - py
+        cr = ax * by - ay * bx
+        if cr == 0.0 and ax * bx + ay * by <= 0.0:
+            return ON_BOUNDARY
+        # Crossing of the horizontal ray to +x: the edge straddles y = py and meets it at
+        # x = px + cr / (by - ay); that is right of p iff cr and (by - ay) share a sign.
+        # cr != 0 here (a straddling edge with cr == 0 passes through p, caught above).
+        if (ay > 0.0) != (by > 0.0):
+            if (cr > 0.0) == (by > ay):
+                inside = not inside
+    return INSIDE if inside else OUTSIDE
+
+
+@njit(cache=True)
+def _in_collision(px, py, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
+    """True if the point is inside or on the boundary of any obstacle."""
+    n_poly = poly_offsets.shape[0] - 1
+    for p in range(n_poly):
+        if px < bbox_lo[p, 0] or px > bbox_hi[p, 0] or py < bbox_lo[p, 1] or py > bbox_hi[p, 1]:
+            continue
+        if _polygon_status(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1]) != OUTSIDE:
+            return True
+    for c in range(circ_r.shape[0]):
+        dx = px - circ_c[c, 0]
+        dy = py - circ_c[c, 1]
+        if dx * dx + dy * dy <= circ_r[c] * circ_r[c]:
+            return True
+    return False
+
+
+@njit(cache=True)
+def points_inside_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, points, out):
+    """``out[m]`` is True if ``points[m]`` is inside or on the boundary of any obstacle."""
+    for i in range(points.shape[0]):
+        out[i] = _in_collision(points[i, 0], points[i, 1], seg_a, seg_b, poly_offsets, circ_c, circ_r,
+                               bbox_lo, bbox_hi)
+
+
+# ---------------------------------------------------------------------------------------------
+# LiDAR ring
+# ---------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _ray_index_span(t_start, span, inv_dth):
+    """First and last ray index (unwrapped, may exceed n) covering [t_start, t_start + span].
+
+    ``floor``/``ceil`` always include every ray whose angle lies in the interval as long as the
+    angle rounding error (~1e-16 rad) is below the ray spacing; the exact hit test decides.
+    """
+    if t_start < 0.0:
+        t_start += 2.0 * math.pi
+    r_lo = int(math.floor(t_start * inv_dth))
+    r_hi = int(math.ceil((t_start + span) * inv_dth))
+    return r_lo, r_hi
+
+
+@njit(cache=True)
+def lidar_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, positions,
+                 cos_t, sin_t, max_range, out):
+    """Fill ``out[i, r]`` with the range [m] along ray ``r`` from agent ``i``.
+
+    Per agent and per primitive: cull by distance, keep only polygon edges facing the agent
+    (the first boundary crossing of a ray starting outside a polygon always enters it, through
+    an edge whose outward side holds the agent), clip the edge to the range disc, convert the
+    clipped edge (or the circle's tangent cone) to an interval of ray indices and intersect
+    only those rays. Agents in collision get 0 on every ray.
+    """
+    n_agents = positions.shape[0]
+    n_rays = cos_t.shape[0]
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
+    inv_dth = n_rays / (2.0 * math.pi)
+    r2max = max_range * max_range
+
+    # +1 for counter-clockwise polygons, -1 for clockwise (sign of the shoelace area).
+    orient = np.empty(n_poly)
+    for p in range(n_poly):
+        area2 = 0.0
+        for k in range(poly_offsets[p], poly_offsets[p + 1]):
+            area2 += seg_a[k, 0] * seg_b[k, 1] - seg_a[k, 1] * seg_b[k, 0]
+        orient[p] = 1.0 if area2 > 0.0 else -1.0
+
+    for i in range(n_agents):
+        px = positions[i, 0]
+        py = positions[i, 1]
+        row = out[i]
+        if _in_collision(px, py, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
+            for r in range(n_rays):
+                row[r] = 0.0
+            continue
+        for r in range(n_rays):
+            row[r] = max_range
+
+        for p in range(n_poly):
+            # Whole-polygon cull on the distance to its bounding box.
+            dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
+            dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
+            if dx * dx + dy * dy >= r2max:
+                continue
+            sgn = orient[p]
+            for k in range(poly_offsets[p], poly_offsets[p + 1]):
+                ax = seg_a[k, 0] - px
+                ay = seg_a[k, 1] - py
+                bx = seg_b[k, 0] - px
+                by = seg_b[k, 1] - py
+                ex = bx - ax
+                ey = by - ay
+                cr = ax * ey - ay * ex  # cross(a - p, b - a) = cross(a - p, b - p)
+                # Back-facing or edge-on (agent on the supporting line): never a first hit;
+                # an edge-on edge's near vertex is hit through the neighbouring edge.
+                if sgn * cr >= 0.0:
+                    continue
+                ee = ex * ex + ey * ey
+                ae = ax * ex + ay * ey
+                aa = ax * ax + ay * ay
+                s_near = min(max(-ae / ee, 0.0), 1.0)
+                nx = ax + s_near * ex
+                ny = ay + s_near * ey
+                if nx * nx + ny * ny >= r2max:
+                    continue
+                # Clip the edge to the range disc |a + s e - p| <= max_range, so long walls
+                # only cost the rays that can see them within range.
+                disc = ae * ae - ee * (aa - r2max)
+                sq = math.sqrt(max(disc, 0.0))
+                s0 = max((-ae - sq) / ee, 0.0)
+                s1 = min((-ae + sq) / ee, 1.0)
+                c0x = ax + s0 * ex
+                c0y = ay + s0 * ey
+                c1x = ax + s1 * ex
+                c1y = ay + s1 * ey
+                th0 = math.atan2(c0y, c0x)
+                th1 = math.atan2(c1y, c1x)
+                # cr > 0: b is counter-clockwise of a seen from p, so sweep a -> b.
+                if cr > 0.0:
+                    t_start = th0
+                    span = th1 - th0
+                else:
+                    t_start = th1
+                    span = th0 - th1
+                if span < 0.0:
+                    span += 2.0 * math.pi
+                r_lo, r_hi = _ray_index_span(t_start, span, inv_dth)
+                for r in range(r_lo, r_hi + 1):
+                    rr = r
+                    while rr >= n_rays:
+                        rr -= n_rays
+                    ux = cos_t[rr]
+                    uy = sin_t[rr]
+                    # Sign of each endpoint relative to the ray's line; a hit needs a sign
+                    # change. A shared vertex gives the same value for both of its edges, so a
+                    # ray exactly through a vertex cannot slip between them by rounding.
+                    sa = ux * ay - uy * ax
+                    sb = ux * by - uy * bx
+                    if (sa > 0.0 and sb > 0.0) or (sa < 0.0 and sb < 0.0):
+                        continue
+                    den = sb - sa  # cross(u, e)
+                    if den == 0.0:
+                        continue  # collinear ray: the neighbouring edge reports the vertex
+                    t = cr / den
+                    if t >= 0.0 and t < row[rr]:
+                        row[rr] = t
+
+        for c in range(n_circ):
+            cx = circ_c[c, 0] - px
+            cy = circ_c[c, 1] - py
+            rc = circ_r[c]
+            d2 = cx * cx + cy * cy
+            dc = math.sqrt(d2)
+            if dc - rc >= max_range:
+                continue
+            half = math.asin(min(rc / dc, 1.0))  # half-angle of the tangent cone
+            phi = math.atan2(cy, cx)
+            q = (dc - rc) * (dc + rc)  # |c - p|^2 - r^2 > 0 outside
+            r_lo, r_hi = _ray_index_span(phi - half, 2.0 * half, inv_dth)
+            for r in range(r_lo, r_hi + 1):
+                rr = r
+                while rr >= n_rays:
+                    rr -= n_rays
+                ux = cos_t[rr]
+                uy = sin_t[rr]
+                b = ux * cx + uy * cy
+                if b <= 0.0:
+                    continue
+                perp = ux * cy - uy * cx
+                disc = rc * rc - perp * perp
+                if disc < 0.0:
+                    continue
+                # Near root of t^2 - 2 b t + q = 0 in the cancellation-free form q / (b + sqrt).
+                t = q / (b + math.sqrt(disc))
+                if t < row[rr]:
+                    row[rr] = t
+
+
+# ---------------------------------------------------------------------------------------------
+# Signed distance and nearest boundary point
+# ---------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def nearest_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, points,
+                   out_d, out_dir, want_dir):
+    """Signed distance [m] to the obstacles and unit direction toward the nearest boundary point.
+
+    Outside every obstacle: distance to the nearest boundary (the exact distance to the union).
+    Inside: minus the depth in the deepest containing obstacle (its own boundary distance);
+    identical to the union's signed distance when obstacles do not overlap.
+    """
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
+    for i in range(points.shape[0]):
+        px = points[i, 0]
+        py = points[i, 1]
+        best_out2 = np.inf  # squared distance to the nearest boundary, from outside
+        bo_x = 0.0
+        bo_y = 0.0
+        best_in = -1.0  # deepest penetration among containing obstacles
+        bi_x = 0.0
+        bi_y = 0.0
+        for p in range(n_poly):
+            in_box = not (px < bbox_lo[p, 0] or px > bbox_hi[p, 0]
+                          or py < bbox_lo[p, 1] or py > bbox_hi[p, 1])
+            if not in_box and best_in < 0.0:
+                # A point outside the box is outside the polygon: skip it when its box is
+                # already farther than the best boundary found.
+                dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
+                dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
+                if dx * dx + dy * dy >= best_out2:
+                    continue
+            elif not in_box:
+                continue
+            dmin2 = np.inf
+            qx = 0.0
+            qy = 0.0
+            inside = False
+            on_edge = False
+            for k in range(poly_offsets[p], poly_offsets[p + 1]):
+                ax = seg_a[k, 0] - px
+                ay = seg_a[k, 1] - py
+                bx = seg_b[k, 0] - px
+                by = seg_b[k, 1] - py
+                cr = ax * by - ay * bx
+                if cr == 0.0 and ax * bx + ay * by <= 0.0:
+                    on_edge = True
+                if (ay > 0.0) != (by > 0.0):
+                    if (cr > 0.0) == (by > ay):
+                        inside = not inside
+                ex = bx - ax
+                ey = by - ay
+                ee = ex * ex + ey * ey
+                s = 0.0
+                if ee > 0.0:
+                    s = min(max(-(ax * ex + ay * ey) / ee, 0.0), 1.0)
+                nx = ax + s * ex
+                ny = ay + s * ey
+                d2 = nx * nx + ny * ny
+                if d2 < dmin2:
+                    dmin2 = d2
+                    qx = nx
+                    qy = ny
+            if on_edge:
+                # Exactly on the boundary: distance 0, direction undefined (zeros).
+                dmin2 = 0.0
+                qx = 0.0
+                qy = 0.0
+                inside = False
+            if inside:
+                depth = math.sqrt(dmin2)
+                if depth > best_in:
+                    best_in = depth
+                    bi_x = qx
+                    bi_y = qy
+            elif dmin2 < best_out2:
+                best_out2 = dmin2
+                bo_x = qx
+                bo_y = qy
+        for c in range(n_circ):
+            cx = circ_c[c, 0] - px
+            cy = circ_c[c, 1] - py
+            rc = circ_r[c]
+            dc = math.sqrt(cx * cx + cy * cy)
+            d = dc - rc
+            if dc > 0.0:
+                ux = cx / dc
+                uy = cy / dc
+            else:
+                ux = -1.0  # at the centre every boundary point is nearest: pick +x
+                uy = 0.0
+            if d < 0.0:
+                if -d > best_in:
+                    best_in = -d
+                    # nearest boundary point c + r (p - c)/|p - c|, relative to p
+                    bi_x = -ux * (-d)
+                    bi_y = -uy * (-d)
+            elif d * d < best_out2:
+                best_out2 = d * d
+                bo_x = ux * d
+                bo_y = uy * d
+        if best_in >= 0.0:
+            dist = -best_in
+            vx = bi_x
+            vy = bi_y
+            norm = best_in
+        else:
+            norm = math.sqrt(best_out2)
+            dist = norm
+            vx = bo_x
+            vy = bo_y
+        out_d[i] = dist
+        if want_dir:
+            if norm > 0.0 and norm < np.inf:
+                out_dir[i, 0] = vx / norm
+                out_dir[i, 1] = vy / norm
+            else:
+                out_dir[i, 0] = 0.0
+                out_dir[i, 1] = 0.0
+
+
+# ---------------------------------------------------------------------------------------------
+# Segment blocking
+# ---------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _on_box(ax, ay, bx, by, cx, cy):
+    """c lies in the closed bounding box of segment a-b (used once c is known collinear)."""
+    return min(ax, bx) <= cx <= max(ax, bx) and min(ay, by) <= cy <= max(ay, by)
+
+
+@njit(cache=True)
+def _segments_touch(p0x, p0y, p1x, p1y, ax, ay, bx, by):
+    """Closed segments p0-p1 and a-b share at least one point (orientation predicates)."""
+    d1 = (bx - ax) * (p0y - ay) - (by - ay) * (p0x - ax)
+    d2 = (bx - ax) * (p1y - ay) - (by - ay) * (p1x - ax)
+    d3 = (p1x - p0x) * (ay - p0y) - (p1y - p0y) * (ax - p0x)
+    d4 = (p1x - p0x) * (by - p0y) - (p1y - p0y) * (bx - p0x)
+    if ((d1 > 0.0 and d2 < 0.0) or (d1 < 0.0 and d2 > 0.0)) and \
+            ((d3 > 0.0 and d4 < 0.0) or (d3 < 0.0 and d4 > 0.0)):
+        return True
+    if d1 == 0.0 and _on_box(ax, ay, bx, by, p0x, p0y):
+        return True
+    if d2 == 0.0 and _on_box(ax, ay, bx, by, p1x, p1y):
+        return True
+    if d3 == 0.0 and _on_box(p0x, p0y, p1x, p1y, ax, ay):
+        return True
+    if d4 == 0.0 and _on_box(p0x, p0y, p1x, p1y, bx, by):
+        return True
+    return False
+
+
+@njit(cache=True)
+def segments_blocked_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, p, q, out):
+    """``out[m]`` is True if the closed segment p[m]-q[m] meets any closed obstacle."""
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
+    for m in range(p.shape[0]):
+        p0x = p[m, 0]
+        p0y = p[m, 1]
+        p1x = q[m, 0]
+        p1y = q[m, 1]
+        lox = min(p0x, p1x)
+        hix = max(p0x, p1x)
+        loy = min(p0y, p1y)
+        hiy = max(p0y, p1y)
+        blocked = False
+        for pg in range(n_poly):
+            if hix < bbox_lo[pg, 0] or lox > bbox_hi[pg, 0] or hiy < bbox_lo[pg, 1] or loy > bbox_hi[pg, 1]:
+                continue
+            k0 = poly_offsets[pg]
+            k1 = poly_offsets[pg + 1]
+            for k in range(k0, k1):
+                if _segments_touch(p0x, p0y, p1x, p1y, seg_a[k, 0], seg_a[k, 1], seg_b[k, 0], seg_b[k, 1]):
+                    blocked = True
+                    break
+            # No edge is touched: the segment is wholly inside or wholly outside, so testing
+            # one endpoint decides.
+            if not blocked and _polygon_status(p0x, p0y, seg_a, seg_b, k0, k1) != OUTSIDE:
+                blocked = True
+            if blocked:
+                break
+        if not blocked:
+            ex = p1x - p0x
+            ey = p1y - p0y
+            ee = ex * ex + ey * ey
+            for c in range(n_circ):
+                wx = circ_c[c, 0] - p0x
+                wy = circ_c[c, 1] - p0y
+                s = 0.0
+                if ee > 0.0:
+                    s = min(max((wx * ex + wy * ey) / ee, 0.0), 1.0)
+                dx = wx - s * ex
+                dy = wy - s * ey
+                if dx * dx + dy * dy <= circ_r[c] * circ_r[c]:
+                    blocked = True
+                    break
+        out[m] = blocked
+
+
+# ---------------------------------------------------------------------------------------------
+# ESDF bilinear query
+# ---------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def esdf_query_kernel(values, ox, oy, res, points, out_v, out_g):
+    """Bilinear interpolation of node values and its analytic gradient; clamps to the grid.
+
+    Cells whose corners are not all finite (an empty world stores +inf) give the minimum
+    corner value and a zero gradient.
+    """
+    ny = values.shape[0]
+    nx = values.shape[1]
+    xmax = (nx - 1) * 1.0
+    ymax = (ny - 1) * 1.0
+    inv = 1.0 / res
+    for m in range(points.shape[0]):
+        fx = min(max((points[m, 0] - ox) * inv, 0.0), xmax)
+        fy = min(max((points[m, 1] - oy) * inv, 0.0), ymax)
+        ix = min(int(math.floor(fx)), nx - 2)
+        iy = min(int(math.floor(fy)), ny - 2)
+        u = fx - ix
+        v = fy - iy
+        v00 = values[iy, ix]
+        v10 = values[iy, ix + 1]
+        v01 = values[iy + 1, ix]
+        v11 = values[iy + 1, ix + 1]
+        if not (math.isfinite(v00) and math.isfinite(v10) and math.isfinite(v01) and math.isfinite(v11)):
+            out_v[m] = min(min(v00, v10), min(v01, v11))
+            out_g[m, 0] = 0.0
+            out_g[m, 1] = 0.0
+            continue
+        out_v[m] = (1.0 - v) * ((1.0 - u) * v00 + u * v10) + v * ((1.0 - u) * v01 + u * v11)
+        out_g[m, 0] = ((1.0 - v) * (v10 - v00) + v * (v11 - v01)) * inv
+        out_g[m, 1] = ((1.0 - u) * (v01 - v00) + u * (v11 - v10)) * inv
