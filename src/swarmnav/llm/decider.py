@@ -1,0 +1,161 @@
+"""The LLM decision layer of HES Section 3.3, on a plain dict of the state z(k).
+
+Per step k the caller gives the state, the rule action a_k^rule and the feasibility
+projection Pi_feas. The decider:
+
+- calls the model when I_llm(k) = 1, eq. (20): at the first step it is asked about and then
+  whenever k - k_llm >= T_llm (k_llm = the previous call's step);
+- takes the model's action as the candidate at a call step, the rule action otherwise, eq. (21);
+- projects the candidate with Pi_feas, eq. (22), exactly as the rule's own actions are
+  projected: an answer that parses but is infeasible is executed as ``keep``, and that is not
+  a fallback;
+- falls back to the rule action on any failure of the model (connection refused, timeout,
+  HTTP error, dropped connection, empty or unparsable answer), counted in llm_fallback_used;
+- records every call in a transcript (state, prompt, raw answer, parsed and executed action,
+  latency, fallback reason).
+
+With a delayed latency mode (``real`` / ``fixed:S``) a successful answer is held and applied,
+projected against the state at that later step, once its latency has elapsed in simulated
+time; meanwhile the rule decides and no new call is made.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from swarmnav.llm.backends import Backend, LlmError, ReplayMismatch
+from swarmnav.llm.config import LatencyMode
+from swarmnav.llm.parse import parse_answer
+from swarmnav.llm.prompt import build_prompt, jsonable
+
+TRANSCRIPT = "llm_transcript.jsonl"
+
+
+def project(action: str, state: Mapping[str, Any]) -> str:
+    """Pi_feas of eq. (22) on the state dict: split only if can_split, merge only if
+    can_merge, keep otherwise (anything outside A_str included)."""
+    if action == "split" and state.get("can_split"):
+        return "split"
+    if action == "merge" and state.get("can_merge"):
+        return "merge"
+    return "keep"
+
+
+@dataclass(frozen=True, slots=True)
+class Decision:
+    """The executed structural action of one step and where it came from."""
+
+    action: str  # in ACTIONS, feasible
+    reason: str
+    source: str  # "llm" (the model's suggestion) or "rule"
+
+
+class LlmDecider:
+    """Trigger, call, parse, project, fall back and record (see module docstring)."""
+
+    def __init__(self, backend: Backend, interval: int = 50, latency: LatencyMode | str = "blocking"):
+        self.backend = backend
+        self.interval = int(interval)
+        self.latency = latency if isinstance(latency, LatencyMode) else LatencyMode.parse(latency)
+        self.records: list[dict[str, Any]] = []
+        self._k_llm: int | None = None
+        self._pending: tuple[int, dict] | None = None  # (apply step, record) of a delayed answer
+
+    def due(self, step: int) -> bool:
+        """I_llm(k) of eq. (20); no new call while a delayed answer is pending."""
+        if self._pending is not None:
+            return False
+        return self._k_llm is None or step - self._k_llm >= self.interval
+
+    def decide(self, state: Mapping[str, Any], step: int, rule_action: str, rule_reason: str = "",
+               projection: Callable[[str], str] | None = None) -> Decision:
+        """The executed action at step ``step``.
+
+        Args:
+            state: z(k) as a dict (``DecisionState.to_dict()``).
+            rule_action: a_k^rule, the rule policy's action now.
+            projection: Pi_feas bound to this step's state; default :func:`project`.
+        """
+        proj = projection or (lambda a: project(a, state))
+        if self._pending is not None and step >= self._pending[0]:
+            _, rec = self._pending
+            self._pending = None
+            return self._apply(rec, step, proj)
+        if not self.due(step):
+            return Decision(proj(rule_action), rule_reason, "rule")
+        self._k_llm = step
+        rec = self._call(state, step, rule_action)
+        if rec["fallback"] is not None:
+            action = proj(rule_action)
+            rec.update(apply_step=step, executed=action)
+            why = f"LLM fallback ({rec['fallback']})"
+            return Decision(action, f"{why}; rule: {rule_reason}" if rule_reason else why, "rule")
+        delay = self.latency.delay_steps(rec["latency_s"], float(state["dt"]))
+        if delay == 0:
+            return self._apply(rec, step, proj)
+        self._pending = (step + delay, rec)
+        return Decision(proj(rule_action), rule_reason, "rule")
+
+    def _call(self, state: Mapping[str, Any], step: int, rule_action: str) -> dict[str, Any]:
+        prompt = build_prompt(state)
+        rec: dict[str, Any] = {
+            "step": int(step), "backend": self.backend.name, "model": getattr(self.backend, "model", ""),
+            "state": {k: jsonable(v, digits=None) for k, v in state.items()}, "prompt": prompt,
+            "raw": None, "parsed": None, "parse": None, "reason": None, "rule_action": rule_action,
+            "latency_s": None, "apply_step": None, "executed": None, "fallback": None,
+        }
+        check = getattr(self.backend, "check_state", None)
+        if check is not None:
+            check(step, rec["state"])
+        t0 = time.perf_counter()
+        try:
+            reply = self.backend.complete(prompt, step)
+        except ReplayMismatch:
+            raise
+        except LlmError as e:
+            rec.update(latency_s=e.latency if e.latency is not None else time.perf_counter() - t0, fallback=str(e))
+        except Exception as e:  # a model must never crash the simulation
+            rec.update(latency_s=time.perf_counter() - t0, fallback=f"error: {type(e).__name__}: {e}")
+        else:
+            parsed = parse_answer(reply.text)
+            rec.update(raw=reply.text, latency_s=reply.latency, parsed=parsed.action, parse=parsed.how or None,
+                       reason=parsed.reason or None)
+            if parsed.action is None:
+                rec["fallback"] = f"parse: {parsed.error}"
+        self.records.append(rec)
+        return rec
+
+    def _apply(self, rec: dict[str, Any], step: int, proj: Callable[[str], str]) -> Decision:
+        action = proj(rec["parsed"])
+        rec.update(apply_step=int(step), executed=action)
+        if action != rec["parsed"]:
+            reason = f"LLM suggested {rec['parsed']}, infeasible: projected to {action}"
+        else:
+            reason = f"LLM: {rec['reason']}" if rec["reason"] else "LLM"
+        return Decision(action, reason, "llm")
+
+    def summary(self) -> dict[str, float]:
+        """Run metrics: call and fallback counts, projections, latency statistics [s]."""
+        lat = np.array([r["latency_s"] for r in self.records], dtype=float)
+        some = lat.size > 0
+        return {
+            "llm_calls": float(len(self.records)),
+            "llm_fallback_used": float(sum(r["fallback"] is not None for r in self.records)),
+            "llm_projected": float(sum(r["executed"] is not None and r["parsed"] is not None
+                                       and r["executed"] != r["parsed"] for r in self.records)),
+            "llm_latency_mean_s": float(lat.mean()) if some else math.nan,
+            "llm_latency_median_s": float(np.median(lat)) if some else math.nan,
+            "llm_latency_max_s": float(lat.max()) if some else math.nan,
+            "llm_latency_total_s": float(lat.sum()),
+        }
+
+    def transcript(self) -> str:
+        """The audit transcript as JSON lines, one record per call."""
+        return "".join(json.dumps(r, allow_nan=False) + "\n" for r in self.records)
+

@@ -1,0 +1,109 @@
+"""The prompt P(z(k)) of HES Section 3.3, its output schema and the decoding settings.
+
+This module is the one place where the text sent to the model is written. The prompt has the
+paper's fixed three-part structure:
+
+1. a role preamble naming the model a "swarm navigation high-level decision planner";
+2. three explicit decision rules over ``can_split``, ``path_count``, ``avg_goal_distance``,
+   ``can_merge`` and ``near_goal_subswarms``;
+3. a strict output constraint: one JSON object ``{"decision": ..., "reason": ...}``;
+
+followed by the state vector z(k) of eq. (18) as JSON. The whole prompt is sent as a single
+user message: some chat templates (Gemma's in llama.cpp) drop a system message, and one
+message keeps the text the model sees identical on every back end.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any, Mapping
+
+#: The structural action set A_str of HES Section 3.1.
+ACTIONS = ("split", "merge", "keep")
+
+#: Fields of z(k), eq. (18), in the paper's order (the keys of ``DecisionState.to_dict()``).
+STATE_FIELDS = (
+    "k", "dt", "S", "path_count", "w_max", "w_min", "avg_goal_distance",
+    "near_goal_subswarms", "d_swarm_min", "can_split", "can_merge",
+)
+
+#: Decoding settings, HES Section 3.3: greedy decoding and at most 64 output tokens.
+TEMPERATURE = 0.0
+MAX_TOKENS = 64
+
+#: JSON schema of the answer, passed to the back ends that constrain decoding with it
+#: (Ollama ``format``, llama.cpp ``response_format.schema``). ``maxLength`` keeps the reason
+#: short enough that the object closes within MAX_TOKENS (our choice: 64 tokens hold the
+#: 25-token JSON frame plus about 120 characters of reason).
+SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "properties": {
+        "decision": {"type": "string", "enum": list(ACTIONS)},
+        "reason": {"type": "string", "maxLength": 120},
+    },
+    "required": ["decision", "reason"],
+}
+
+ROLE = (
+    "You are a swarm navigation high-level decision planner. A swarm of UAVs flies through a "
+    "cluttered corridor to a goal. It is organised in sub-swarms, each following a subleader. "
+    "Every few seconds you choose one structural action for the whole swarm: \"split\" (divide "
+    "into more sub-swarms that take different passable corridors), \"merge\" (join sub-swarms "
+    "again) or \"keep\" (keep the current structure)."
+)
+
+FIELDS = (
+    "State fields: k = step, dt = step length [s], S = number of sub-swarms, path_count = "
+    "number of passable corridors towards the goal, w_max / w_min = widest / narrowest corridor "
+    "width [m], avg_goal_distance = mean sub-swarm distance to the goal [m], "
+    "near_goal_subswarms = sub-swarms close to the goal, d_swarm_min = smallest distance "
+    "between two sub-swarms [m] (null with one sub-swarm), can_split / can_merge = whether a "
+    "split / merge is feasible now."
+)
+
+RULES = (
+    "Decision rules:\n"
+    "1. If can_split is true, path_count >= 2 and avg_goal_distance is still large, choose "
+    "\"split\" so the sub-swarms use the separate corridors.\n"
+    "2. If can_merge is true and near_goal_subswarms >= 2 (sub-swarms meet near the goal), "
+    "choose \"merge\".\n"
+    "3. Otherwise choose \"keep\". Never choose split when can_split is false, nor merge when "
+    "can_merge is false."
+)
+
+OUTPUT = (
+    "Output: answer with exactly one JSON object and nothing else, in the form "
+    "{\"decision\": \"split\" | \"merge\" | \"keep\", \"reason\": \"<one short sentence>\"}."
+)
+
+
+def state_json(state: Mapping[str, Any]) -> str:
+    """z(k) as compact JSON in the paper's field order; non-finite numbers become null
+    (e.g. d_swarm_min with one sub-swarm) and floats are rounded to 3 decimals."""
+    return json.dumps({k: jsonable(state[k]) for k in _ordered(state)}, separators=(", ", ": "))
+
+
+def build_prompt(state: Mapping[str, Any]) -> str:
+    """P(z(k)): role preamble, field glossary, three rules, output constraint, then z(k)."""
+    return "\n\n".join((ROLE, FIELDS, RULES, OUTPUT, "Current state: " + state_json(state)))
+
+
+def jsonable(v: Any, digits: int | None = 3) -> Any:
+    """A state value as strict JSON: bools stay bools, non-finite floats become None, other
+    floats are rounded to ``digits`` decimals (None: kept exact, for the transcript)."""
+    if isinstance(v, bool) or v is None or isinstance(v, str):
+        return v
+    if hasattr(v, "item"):  # numpy scalar
+        v = v.item()
+    if isinstance(v, int):
+        return v
+    f = float(v)
+    if not math.isfinite(f):
+        return None
+    return f if digits is None else round(f, digits)
+
+
+def _ordered(state: Mapping[str, Any]) -> list[str]:
+    known = [k for k in STATE_FIELDS if k in state]
+    return known + sorted(k for k in state if k not in STATE_FIELDS)

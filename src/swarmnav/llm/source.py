@@ -1,0 +1,56 @@
+"""The LLM decision layer as a decision source of a method (HES's ``DecisionSource``).
+
+A method that decides structure asks a source ``propose(z, step)`` each decision step; the
+rule source answers from the rules. :func:`decision_source` wraps that rule source when the
+method's parameters select an LLM back end, so the method itself needs one line to gain LLM
+decisions. The wrapper only needs ``z.to_dict()`` (or a dict) and the rule's proposal, whose
+own class it reuses for its answer.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+from swarmnav.llm.backends import make_backend
+from swarmnav.llm.config import LatencyMode, llm_params
+from swarmnav.llm.decider import TRANSCRIPT, LlmDecider
+
+
+class LlmDecisionSource:
+    """``propose(z, step)``: the LLM's projected action at call steps, the rule's otherwise.
+
+    Args:
+        rule: the rule source (``propose(z, step)`` -> a proposal with ``action``, ``reason``,
+            ``source``), asked every step: its action is a_k^rule and the fallback.
+        decider: the :class:`LlmDecider` that calls the model.
+        project: Pi_feas as ``project(action, z)``; default the decider's eq. (22) on the dict.
+    """
+
+    def __init__(self, rule: Any, decider: LlmDecider, project: Callable[[str, Any], str] | None = None):
+        self.rule, self.decider, self.project = rule, decider, project
+
+    def propose(self, z: Any, step: int) -> Any:
+        r = self.rule.propose(z, step)
+        state = z.to_dict() if hasattr(z, "to_dict") else dict(z)
+        proj = (lambda a: self.project(a, z)) if self.project is not None else None
+        d = self.decider.decide(state, step, r.action, r.reason, proj)
+        if d.source == "rule" and d.action == r.action and d.reason == r.reason:
+            return r
+        return type(r)(action=d.action, reason=d.reason, source=d.source)
+
+    def summary(self) -> dict[str, float]:
+        return self.decider.summary()
+
+    def artifacts(self) -> dict[str, str]:
+        return {TRANSCRIPT: self.decider.transcript()}
+
+
+def decision_source(params: Any, rule: Any, project: Callable[[str, Any], str] | None = None) -> Any:
+    """``rule`` itself for ``params.decision == "rule"``, else an :class:`LlmDecisionSource`
+    on the back end the ``llm_*`` fields of ``params`` describe (raises ConfigError)."""
+    p = llm_params(params)
+    if p.decision == "rule":
+        return rule
+    backend = make_backend(p.decision, url=p.llm_url, model=p.llm_model, timeout=p.llm_timeout, gguf=p.llm_gguf,
+                           replay=p.llm_replay, response_format=p.llm_response_format, threads=p.llm_threads)
+    return LlmDecisionSource(rule, LlmDecider(backend, p.llm_interval, LatencyMode.parse(p.llm_latency)), project)
