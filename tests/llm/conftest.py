@@ -9,7 +9,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from fakeserver import FakeLlmServer  # noqa: E402
+from llm_fakeserver import FakeLlmServer  # noqa: E402
 
 from swarmnav.llm.backends import LlmError, Reply  # noqa: E402
 
