@@ -9,6 +9,8 @@ dynamics model and an ``info`` dict. Metrics-only data goes in ``info``:
 - anything else is ignored by the loop.
 
 ``summary()`` returns method-specific run metrics (floats) merged into ``RunResult.metrics``.
+An optional ``artifacts()`` returns extra files of the run, ``{file name: str | bytes}``, kept
+in ``RunResult.artifacts`` and written into the run directory (e.g. an LLM transcript).
 """
 
 from __future__ import annotations

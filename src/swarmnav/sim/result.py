@@ -27,6 +27,8 @@ class RunResult:
         events: structural events, dicts with ``step``, ``action``, ``source``, ``reason``.
         metrics: scalar metrics (floats).
         wall_time: seconds spent in the rollout loop [s].
+        artifacts: extra files of the run, file name -> content, from the method's optional
+            ``artifacts()`` hook (e.g. ``llm_transcript.jsonl``); written by ``save``.
     """
 
     config: dict[str, Any]
@@ -37,6 +39,7 @@ class RunResult:
     events: list[dict[str, Any]] = field(default_factory=list)
     metrics: dict[str, float] = field(default_factory=dict)
     wall_time: float = 0.0
+    artifacts: dict[str, str | bytes] = field(default_factory=dict)
 
     @property
     def n_subswarms(self) -> np.ndarray:
@@ -50,7 +53,8 @@ class RunResult:
         return self.clearance.min(axis=1)
 
     def save(self, out: str | Path) -> Path:
-        """Write ``metrics.json``, ``trajectory.npz``, ``config.json`` and ``events.jsonl``.
+        """Write ``metrics.json``, ``trajectory.npz``, ``config.json``, ``events.jsonl`` and
+        every artifact under its own name.
 
         Files are written to a temporary name and renamed, so a killed process never leaves a
         half-written file under the final name.
@@ -64,6 +68,11 @@ class RunResult:
         _atomic(d / "config.json", lambda f: f.write(json.dumps(self.config, indent=2).encode()))
         metrics = dict(self.metrics, wall_time_s=self.wall_time)
         _atomic(d / "metrics.json", lambda f: f.write(json.dumps(_jsonable(metrics), indent=2).encode()))
+        for name, content in self.artifacts.items():
+            if Path(name).name != name or name.startswith(".") or name in _RUN_FILES:
+                raise SwarmnavError(f"artifact name must be a plain file name of its own, got {name!r}")
+            data = content.encode() if isinstance(content, str) else bytes(content)
+            _atomic(d / name, lambda f, data=data: f.write(data))
         return d
 
     @classmethod
@@ -84,6 +93,9 @@ class RunResult:
             events = [json.loads(line) for line in ev.read_text().splitlines() if line.strip()]
         wall = float(metrics.pop("wall_time_s", 0.0))
         return cls(config=config, events=events, metrics=metrics, wall_time=wall, **arrays)
+
+
+_RUN_FILES = ("metrics.json", "trajectory.npz", "config.json", "events.jsonl")
 
 
 def _atomic(path: Path, write) -> None:

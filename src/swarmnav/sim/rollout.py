@@ -92,6 +92,9 @@ def run(
     )
     metrics.update(m.summary())
     result.metrics = metrics
+    artifacts = getattr(m, "artifacts", None)  # optional hook: extra files of the run directory
+    if callable(artifacts):
+        result.artifacts = dict(artifacts())
     return result
 
 
