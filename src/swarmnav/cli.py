@@ -32,6 +32,36 @@ def _parse_sets(items: Sequence[str] | None) -> dict[str, str]:
     return out
 
 
+#: LLM decision flags (HES Section 3.3): sugar for ``--set KEY=VALUE``, see docs/llm.md.
+_LLM_FLAGS = (
+    ("--decision", "decision", "rule (default) | ollama | openai | llamacpp | replay"),
+    ("--llm-url", "llm_url", "model server URL (ollama: http://HOST:11434, openai: http://HOST:PORT/v1)"),
+    ("--llm-model", "llm_model", "model name on the server (default qwen2.5:3b)"),
+    ("--llm-timeout", "llm_timeout", "per-call timeout [s] (default 120)"),
+    ("--llm-interval", "llm_interval", "steps between LLM calls, T_llm (default 50)"),
+    ("--llm-gguf", "llm_gguf", "GGUF model file for --decision llamacpp"),
+    ("--llm-latency", "llm_latency", "blocking (default) | real | fixed:SECONDS"),
+    ("--llm-replay", "llm_replay", "transcript or run directory for --decision replay"),
+)
+
+
+def _add_llm_flags(p: argparse.ArgumentParser) -> None:
+    for flag, key, text in _LLM_FLAGS:
+        p.add_argument(flag, dest=key, metavar=key.removeprefix("llm_").upper(), help=text)
+
+
+def _llm_sets(args, params: dict[str, str]) -> dict[str, str]:
+    """``params`` with the LLM flags added; a flag and a ``--set`` of the same key must agree."""
+    for flag, key, _ in _LLM_FLAGS:
+        value = getattr(args, key, None)
+        if value is None:
+            continue
+        if key in params and params[key] != value:
+            raise ConfigError(f"{flag} {value} contradicts --set {key}={params[key]}")
+        params[key] = value
+    return params
+
+
 def _cmd_scenarios(args) -> int:
     from swarmnav.world.generators import GENERATORS
     from swarmnav.world.scenario import builtin_names, load_scenario
@@ -69,7 +99,7 @@ def _cmd_run(args) -> int:
         raise ConfigError("run: give exactly one of --scenario NAME or --scenario-file PATH")
     if args.steps < 1:
         raise ConfigError(f"run: --steps must be >= 1, got {args.steps}")
-    params = _parse_sets(args.set)
+    params = _llm_sets(args, _parse_sets(args.set))
     n = params.pop("n", None)
     scn = load_scenario(args.scenario_file or args.scenario, n=int(n) if n is not None else None)
     progress = sys.stderr.isatty() and not args.quiet
@@ -84,8 +114,22 @@ def _cmd_run(args) -> int:
         from swarmnav.viz import plot_run
 
         print(f"  figure: {plot_run(res, out / 'trajectory.png')}")
-    print(f"  wrote {out}/metrics.json, trajectory.npz, config.json")
+    if "llm_calls" in m:
+        print(f"  LLM: {m['llm_calls']:.0f} calls, {m['llm_fallback_used']:.0f} fallbacks, "
+              f"{m['llm_projected']:.0f} projected to keep, latency median {m['llm_latency_median_s']:.2f} s "
+              f"(max {m['llm_latency_max_s']:.2f} s)")
+    print(f"  wrote {out}/metrics.json, trajectory.npz, config.json" + "".join(f", {a}" for a in res.artifacts))
     return 0
+
+
+def _cmd_llm(args) -> int:
+    from swarmnav.llm.check import check
+    from swarmnav.llm.config import LlmParams
+    from swarmnav.params import build
+
+    params = _llm_sets(args, {})
+    params.setdefault("decision", "ollama")
+    return check(build(LlmParams, params, context="llm check"), sys.stdout)
 
 
 def _cmd_plot(args) -> int:
@@ -155,6 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="method parameter (repeatable); n=N resizes the swarm")
     s.add_argument("--plot", action="store_true", help="also draw DIR/trajectory.png")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_llm_flags(s)
     s.set_defaults(fn=_cmd_run)
 
     s = sub.add_parser("plot", help="draw a run directory like HES Figure 3")
@@ -179,6 +224,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--save-runs", action="store_true", help="also keep every run directory under DIR/runs")
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(fn=_cmd_experiment)
+
+    s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question")
+    s.add_argument("action", choices=["check"])
+    _add_llm_flags(s)
+    s.set_defaults(fn=_cmd_llm)
     return p
 
 

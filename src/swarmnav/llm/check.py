@@ -26,7 +26,7 @@ def check(p: LlmParams, out: TextIO) -> int:
                            replay=p.llm_replay, response_format=p.llm_response_format, threads=p.llm_threads)
     where = getattr(backend, "url", None) or getattr(backend, "path", "")
     print(f"back end {backend.name} ({where}), model {backend.model or '-'}, timeout {p.llm_timeout:g} s", file=out)
-    step = min(getattr(backend, "records", {0: None})) if p.decision == "replay" else 0
+    step = min(getattr(backend, "records", None) or [0])  # replay: its first recorded call
     try:
         reply = backend.complete(build_prompt(SAMPLE_STATE), step)
     except LlmError as e:
