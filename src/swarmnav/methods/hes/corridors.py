@@ -1,0 +1,226 @@
+"""Corridor detection from one LiDAR ring, HES Section 3.2 (gap detection by local-minimum pairing).
+
+The paper defers the details to its reference [38]; this is our reconstruction, kept small:
+
+1. **Anchors**: the local minima of the ring among rays that hit something (the nearest point
+   of every visible obstacle surface; a flat run of equal ranges counts once).
+2. **Pairing**: every two angularly consecutive anchors ``a, b`` bound one sector of the ring.
+   Between them the ring rises to a peak and falls again; if the peak is at least ``h_open``
+   above the nearer anchor the sector is an *opening* (an obstacle-free direction between two
+   obstacle surfaces).
+3. **Throat and width**: the sector's hit points are split at the peak into the side of ``a``
+   and the side of ``b``; the closest pair of points across the two sides is the throat
+   ``(q_a, q_b)`` and its length is the corridor width ``w``. A concave corner, whose two
+   sides meet, gets a width of about one ray spacing and is thus never passable.
+4. **Direction**: the corridor's exit direction ``n`` is the throat normal on the side of the
+   peak ray; the corridor target lies ``through`` metres beyond the throat midpoint along ``n``.
+
+:func:`detect_gaps` (numba) returns every opening; :func:`corridors_toward` keeps those wider
+than ``w_pass`` whose exit direction lies within ``toward_deg`` of the goal bearing, the
+*candidate corridors leading toward the goal*, and adds the route cost used to choose among them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+# Columns of the detect_gaps output rows.
+GAP_QA_X, GAP_QA_Y, GAP_QB_X, GAP_QB_Y, GAP_W, GAP_NX, GAP_NY, GAP_PEAK = range(8)
+
+
+@njit(cache=True)
+def ring_anchors(ring, max_range):
+    """Indices of the local minima of a ring among rays that hit (``d < max_range``)."""
+    n = ring.shape[0]
+    out = np.empty(n, dtype=np.int64)
+    m = 0
+    for r in range(n):
+        d = ring[r]
+        if d >= max_range or not d < ring[(r - 1) % n]:
+            continue
+        j = (r + 1) % n
+        steps = 0
+        while ring[j] == d and steps < n:
+            j = (j + 1) % n
+            steps += 1
+        if ring[j] > d:
+            out[m] = r
+            m += 1
+    return out[:m]
+
+
+@njit(cache=True)
+def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
+    """All openings of one ring (see module docstring).
+
+    Args:
+        ring: (R,) ranges [m] of the agent at ``(px, py)``; cos_t, sin_t: (R,) ray directions.
+        max_range: R_L [m] (rays at R_L hit nothing); h_open: opening depth threshold [m].
+
+    Returns:
+        (M, 8) rows ``qa_x, qa_y, qb_x, qb_y, width, n_x, n_y, peak_ray``: throat end points
+        [m], width [m], unit exit direction, index of the peak ray.
+    """
+    n = ring.shape[0]
+    anchors = ring_anchors(ring, max_range)
+    na = anchors.shape[0]
+    out = np.empty((max(na, 1), 8))
+    m = 0
+    if na == 0:
+        return out[:0]
+    for i in range(na):
+        a = anchors[i]
+        b = anchors[(i + 1) % na]
+        span = (b - a) % n
+        if na == 1:
+            span = n
+        if span < 2:
+            continue
+        pk = -1
+        best = -1.0
+        for s in range(1, span):
+            d = ring[(a + s) % n]
+            if d > best:
+                best = d
+                pk = s
+        if best - min(ring[a], ring[b]) < h_open:
+            continue
+        wbest = np.inf
+        ax = ay = bx = by = 0.0
+        for s in range(0, pk):
+            ra = (a + s) % n
+            da = ring[ra]
+            if da >= max_range:
+                continue
+            qx = px + da * cos_t[ra]
+            qy = py + da * sin_t[ra]
+            for t in range(pk + 1, span + 1):
+                rb = (a + t) % n
+                db = ring[rb]
+                if db >= max_range:
+                    continue
+                ux = px + db * cos_t[rb] - qx
+                uy = py + db * sin_t[rb] - qy
+                w2 = ux * ux + uy * uy
+                if w2 < wbest:
+                    wbest = w2
+                    ax, ay = qx, qy
+                    bx, by = qx + ux, qy + uy
+        if not np.isfinite(wbest) or wbest <= 0.0:
+            continue
+        w = math.sqrt(wbest)
+        nx = -(by - ay) / w
+        ny = (bx - ax) / w
+        rp = (a + pk) % n
+        if nx * cos_t[rp] + ny * sin_t[rp] < 0.0:
+            nx, ny = -nx, -ny
+        out[m, 0], out[m, 1], out[m, 2], out[m, 3] = ax, ay, bx, by
+        out[m, 4], out[m, 5], out[m, 6], out[m, 7] = w, nx, ny, rp
+        m += 1
+    return out[:m]
+
+
+@njit(cache=True)
+def segment_clear(ring, px, py, cos_t, sin_t, gx, gy, rho, max_range):
+    """True if no LiDAR return lies within ``rho`` [m] of the segment from the agent to ``g``
+    (a straight route of half-width ``rho`` is free as far as the ring can tell)."""
+    n = ring.shape[0]
+    ex = gx - px
+    ey = gy - py
+    ee = ex * ex + ey * ey
+    for r in range(n):
+        d = ring[r]
+        if d >= max_range:
+            continue
+        qx = d * cos_t[r]
+        qy = d * sin_t[r]
+        s = 0.0
+        if ee > 0.0:
+            s = min(max((qx * ex + qy * ey) / ee, 0.0), 1.0)
+        dx = qx - s * ex
+        dy = qy - s * ey
+        if dx * dx + dy * dy < rho * rho:
+            return False
+    return True
+
+
+@njit(cache=True)
+def free_points(ring, px, py, cos_t, sin_t, pts, clear, max_range):
+    """(M,) bool: no LiDAR return of this ring lies within ``clear`` [m] of ``pts[m]``."""
+    n = ring.shape[0]
+    out = np.ones(pts.shape[0], dtype=np.bool_)
+    c2 = clear * clear
+    for r in range(n):
+        d = ring[r]
+        if d >= max_range:
+            continue
+        qx = px + d * cos_t[r]
+        qy = py + d * sin_t[r]
+        for k in range(pts.shape[0]):
+            if out[k]:
+                dx = pts[k, 0] - qx
+                dy = pts[k, 1] - qy
+                if dx * dx + dy * dy < c2:
+                    out[k] = False
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class Corridor:
+    """A candidate corridor toward the goal, in world coordinates.
+
+    Attributes:
+        mid: (2,) throat midpoint [m]; normal: (2,) unit exit direction.
+        width: throat width [m] (``inf`` for the direct route to a visible goal).
+        target: (2,) point ``through`` metres beyond the throat [m] (the goal for ``direct``).
+        cost: route length estimate ``|mid - p| + |goal - mid|`` plus the width penalty [m].
+        direct: True for the straight route to the goal.
+    """
+
+    mid: np.ndarray
+    normal: np.ndarray
+    width: float
+    target: np.ndarray
+    cost: float
+    direct: bool = False
+
+
+def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pass: float, toward_deg: float,
+                     through: float) -> list[Corridor]:
+    """The candidate corridors leading toward the goal among the openings ``gaps`` seen from ``p``.
+
+    Keeps openings at least ``w_pass`` wide whose exit direction is within ``toward_deg`` of the
+    bearing to the goal. Cost = ``|mid - p| + |goal - mid|`` [m] (the length of the route
+    through the throat midpoint). Sorted by cost.
+    """
+    out: list[Corridor] = []
+    if len(gaps) == 0:
+        return out
+    g = goal - p
+    gn = math.hypot(g[0], g[1])
+    gu = g / gn if gn > 0 else np.array([1.0, 0.0])
+    cmin = math.cos(math.radians(toward_deg))
+    for row in gaps:
+        w = row[GAP_W]
+        if w < w_pass:
+            continue
+        nrm = row[GAP_NX:GAP_NY + 1]
+        if nrm[0] * gu[0] + nrm[1] * gu[1] < cmin:
+            continue
+        mid = 0.5 * (row[GAP_QA_X:GAP_QA_Y + 1] + row[GAP_QB_X:GAP_QB_Y + 1])
+        cost = math.hypot(*(mid - p)) + math.hypot(*(goal - mid))
+        out.append(Corridor(mid=mid, normal=nrm.copy(), width=float(w), target=mid + through * nrm, cost=cost))
+    out.sort(key=lambda c: c.cost)
+    return out
+
+
+def direct_corridor(p: np.ndarray, goal: np.ndarray) -> Corridor:
+    """The straight route to the goal (used when :func:`segment_clear` says it is free)."""
+    g = goal - p
+    d = math.hypot(g[0], g[1])
+    u = g / d if d > 0 else np.array([1.0, 0.0])
+    return Corridor(mid=p.copy(), normal=u, width=math.inf, target=goal.copy(), cost=d, direct=True)

@@ -1,0 +1,327 @@
+"""Low-level controller of HES, Section 4: the eight force terms of eq. (38) as pure functions.
+
+Every term is a numba function of flat arrays that returns an (N, 2) acceleration [m/s^2];
+:func:`force_terms` evaluates all eight into an (8, N, 2) stack (in the order of eq. (38)) and
+:func:`synthesize` sums them. No Python loop over agents runs per step: the per-agent and
+per-ray work is compiled.
+
+Order of the stack (``TERMS``)::
+
+    0 att    slot attraction                       eq. (24), attenuated by sigma(p_i, p*_i)
+    1 sep    global separation                     eq. (25)
+    2 path   corridor centering                    eq. (32), navigate only
+    3 intra  nearest-neighbour cohesion            eq. (26), attenuated by sigma(p_i, p_nn)
+    4 ir     intra-sub-swarm short-range repulsion eq. (31), navigate only
+    5 fol    follower-subleader coupling           eq. (27), attenuated by sigma(p_i, p_s)
+    6 coh    centroid cohesion                     eq. (29), attenuated by sigma(p_i, pbar_s)
+    7 obs    LiDAR obstacle repulsion              eqs. (35)-(37)
+
+The four attraction-type terms (att, intra, fol, coh) are multiplied by the occlusion factor
+of eq. (30); ``sig`` holds it per agent and target, columns ``SIG_SLOT, SIG_NN, SIG_SL,
+SIG_CENT``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+TERMS = ("att", "sep", "path", "intra", "ir", "fol", "coh", "obs")
+SIG_SLOT, SIG_NN, SIG_SL, SIG_CENT = 0, 1, 2, 3
+
+# Indices of the gain vector passed to the kernels (one float64 array keeps the signature short).
+G_KP, G_KV, G_KSEP, G_RSEP, G_KPATH, G_KINTRA, G_DTHR, G_KIR, G_DIR, G_KL, G_KVL, G_D0, G_KCOH, G_DC, \
+    G_KREP, G_RT, G_KB, G_GAMMA, G_KE, G_DSAFE, G_DFLOOR = range(21)
+N_GAINS = 21
+
+
+def gain_vector(p) -> np.ndarray:
+    """The kernels' gain vector from a :class:`HesParams`."""
+    g = np.empty(N_GAINS)
+    g[G_KP], g[G_KV], g[G_KSEP], g[G_RSEP] = p.k_p, p.k_v, p.k_sep, p.r_sep
+    g[G_KPATH], g[G_KINTRA], g[G_DTHR], g[G_KIR], g[G_DIR] = p.k_path, p.k_intra, p.d_thr, p.k_ir, p.d_ir
+    g[G_KL], g[G_KVL], g[G_D0], g[G_KCOH], g[G_DC] = p.k_l, p.k_vl, p.d_0, p.k_coh, p.d_c
+    g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE] = p.k_rep, p.r_trigger, p.k_b, p.gamma, p.k_e
+    g[G_DSAFE], g[G_DFLOOR] = p.d_safe, p.d_floor
+    return g
+
+
+# --------------------------------------------------------------------------- reference, eq. (23)
+
+@njit(cache=True)
+def slot_velocity(x, slot, speed, eps_v):
+    """Reference velocity of eq. (23): ``v*_i = v_s (p*_i - p_i) / (||p*_i - p_i|| + eps_v)``.
+
+    Args:
+        x: (N, 2) positions [m]; slot: (N, 2) reference positions p*_i [m];
+        speed: (N,) cruise speed v_s of each agent's sub-swarm [m/s]; eps_v [m].
+    """
+    n = x.shape[0]
+    out = np.empty((n, 2))
+    for i in range(n):
+        ex = slot[i, 0] - x[i, 0]
+        ey = slot[i, 1] - x[i, 1]
+        s = speed[i] / (math.sqrt(ex * ex + ey * ey) + eps_v)
+        out[i, 0] = s * ex
+        out[i, 1] = s * ey
+    return out
+
+
+# --------------------------------------------------------------------------- the eight terms
+
+@njit(cache=True)
+def attraction(x, v, slot, vslot, k_p, k_v):
+    """Eq. (24): ``f_att = k_p (p* - p) + k_v (v* - v)``."""
+    return k_p * (slot - x) + k_v * (vslot - v)
+
+
+@njit(cache=True)
+def separation(x, group, k, radius, d_floor, same_group):
+    """Inverse-distance repulsion ``sum_j k (p_i - p_j) / d_ij^2`` over ``d_ij < radius``.
+
+    ``same_group=False``: all neighbours, eq. (25) (global separation, k_sep, r_sep);
+    ``same_group=True``: members of i's own sub-swarm only, eq. (31) (k_ir, d_ir).
+    O(N^2) pair loop (compiled; N is tens to hundreds here).
+    """
+    n = x.shape[0]
+    out = np.zeros((n, 2))
+    r2 = radius * radius
+    f2 = d_floor * d_floor
+    for i in range(n):
+        for j in range(i + 1, n):
+            if same_group and group[i] != group[j]:
+                continue
+            dx = x[i, 0] - x[j, 0]
+            dy = x[i, 1] - x[j, 1]
+            d2 = dx * dx + dy * dy
+            if d2 >= r2:
+                continue
+            s = k / max(d2, f2)
+            out[i, 0] += s * dx
+            out[i, 1] += s * dy
+            out[j, 0] -= s * dx
+            out[j, 1] -= s * dy
+    return out
+
+
+@njit(cache=True)
+def centering(x, target, k):
+    """Eq. (32): ``f_path = k_path (c_s - p_i)`` with ``target[i] = c_s`` of i's sub-swarm."""
+    return k * (target - x)
+
+
+@njit(cache=True)
+def spring(x, target, k, d0, mask):
+    """Dead-band spring toward a target point: ``k max(0, ||q_i - p_i|| - d0) e_i``,
+    ``e_i = (q_i - p_i) / ||q_i - p_i||``; zero where ``mask`` is False.
+
+    The attraction part of eq. (26) (q = nearest neighbour, d0 = d_thr), eq. (27)
+    (q = subleader, d0 = d_0) and eq. (29) (q = centroid, d0 = d_c).
+    """
+    n = x.shape[0]
+    out = np.zeros((n, 2))
+    for i in range(n):
+        if not mask[i]:
+            continue
+        ex = target[i, 0] - x[i, 0]
+        ey = target[i, 1] - x[i, 1]
+        d = math.sqrt(ex * ex + ey * ey)
+        if d > d0 and d > 0.0:
+            s = k * (d - d0) / d
+            out[i, 0] = s * ex
+            out[i, 1] = s * ey
+    return out
+
+
+@njit(cache=True)
+def velocity_match(v, v_target, k, mask):
+    """Velocity part of eq. (27): ``k_vl (v_s - v_i)`` (v_s: the subleader's velocity)."""
+    n = v.shape[0]
+    out = np.zeros((n, 2))
+    for i in range(n):
+        if mask[i]:
+            out[i, 0] = k * (v_target[i, 0] - v[i, 0])
+            out[i, 1] = k * (v_target[i, 1] - v[i, 1])
+    return out
+
+
+@njit(cache=True)
+def nearest_in_group(x, group):
+    """Index of each agent's nearest neighbour within its own sub-swarm (-1 if alone)."""
+    n = x.shape[0]
+    out = np.full(n, -1, dtype=np.int64)
+    best = np.full(n, np.inf)
+    for i in range(n):
+        for j in range(i + 1, n):
+            if group[i] != group[j]:
+                continue
+            dx = x[i, 0] - x[j, 0]
+            dy = x[i, 1] - x[j, 1]
+            d2 = dx * dx + dy * dy
+            if d2 < best[i]:
+                best[i] = d2
+                out[i] = j
+            if d2 < best[j]:
+                best[j] = d2
+                out[j] = i
+    return out
+
+
+@njit(cache=True)
+def is_local_min(ring, r):
+    """Eq. (35) local-minimum test ``d_r < d_{r-1} and d_r < d_{r+1}`` with circular indexing.
+
+    A flat run of equal ranges (two rays straddling a wall's foot point symmetrically) counts as
+    one minimum, at its first ray, if the ring rises on both ends; the paper's strict test would
+    drop such a minimum and with it the whole wall's repulsion for that step.
+    """
+    n = ring.shape[0]
+    d = ring[r]
+    if not d < ring[(r - 1) % n]:
+        return False
+    j = (r + 1) % n
+    steps = 0
+    while ring[j] == d and steps < n:
+        j = (j + 1) % n
+        steps += 1
+    return ring[j] > d
+
+
+@njit(cache=True)
+def repulsion_magnitude(d, k_rep, r_t, k_b, gamma, k_e, d_safe):
+    """Eq. (36): per-ray repulsive magnitude omega [m/s^2] at range d [m] (d already floored).
+
+    ``k_rep max(0, 1/d - 1/R_t) / d^2 * (1 + k_b (max(0, R_t - d) / R_t)^gamma)
+    + 1{d < d_safe} k_e (d_safe - d + 1)^2``.
+    """
+    w = k_rep * max(0.0, 1.0 / d - 1.0 / r_t) / (d * d) * (1.0 + k_b * (max(0.0, r_t - d) / r_t) ** gamma)
+    if d < d_safe:
+        w += k_e * (d_safe - d + 1.0) ** 2
+    return w
+
+
+@njit(cache=True)
+def lidar_repulsion(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_floor):
+    """Eq. (37): ``f_obs,i = sum_{r in L_i} omega_{i,r} e_away,r``, ``e_away = -(cos, sin) theta_r``,
+    over the active local-minimum set L_i of eq. (35) (local minima of the ring closer than R_t).
+
+    Args:
+        ring: (N, R) fused LiDAR ranges [m] (eq. 9).
+    """
+    n, nr = ring.shape
+    out = np.zeros((n, 2))
+    for i in range(n):
+        row = ring[i]
+        for r in range(nr):
+            d = row[r]
+            if d >= r_t or not is_local_min(row, r):
+                continue
+            w = repulsion_magnitude(max(d, d_floor), k_rep, r_t, k_b, gamma, k_e, d_safe)
+            out[i, 0] -= w * cos_t[r]
+            out[i, 1] -= w * sin_t[r]
+    return out
+
+
+# --------------------------------------------------------------------------- synthesis, eq. (38)
+
+@njit(cache=True)
+def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
+                ring, cos_t, sin_t, g):
+    """All eight terms of eq. (38), an (8, N, 2) stack in the order of ``TERMS``.
+
+    Args:
+        x, v: (N, 2) positions [m] and velocities [m/s].
+        group: (N,) sub-swarm index of each agent (any ints; equal = same sub-swarm).
+        sl_pos, sl_vel: (N, 2) position and velocity of each agent's subleader.
+        follower: (N,) bool, False for subleaders (the leader included): no coupling term.
+        cent: (N, 2) centroid of each agent's sub-swarm; waypoint: (N, 2) its c_s.
+        nav: (N,) bool, the agent's sub-swarm is in navigate mode (path, ir active).
+        slot, vslot: (N, 2) reference position and velocity, eq. (23).
+        nn: (N,) nearest same-sub-swarm neighbour (-1: none).
+        sig: (N, 4) occlusion factors of eq. (30) for slot, nn, subleader, centroid.
+        ring: (N, R) LiDAR ranges; cos_t, sin_t: (R,) ray directions; g: gain vector.
+    """
+    n = x.shape[0]
+    out = np.zeros((8, n, 2))
+    out[0] = attraction(x, v, slot, vslot, g[G_KP], g[G_KV])
+    out[1] = separation(x, group, g[G_KSEP], g[G_RSEP], g[G_DFLOOR], False)
+    out[2] = centering(x, waypoint, g[G_KPATH])
+    has_nn = nn >= 0
+    q = np.empty((n, 2))
+    for i in range(n):
+        j = nn[i] if nn[i] >= 0 else i
+        q[i, 0] = x[j, 0]
+        q[i, 1] = x[j, 1]
+    out[3] = spring(x, q, g[G_KINTRA], g[G_DTHR], has_nn)
+    out[4] = separation(x, group, g[G_KIR], g[G_DIR], g[G_DFLOOR], True)
+    out[5] = spring(x, sl_pos, g[G_KL], g[G_D0], follower) + velocity_match(v, sl_vel, g[G_KVL], follower)
+    all_true = np.ones(n, dtype=np.bool_)
+    out[6] = spring(x, cent, g[G_KCOH], g[G_DC], all_true)
+    out[7] = lidar_repulsion(ring, cos_t, sin_t, g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE],
+                             g[G_DSAFE], g[G_DFLOOR])
+    for i in range(n):
+        for c in range(2):
+            out[0, i, c] *= sig[i, SIG_SLOT]
+            out[3, i, c] *= sig[i, SIG_NN]
+            out[5, i, c] *= sig[i, SIG_SL]
+            out[6, i, c] *= sig[i, SIG_CENT]
+            if not nav[i]:  # eq. (38): path and intra-repulsion only in navigate mode
+                out[2, i, c] = 0.0
+                out[4, i, c] = 0.0
+    return out
+
+
+@njit(cache=True)
+def synthesize(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
+               ring, cos_t, sin_t, g):
+    """Eq. (38): ``a_cmd = sum of the eight terms`` (before saturation), (N, 2)."""
+    t = force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
+                    ring, cos_t, sin_t, g)
+    return t.sum(axis=0)
+
+
+@njit(cache=True)
+def saturate(a, a_max):
+    """Eq. (39): scale each row down to norm ``a_max`` [m/s^2] if it is longer."""
+    n = a.shape[0]
+    out = a.copy()
+    for i in range(n):
+        s = math.sqrt(a[i, 0] * a[i, 0] + a[i, 1] * a[i, 1])
+        if s > a_max:
+            out[i, 0] *= a_max / s
+            out[i, 1] *= a_max / s
+    return out
+
+
+# --------------------------------------------------------------------------- safety stack (ours)
+
+@njit(cache=True)
+def braking_barrier(ring, v, cos_t, sin_t, margin, a_brake, dt, max_range):
+    """Braking barrier (ours; an adaptive motion-regulation layer of the safety stack, Section 5.3).
+
+    The closing speed ``c = v . u`` toward an agent's nearest LiDAR return (range d along ray u)
+    is bounded by what a deceleration ``a_brake`` stops within ``d - margin``:
+    ``c_max = sqrt(2 a_brake max(d - margin, 0))``. An excess is removed within one step,
+    ``a = -min((c - c_max) / dt, 4 a_brake) u``; zero when the agent is slow enough.
+    """
+    n, nr = ring.shape
+    out = np.zeros((n, 2))
+    for i in range(n):
+        row = ring[i]
+        r = 0
+        d = row[0]
+        for k in range(1, nr):
+            if row[k] < d:
+                d = row[k]
+                r = k
+        if d >= max_range:
+            continue
+        c = v[i, 0] * cos_t[r] + v[i, 1] * sin_t[r]
+        c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
+        if c > c_max:
+            b = min((c - c_max) / dt, 4.0 * a_brake)
+            out[i, 0] = -b * cos_t[r]
+            out[i, 1] = -b * sin_t[r]
+    return out

@@ -1,0 +1,169 @@
+"""The hierarchy of HES, Section 2.2: partition, centroids, report packets, split / merge
+execution and dynamic follower reassignment (eq. 41). Pure functions of arrays.
+
+A partition is held as ``labels`` (N,) int sub-swarm ids plus ``subleaders`` {id: agent};
+every agent has exactly one label (eq. 1 holds by construction) and every subleader carries
+its own sub-swarm's label (:func:`check_partition` asserts both).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from swarmnav.methods.hes.corridors import Corridor
+
+
+def check_partition(labels: np.ndarray, subleaders: dict[int, int], n: int) -> None:
+    """Raise AssertionError unless ``labels`` is a partition of ``{0..n-1}`` (eq. 1) whose blocks
+    are exactly the keys of ``subleaders`` and every subleader is a member of its own block."""
+    assert labels.shape == (n,), "every agent needs exactly one sub-swarm label"
+    ids = set(np.unique(labels).tolist())
+    assert ids == set(subleaders), f"sub-swarm ids {sorted(ids)} != subleader keys {sorted(subleaders)}"
+    for s, a in subleaders.items():
+        assert labels[a] == s, f"subleader {a} of sub-swarm {s} carries label {labels[a]}"
+
+
+def centroids(x: np.ndarray, labels: np.ndarray, ids: list[int]) -> np.ndarray:
+    """Eq. (2): ``pbar_s = mean of p_i over S_s`` for each id in ``ids``, (S, 2) [m]."""
+    return np.array([x[labels == s].mean(axis=0) for s in ids]).reshape(-1, 2)
+
+
+@dataclass(frozen=True, slots=True)
+class Pack:
+    """The subleader report packet P_s(k) of eq. (3): ``{(j, p_j, v_j) | j in S_s(k)}``."""
+
+    sid: int
+    subleader: int
+    members: np.ndarray  # (m,) agent indices j
+    positions: np.ndarray  # (m, 2) p_j [m]
+    velocities: np.ndarray  # (m, 2) v_j [m/s]
+
+    @property
+    def centroid(self) -> np.ndarray:
+        return self.positions.mean(axis=0)
+
+    @property
+    def subleader_position(self) -> np.ndarray:
+        return self.positions[int(np.flatnonzero(self.members == self.subleader)[0])]
+
+
+@dataclass(frozen=True, slots=True)
+class Report:
+    """What a subleader sends the leader each step: its Pack and what its LiDAR ring shows.
+
+    Attributes:
+        pack: P_s(k).
+        corridors: candidate corridors toward the goal from the subleader's ring, best first.
+        clearance: nearest LiDAR return over the members' rings [m] (R_L if none).
+    """
+
+    pack: Pack
+    corridors: tuple[Corridor, ...]
+    clearance: float
+
+
+def make_pack(sid: int, subleader: int, members: np.ndarray, x: np.ndarray, v: np.ndarray) -> Pack:
+    return Pack(sid, subleader, members, x[members].copy(), v[members].copy())
+
+
+# --------------------------------------------------------------------------- split and merge
+
+def split_members(x: np.ndarray, members: np.ndarray, targets: list[np.ndarray], weights: list[float],
+                  heading: np.ndarray, min_size: int) -> list[np.ndarray]:
+    """Assign the members of one sub-swarm to the corridors of a split.
+
+    Corridors and agents are both ordered by their lateral coordinate across ``heading`` (the
+    bearing to the goal): agents on the left take the leftmost corridor, so no two groups
+    cross. Group sizes are proportional to ``weights`` (the corridors' usable widths), at
+    least ``min_size`` each (largest-remainder rounding).
+
+    Returns:
+        One member array per target, in the order of ``targets``.
+    """
+    m = len(members)
+    k = len(targets)
+    left = np.array([-heading[1], heading[0]])
+    order_c = np.argsort([float(np.dot(t, left)) for t in targets])  # right to left
+    w = np.asarray(weights, dtype=float)[order_c]
+    share = w / w.sum() * m
+    sizes = np.maximum(np.floor(share).astype(int), min_size)
+    while sizes.sum() > m:  # min_size may overshoot: take back from the biggest groups
+        sizes[np.argmax(sizes)] -= 1
+    rem = share - np.floor(share)
+    while sizes.sum() < m:
+        j = int(np.argmax(rem))
+        sizes[j] += 1
+        rem[j] = -1.0
+    order_a = members[np.argsort(x[members] @ left, kind="stable")]  # right to left
+    out: list[np.ndarray] = [np.zeros(0, dtype=np.int64)] * k
+    start = 0
+    for j, c in enumerate(order_c):
+        out[c] = np.sort(order_a[start:start + sizes[j]])
+        start += sizes[j]
+    return out
+
+
+def choose_subleader(x: np.ndarray, members: np.ndarray, leader: int) -> int:
+    """The leader if it is a member, else the member nearest the group's centroid."""
+    if leader in members:
+        return int(leader)
+    c = x[members].mean(axis=0)
+    return int(members[np.argmin(np.sum((x[members] - c) ** 2, axis=1))])
+
+
+def merge_pair(cents: np.ndarray, ids: list[int], near: np.ndarray, d_merge: float) -> tuple[int, int]:
+    """The pair of sub-swarms a merge joins: the closest pair closer than ``d_merge`` if any,
+    else the closest pair among the near-goal sub-swarms (``near`` (S,) bool)."""
+    S = len(ids)
+    best, pair = np.inf, None
+    best_near, pair_near = np.inf, None
+    for a in range(S):
+        for b in range(a + 1, S):
+            d = float(np.hypot(*(cents[a] - cents[b])))
+            if d < best:
+                best, pair = d, (ids[a], ids[b])
+            if near[a] and near[b] and d < best_near:
+                best_near, pair_near = d, (ids[a], ids[b])
+    if best < d_merge or pair_near is None:
+        return pair
+    return pair_near
+
+
+# --------------------------------------------------------------------------- reassignment, eq. (41)
+
+def reassign(x: np.ndarray, labels: np.ndarray, ids: list[int], sl_pos: np.ndarray, waypoints: np.ndarray,
+             protected: np.ndarray, last_move: np.ndarray, k: int, cooldown_steps: int, w: float, w_c: float,
+             delta_min: float, n_move_max: int) -> tuple[np.ndarray, np.ndarray]:
+    """Dynamic follower reassignment, eq. (41).
+
+    Cost of follower i in sub-swarm s: ``phi_s(i) = w ||p_i - p_s|| + w_c ||p_i - c_s||``.
+    Follower i moves to ``s* = argmin phi`` if ``phi_cur - phi_s* >= Delta_min``, it is not
+    protected (subleaders, the leader) and its last move is at least ``tau_ra`` ago; at most
+    ``N_move^max`` moves per update, largest improvements first.
+
+    Args:
+        ids: sub-swarm ids, rows of ``sl_pos`` (S, 2) and ``waypoints`` (S, 2).
+        protected: (N,) bool; last_move: (N,) step of each agent's last transfer (large
+            negative if never).
+
+    Returns:
+        ``(new_labels, moved)``: a new label array and the indices of the moved followers.
+    """
+    if len(ids) < 2 or n_move_max <= 0:
+        return labels, np.zeros(0, dtype=np.int64)
+    phi = w * np.linalg.norm(x[:, None, :] - sl_pos[None], axis=2) + \
+        w_c * np.linalg.norm(x[:, None, :] - waypoints[None], axis=2)  # (N, S)
+    col = np.searchsorted(np.asarray(ids), labels)
+    cur = phi[np.arange(len(x)), col]
+    best = np.argmin(phi, axis=1)
+    gain = cur - phi[np.arange(len(x)), best]
+    ok = (gain >= delta_min) & ~protected & (k - last_move >= cooldown_steps)
+    cand = np.flatnonzero(ok)
+    if len(cand) == 0:
+        return labels, cand
+    cand = cand[np.argsort(-gain[cand], kind="stable")][:n_move_max]
+    out = labels.copy()
+    out[cand] = np.asarray(ids)[best[cand]]
+    return out, np.sort(cand)

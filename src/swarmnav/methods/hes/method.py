@@ -1,0 +1,462 @@
+"""``hes``: the Hierarchical Embodied Swarm method (Wu & Wei, Drones 2026), wired from pure parts.
+
+Per step (paper Section 4.4, "At each discrete step"):
+
+1. sense: every agent's fused LiDAR ring (eq. 8-9);
+2. report: each subleader sends its Pack P_s(k) (eq. 3) and the corridors its ring shows
+   (Section 3.2); the leader's planner reads only these reports;
+3. decide: z(k) (eq. 18) -> decision source -> Pi_feas (eq. 22) -> execute split / merge / keep;
+4. modes (eq. 12), waypoints c_s(k) along the chosen corridor, formation references (eq. 23),
+   dynamic follower reassignment (eq. 41);
+5. control: the eight force terms (eq. 38), safety stack, saturation (eq. 39).
+
+The class holds the planner's memory (partition, waypoints, modes, cooldowns) and calls the
+pure functions of ``forces``, ``corridors``, ``decision``, ``hierarchy`` and ``formation``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from swarmnav.dynamics import DampedDoubleIntegrator
+from swarmnav.methods.base import Observation
+from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.corridors import (
+    Corridor,
+    corridors_toward,
+    detect_gaps,
+    direct_corridor,
+    free_points,
+    segment_clear,
+)
+from swarmnav.methods.hes.decision import (
+    ENCIRCLE,
+    NAVIGATE,
+    DecisionSource,
+    DecisionState,
+    Proposal,
+    RulePolicy,
+    merge_feasible,
+    project,
+    split_feasible,
+    target_proximity,
+    task_mode,
+)
+from swarmnav.methods.hes.formation import assign_slots, hex_template, ring_slots
+from swarmnav.methods.hes.hierarchy import (
+    Report,
+    check_partition,
+    choose_subleader,
+    make_pack,
+    merge_pair,
+    reassign,
+    split_members,
+)
+from swarmnav.methods.hes.params import HesParams
+from swarmnav.params import build
+from swarmnav.sensing import segments_blocked
+from swarmnav.sensing.lidar import _ray_table, lidar_ring
+from swarmnav.world.scenario import Scenario
+
+_NEVER = -(10**9)
+_RING_ANGLES = np.linspace(0.0, 2 * math.pi, 72, endpoint=False)  # encircle slot candidates (5 deg)
+_SLOT_REFRESH = 10  # steps between re-solving the slot assignment (ours: 1 s)
+
+
+@dataclass(slots=True)
+class SubSwarm:
+    """Planner memory of one sub-swarm (mutable; owned by :class:`Hes`)."""
+
+    sid: int
+    subleader: int
+    waypoint: np.ndarray  # c_s(k) [m]
+    mode: int = NAVIGATE
+    route: Corridor | None = None  # corridor currently followed
+    committed: bool = False  # assigned by a split: follow it until its throat is passed
+    alpha: float = 1.0  # formation scale alpha_s(k)
+    slot_index: dict[int, int] = field(default_factory=dict)  # agent -> template row (r_i)
+    slot_step: int = _NEVER  # step of the last slot assignment
+    ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
+
+
+class Hes:
+    """The HES method (see module docstring); parameters: :class:`HesParams`."""
+
+    name = "hes"
+
+    def __init__(self, **overrides: Any):
+        self.params = build(HesParams, overrides, context="hes")
+        self.dt = self.params.dt
+        self.dynamics = DampedDoubleIntegrator()  # eq. (5)-(7): m = 5 kg, c_d = 0.5, inverse model
+        self._gains = F.gain_vector(self.params)
+        self._cos, self._sin = _ray_table(self.params.n_rays)
+        self._source_override: DecisionSource | None = None
+
+    def use_source(self, source: DecisionSource) -> Hes:
+        """Decide structure with ``source`` instead of the rule policy (from the next reset)."""
+        self._source_override = source
+        return self
+
+    # ------------------------------------------------------------------ lifecycle
+    def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
+              rng: np.random.Generator) -> None:
+        p = self.params
+        self.scenario = scenario
+        self.goal = scenario.goal_array.astype(float)
+        self.geom = scenario.geometry
+        n = len(positions)
+        self.n = n
+        self.source: DecisionSource = self._source_override or RulePolicy(p.d_merge, p.t_cd)
+        c = positions.mean(axis=0)
+        self.leader = int(np.argmin(np.sum((positions - c) ** 2, axis=1)))  # one leader, eq. (1) roles
+        self.labels = np.zeros(n, dtype=np.int64)
+        self.subs: dict[int, SubSwarm] = {0: SubSwarm(0, self.leader, c.copy())}
+        self._next_id = 1
+        self.k_last: int | None = None
+        self.last_move = np.full(n, _NEVER, dtype=np.int64)
+        self._cd_steps = int(round(p.t_cd / p.dt))
+        self._ra_steps = int(round(p.tau_ra / p.dt))
+        self.stats = {"splits": 0, "merges": 0, "reassigned": 0, "projected_to_keep": 0}
+        self.last_z: DecisionState | None = None
+        self.last_reports: dict[int, Report] = {}
+
+    def summary(self) -> dict[str, float]:
+        out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}
+        out.update({f"hes_{k}": float(v) for k, v in self.stats.items()})
+        if hasattr(self.source, "summary"):
+            out.update({k: float(v) for k, v in self.source.summary().items()})
+        return out
+
+    # ------------------------------------------------------------------ one step
+    def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
+        p = self.params
+        k = obs.step
+        x = np.ascontiguousarray(obs.positions, dtype=np.float64)
+        v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
+        ring = self._sense(x)
+        events: list[dict] = []
+
+        # 2. reports from subleaders, 3. decision through Pi_feas
+        reports = {s: self._report(s, x, v, ring) for s in sorted(self.subs)}
+        z = self.decision_state(k, reports)
+        prop = self.source.propose(z, k)
+        action = project(prop.action, z)
+        if action != prop.action:
+            self.stats["projected_to_keep"] += 1
+        if action == "split":
+            events.append(self._split(x, reports, prop))
+        elif action == "merge":
+            events.append(self._merge(x, reports, prop))
+        if action != "keep":
+            self.k_last = k
+            reports = {s: self._report(s, x, v, ring) for s in sorted(self.subs)}
+        self.last_z, self.last_reports = z, reports
+
+        # 4. modes, waypoints, reassignment, references
+        for s, sub in self.subs.items():
+            self._navigate(sub, reports[s], x, k)
+        self._reassign(x, k)
+        slot, speed = self._references(x, k)
+
+        # 5. control
+        a = self._control(x, v, ring, slot, speed)
+        return a, {"labels": self.labels.copy(), "events": events}
+
+    # ------------------------------------------------------------------ perception and reports
+    def _sense(self, x: np.ndarray) -> np.ndarray:
+        p = self.params
+        if self.geom.is_empty:
+            ring = np.full((len(x), p.n_rays), p.lidar_range)
+        else:
+            ring = lidar_ring(self.geom, x, p.n_rays, p.lidar_range)
+        self._ring = ring  # read by the corridor choice and the encircle slots of this step
+        return ring
+
+    def _report(self, s: int, x: np.ndarray, v: np.ndarray, ring: np.ndarray) -> Report:
+        """Subleader s's report: its Pack and the corridors toward the goal its ring shows."""
+        p = self.params
+        sub = self.subs[s]
+        members = np.flatnonzero(self.labels == s)
+        pack = make_pack(s, sub.subleader, members, x, v)
+        a = sub.subleader
+        gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], self._cos, self._sin, p.lidar_range, p.h_open)
+        cors = corridors_toward(gaps, x[a], self.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through)
+        return Report(pack, tuple(cors), float(ring[members].min()))
+
+    def decision_state(self, k: int, reports: dict[int, Report]) -> DecisionState:
+        """z(k) of eq. (18) from the reports alone."""
+        p = self.params
+        ids = sorted(reports)
+        cents = np.array([reports[s].pack.centroid for s in ids])
+        S = len(ids)
+        d_goal = np.hypot(*(cents - self.goal).T)
+        widths = [c.width for s in ids for c in reports[s].corridors]
+        n_c = max(sum(1 for c in reports[s].corridors if c.width >= p.w_split) for s in ids)
+        n_near = int(np.sum(d_goal < p.r_merge))  # eq. (15)
+        d_swarm_min = math.inf
+        if S >= 2:  # eq. (14)
+            diff = cents[:, None, :] - cents[None, :, :]
+            dd = np.hypot(diff[..., 0], diff[..., 1])
+            d_swarm_min = float(dd[np.triu_indices(S, 1)].min())
+        n_all = sum(len(reports[s].pack.members) for s in ids)
+        gbar = sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all  # global centroid, eq. (2)
+        can_split = split_feasible(S, n_c, k, self.k_last, self._cd_steps, float(np.hypot(*(gbar - self.goal))),
+                                   p.r_merge)
+        can_merge = merge_feasible(S, n_near, d_swarm_min, p.d_merge)
+        return DecisionState(
+            k=int(k), dt=p.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,
+            w_min=float(min(widths)) if widths else 0.0, d_goal_avg=float(d_goal.mean()), n_near=n_near,
+            d_swarm_min=d_swarm_min, can_split=bool(can_split), can_merge=bool(can_merge),
+        )
+
+    # ------------------------------------------------------------------ structural actions
+    def _split(self, x: np.ndarray, reports: dict[int, Report], prop: Proposal) -> dict:
+        """Split the single sub-swarm into one sub-swarm per split path (at most max_subswarms,
+        each of at least min_size agents): corridors ranked by route cost, agents assigned by
+        lateral order, the leader keeps its sub-swarm, new subleaders nearest their centroids."""
+        p = self.params
+        (s0,) = self.subs
+        rep = reports[s0]
+        members = rep.pack.members
+        cors = [c for c in rep.corridors if c.width >= p.w_split]
+        m = max(2, min(len(cors), p.max_subswarms, len(members) // max(p.min_size, 1)))
+        cors = cors[:m]
+        cent = rep.pack.centroid
+        heading = self.goal - cent
+        heading = heading / max(np.hypot(*heading), 1e-9)
+        groups = split_members(x, members, [c.mid - cent for c in cors], [min(c.width, 10.0) for c in cors],
+                               heading, p.min_size)
+        old = self.subs.pop(s0)
+        for c, g in zip(cors, groups):
+            if len(g) == 0:
+                continue
+            sid = s0 if self.leader in g else self._new_id()
+            sl = choose_subleader(x, g, self.leader)
+            self.labels[g] = sid
+            wp = old.waypoint.copy() if sid == s0 else x[g].mean(axis=0)
+            self.subs[sid] = SubSwarm(sid, sl, wp, mode=old.mode, route=c, committed=True, alpha=old.alpha)
+        if s0 not in self.subs:  # leader-less split cannot happen, but keep ids consistent
+            pass
+        self.stats["splits"] += 1
+        return {"action": "split", "source": prop.source, "reason": prop.reason,
+                "agents": [int(i) for i in members], "into": len(self.subs)}
+
+    def _merge(self, x: np.ndarray, reports: dict[int, Report], prop: Proposal) -> dict:
+        """Merge the pair chosen by :func:`merge_pair`; the merged sub-swarm keeps the id and
+        subleader of the leader's (else the larger) part."""
+        p = self.params
+        ids = sorted(self.subs)
+        cents = np.array([reports[s].pack.centroid for s in ids])
+        near = np.hypot(*(cents - self.goal).T) < p.r_merge
+        a, b = merge_pair(cents, ids, near, p.d_merge)
+        size = {s: int(np.count_nonzero(self.labels == s)) for s in (a, b)}
+        keep, drop = (a, b)
+        if self.subs[b].subleader == self.leader or (self.subs[a].subleader != self.leader and size[b] > size[a]):
+            keep, drop = b, a
+        agents = np.flatnonzero((self.labels == a) | (self.labels == b))
+        self.labels[self.labels == drop] = keep
+        gone = self.subs.pop(drop)
+        kept = self.subs[keep]
+        kept.waypoint = (size[keep] * kept.waypoint + size[drop] * gone.waypoint) / (size[a] + size[b])
+        kept.committed = False
+        kept.slot_step = _NEVER
+        kept.mode = min(kept.mode, gone.mode) if kept.mode != gone.mode else kept.mode
+        self.stats["merges"] += 1
+        return {"action": "merge", "source": prop.source, "reason": prop.reason,
+                "agents": [int(i) for i in agents], "into": len(self.subs)}
+
+    def _new_id(self) -> int:
+        self._next_id += 1
+        return self._next_id - 1
+
+    # ------------------------------------------------------------------ navigation
+    def _navigate(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int) -> None:
+        """Task mode (eq. 12), corridor choice and waypoint c_s(k) of one sub-swarm."""
+        p = self.params
+        cent = rep.pack.centroid
+        sl = x[sub.subleader]
+        delta = target_proximity(float(np.hypot(*(cent - self.goal))), float(np.hypot(*(sl - self.goal))))
+        mode = task_mode(sub.mode, delta, p.r_in, p.r_out)
+        if mode != sub.mode:
+            sub.slot_step = _NEVER
+            sub.ring_offsets = None
+        sub.mode = mode
+        if mode == ENCIRCLE:
+            sub.waypoint = self.goal.copy()
+            sub.alpha = 1.0
+            return
+        route = self._choose_route(sub, rep, x)
+        sub.route = route
+        target = route.target if route is not None else self.goal
+        # virtual leader: advance toward the target at the (adaptive) cruise speed ...
+        step = self._cruise(rep) * p.dt
+        d = target - sub.waypoint
+        dn = math.hypot(d[0], d[1])
+        sub.waypoint = target.copy() if dn <= step else sub.waypoint + d * (step / dn)
+        # ... on a leash of length `lead` around the sub-swarm centroid
+        off = sub.waypoint - cent
+        on = math.hypot(off[0], off[1])
+        if on > p.lead:
+            sub.waypoint = cent + off * (p.lead / on)
+        w = route.width if route is not None else math.inf
+        a_target = float(np.clip(w / p.w_ref, p.alpha_min, 1.0)) if math.isfinite(w) else 1.0
+        sub.alpha += float(np.clip(a_target - sub.alpha, -0.05, 0.05))
+
+    def _choose_route(self, sub: SubSwarm, rep: Report, x: np.ndarray) -> Corridor | None:
+        """The corridor this sub-swarm follows: the direct route if the goal is in clear view,
+        else the cheapest candidate, kept (hysteresis ``switch_margin``) while it is still seen,
+        and kept unconditionally while a split's commitment lasts."""
+        p = self.params
+        a = sub.subleader
+        sl = x[a]
+        cands = list(rep.corridors)
+        ring_a = self._ring[a]
+        if segment_clear(ring_a, sl[0], sl[1], self._cos, self._sin, self.goal[0], self.goal[1], p.d_safe,
+                         p.lidar_range):
+            cands.insert(0, direct_corridor(sl, self.goal))
+        prev = sub.route
+        if sub.committed and prev is not None:
+            cent = rep.pack.centroid
+            if float(np.dot(cent - prev.mid, prev.normal)) > 0.0:
+                sub.committed = False
+        if not cands:
+            return prev
+        m = len(rep.pack.members)
+        cost = [c.cost + self._width_penalty(c.width, m) for c in cands]
+        best = int(np.argmin(cost))
+        if prev is None:
+            return cands[best]
+        same = self._match(prev, cands)
+        if same is None:
+            sub.committed = False
+            return cands[best]
+        if sub.committed or cost[best] >= cost[same] - p.switch_margin:
+            return cands[same]
+        return cands[best]
+
+    @staticmethod
+    def _width_penalty(w: float, m: int) -> float:
+        """Route-cost penalty [m] of a narrow corridor for a sub-swarm of m agents (ours): the
+        extra queue length of funnelling m agents through it, 1 m per agent at w = 0, zero from
+        6 m (three abreast at 2 m) up."""
+        if not math.isfinite(w):
+            return 0.0
+        return m * max(0.0, 6.0 - w) / 6.0
+
+    @staticmethod
+    def _match(prev: Corridor, cands: list[Corridor]) -> int | None:
+        """Index of the candidate that is the same corridor as ``prev`` (None if lost)."""
+        if prev.direct:
+            for j, c in enumerate(cands):
+                if c.direct:
+                    return j
+        best, j_best = math.inf, None
+        for j, c in enumerate(cands):
+            if c.direct:
+                continue
+            d = math.hypot(*(c.mid - prev.mid))
+            if d < best:
+                best, j_best = d, j
+        tol = max(3.0, 0.5 * min(prev.width, 20.0)) if math.isfinite(prev.width) else 3.0
+        return j_best if best <= tol else None
+
+    def _cruise(self, rep: Report) -> float:
+        """Cruise speed v_s of a sub-swarm [m/s]; with the safety stack on, scaled down linearly
+        from v_s (clearance >= clr_slow) to v_min_frac v_s (clearance <= d_safe) by the nearest
+        LiDAR return of its members (adaptive cruise, ours)."""
+        p = self.params
+        if not p.adaptive:
+            return p.v_s
+        f = np.clip((rep.clearance - p.d_safe) / max(p.clr_slow - p.d_safe, 1e-9), 0.0, 1.0)
+        return p.v_s * (p.v_min_frac + (1.0 - p.v_min_frac) * float(f))
+
+    # ------------------------------------------------------------------ reassignment, eq. (41)
+    def _reassign(self, x: np.ndarray, k: int) -> None:
+        p = self.params
+        if len(self.subs) < 2:
+            return
+        ids = sorted(self.subs)
+        sl_pos = x[[self.subs[s].subleader for s in ids]]
+        wps = np.array([self.subs[s].waypoint for s in ids])
+        protected = np.zeros(self.n, dtype=bool)
+        protected[[self.subs[s].subleader for s in ids]] = True
+        protected[self.leader] = True
+        new, moved = reassign(x, self.labels, ids, sl_pos, wps, protected, self.last_move, k, self._ra_steps,
+                              p.w_sl, p.w_c, p.delta_min, p.n_move_max)
+        if len(moved):
+            for s in set(self.labels[moved].tolist()) | set(new[moved].tolist()):
+                self.subs[s].slot_step = _NEVER
+            self.labels = new
+            self.last_move[moved] = k
+            self.stats["reassigned"] += len(moved)
+
+    # ------------------------------------------------------------------ references, eq. (23)
+    def _references(self, x: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Slots p*_i (N, 2) and each agent's cruise speed (N,)."""
+        p = self.params
+        slot = np.empty_like(x)
+        speed = np.empty(self.n)
+        for s, sub in self.subs.items():
+            members = np.flatnonzero(self.labels == s)
+            m = len(members)
+            if sub.mode == ENCIRCLE:
+                if sub.ring_offsets is None or len(sub.ring_offsets) != m or k - sub.slot_step >= _SLOT_REFRESH:
+                    a = sub.subleader
+                    pts = self.goal[None, :] + p.r_enc * np.column_stack([np.cos(_RING_ANGLES), np.sin(_RING_ANGLES)])
+                    free = free_points(self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, pts,
+                                       p.enc_clear, p.lidar_range)
+                    ring = ring_slots(self.goal, p.r_enc, m, free, _RING_ANGLES)
+                    r_i = assign_slots(x[members], ring)
+                    sub.ring_offsets = ring[r_i] - self.goal
+                    sub.slot_step = k
+                slot[members] = self.goal + sub.ring_offsets
+                speed[members] = p.v_s
+                continue
+            tmpl = hex_template(m) * (p.spacing * sub.alpha)
+            if k - sub.slot_step >= _SLOT_REFRESH or set(sub.slot_index) != set(members.tolist()):
+                r_i = assign_slots(x[members], sub.waypoint + tmpl)
+                sub.slot_index = dict(zip(members.tolist(), r_i.tolist()))
+                sub.slot_step = k
+            r_i = np.fromiter((sub.slot_index[i] for i in members.tolist()), dtype=np.int64, count=m)
+            slot[members] = sub.waypoint + tmpl[r_i]
+            speed[members] = p.v_s
+        return slot, speed
+
+    # ------------------------------------------------------------------ control, eq. (38)-(39)
+    def _control(self, x: np.ndarray, v: np.ndarray, ring: np.ndarray, slot: np.ndarray,
+                 speed: np.ndarray) -> np.ndarray:
+        p = self.params
+        n = self.n
+        ids = sorted(self.subs)
+        col = np.searchsorted(np.asarray(ids), self.labels)
+        sl_idx = np.array([self.subs[s].subleader for s in ids])[col]
+        cents = np.array([x[self.labels == s].mean(axis=0) for s in ids])
+        cent = cents[col]
+        wp = np.array([self.subs[s].waypoint for s in ids])[col]
+        nav = np.array([self.subs[s].mode == NAVIGATE for s in ids])[col]
+        follower = sl_idx != np.arange(n)
+        nn = F.nearest_in_group(x, self.labels)
+        sig = self._occlusion(x, slot, nn, sl_idx, cent)
+        vslot = F.slot_velocity(x, slot, speed, p.eps_v)
+        a = F.synthesize(x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig,
+                         ring, self._cos, self._sin, self._gains)
+        if p.adaptive:
+            a = a + F.braking_barrier(ring, v, self._cos, self._sin, p.brake_margin, p.a_brake, p.dt, p.lidar_range)
+        return F.saturate(a, p.a_bound)
+
+    def _occlusion(self, x, slot, nn, sl_idx, cent) -> np.ndarray:
+        """Eq. (30): sigma_occ where the segment to the slot / nearest neighbour / subleader /
+        centroid meets an obstacle, 1 otherwise; (N, 4)."""
+        p = self.params
+        n = self.n
+        if self.geom.is_empty or p.sigma == 1.0:
+            return np.ones((n, 4))
+        q_nn = x[np.where(nn >= 0, nn, np.arange(n))]
+        P = np.concatenate([x, x, x, x])
+        Q = np.concatenate([slot, q_nn, x[sl_idx], cent])
+        blocked = segments_blocked(self.geom, P, Q).reshape(4, n).T
+        return np.where(blocked, p.sigma, 1.0)

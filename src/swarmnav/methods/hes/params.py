@@ -1,0 +1,136 @@
+"""Parameters of the HES method: Table A1 of the paper, and the values it leaves open.
+
+Every field carries its unit and its source. ``Table A1`` / ``eq. (n)`` values are the
+paper's and must not be tuned. Fields marked ``ours`` are not given by the paper; the reason
+for each value is in the comment and in ``docs/methods/hes.md``. One parameter set serves all
+scenes (nothing here is scene-specific).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from swarmnav.errors import ConfigError
+
+#: Values of ``decision`` this issue supports (LLM back ends arrive with the LLM issue).
+DECISIONS = ("rule",)
+
+
+@dataclass(frozen=True, slots=True)
+class HesParams:
+    # ---------------------------------------------------------------- dynamics and sensing
+    dt: float = 0.1  # [s] integration / decision step, Section 5.1
+    n_rays: int = 360  # LiDAR rays n_theta (1 deg resolution), Table A1
+    lidar_range: float = 20.0  # R_L [m], Table A1
+    r_trigger: float = 14.0  # R_t [m] avoidance trigger radius of eq. (35)-(36), Table A1
+    a_max: float = 2.6  # a_xy^max [m/s^2] acceleration saturation, eq. (39), Table A1
+
+    # ---------------------------------------------------------------- force gains, Table A1
+    k_p: float = 0.7  # [1/s^2] slot position gain, eq. (24)
+    k_v: float = 0.8  # [1/s] slot velocity gain, eq. (24)
+    k_rep: float = 9.0  # [m^3/s^2] LiDAR repulsion base gain, eq. (36)
+    k_e: float = 48.0  # [m/s^2 per m^2] near-obstacle (emergency) gain, eq. (36)
+    k_b: float = 0.9  # [-] short-range boost factor, eq. (36)
+    gamma: float = 1.2  # [-] short-range boost exponent, eq. (36)
+    k_sep: float = 1.1  # [m^2/s^2] global separation gain, eq. (25)
+    k_intra: float = 1.8  # [1/s^2] nearest-neighbour cohesion gain, eq. (26)
+    k_ir: float = 1.6  # [m^2/s^2] intra-sub-swarm repulsion gain, eq. (31)
+    k_path: float = 0.75  # [1/s^2] corridor-centering gain, eq. (32)
+    k_l: float = 1.6  # [1/s^2] follower-subleader position coupling k_l, eq. (27)
+    k_vl: float = 0.7  # [1/s] follower-subleader velocity coupling k_vl, eq. (27)
+    k_coh: float = 0.9  # [1/s^2] centroid cohesion gain, eq. (29)
+    d_safe: float = 1.5  # [m] safety distance of eq. (36) (also the metric threshold), Table A1
+    sigma_occ: float = 0.2  # [-] occlusion attenuation factor, eq. (30), Table A1
+
+    # ---------------------------------------------------------------- structural decisions, Table A1
+    t_cd: float = 10.0  # T_cd [s] split-merge cooldown, eq. (13)
+    r_in: float = 8.0  # [m] encircle entry threshold, eq. (12)
+    r_out: float = 11.0  # [m] encircle exit threshold, eq. (12)
+    r_merge: float = 12.0  # [m] near-goal radius, eqs. (13), (15)
+    d_merge: float = 8.0  # [m] inter-sub-swarm merge distance, eq. (16)
+
+    # ---------------------------------------------------------------- follower reassignment, Table A1
+    w_sl: float = 1.0  # w [-] subleader-distance weight, eq. (41)
+    w_c: float = 0.5  # w_c [-] waypoint-distance weight, eq. (41)
+    delta_min: float = 2.0  # Delta_min [m] minimum cost improvement, eq. (41)
+    tau_ra: float = 2.0  # tau_ra [s] per-follower cooldown, Section 4.4
+    n_move_max: int = 3  # N_move^max transfers per planner update, Section 4.4
+
+    # ---------------------------------------------------------------- reference trajectory (ours)
+    v_s: float = 2.5  # ours [m/s] cruise speed v_s: 100 s horizon covers the ~110 m gate zig-zag with margin
+    eps_v: float = 0.5  # ours [m] eps_v of eq. (23): the slot velocity ramps down within ~0.5 m of the slot
+    spacing: float = 2.0  # ours [m] lattice spacing of the formation template Delta_f (before k_path compresses it)
+    alpha_min: float = 0.35  # ours [-] smallest formation scale alpha_s in a narrow corridor
+    w_ref: float = 10.0  # ours [m] corridor width at (and above) which alpha_s = 1
+    lead: float = 3.0  # ours [m] leash: waypoint c_s stays within this distance ahead of the sub-swarm centroid
+    through: float = 3.0  # ours [m] the corridor target lies this far beyond the gap's throat
+    r_enc: float = 6.0  # ours [m] encircle radius: paper's E_mean = 6.1 m with R_goal = 1 (r_succ = 8 m)
+    enc_clear: float = 2.0  # ours [m] encircle slots keep this clearance from LiDAR returns (> d_safe)
+
+    # ---------------------------------------------------------------- interaction radii (ours)
+    r_sep: float = 1.6  # ours [m] r_sep of eq. (25): global separation acts inside ~one UAV spacing
+    d_ir: float = 1.2  # ours [m] d_ir of eq. (31): shorter than r_sep, as Section 4.2 requires
+    d_thr: float = 2.0  # ours [m] d_thr of eq. (26): a nearest neighbour farther than 2 m is drifting away
+    d_0: float = 12.5  # ours [m] d_0 of eq. (27): > 2 r_enc, so the encircle ring (followers up to 2 r_enc from the subleader) is not pulled in
+    d_c: float = 6.5  # ours [m] d_c of eq. (29): > r_enc, so the ring is not pulled in; acts on stragglers only
+    d_floor: float = 0.05  # ours [m] distances are floored here before 1/d and 1/d^2 (bounded forces)
+
+    # ---------------------------------------------------------------- corridor detection (ours)
+    w_pass: float = 2.0  # ours [m] narrowest gap a UAV may be routed through (0.4 m body + margins)
+    w_split: float = 6.0  # ours [m] a gap counts as a split path (n_c) if a >=5-agent sub-swarm (~3 m across) passes it with d_safe = 1.5 m each side
+    h_open: float = 0.5  # ours [m] the ring must rise this much between two minima to form an opening
+    toward_deg: float = 100.0  # ours [deg] a corridor leads toward the goal if its exit direction is within this of the goal bearing
+    switch_margin: float = 3.0  # ours [m] route-cost margin before a sub-swarm switches corridor (hysteresis)
+    max_subswarms: int = 3  # ours [-] a split creates at most this many sub-swarms
+    min_size: int = 4  # ours [-] smallest sub-swarm a split may create
+
+    # ---------------------------------------------------------------- safety stack (ours; Section 5.3)
+    v_min_frac: float = 0.5  # ours [-] adaptive cruise: v_s is scaled down to this fraction in tight places
+    clr_slow: float = 3.0  # ours [m] adaptive cruise acts when the sub-swarm's closest LiDAR return is nearer than this
+    brake_margin: float = 0.6  # ours [m] braking barrier: stop distance kept from the nearest LiDAR return
+    a_brake: float = 1.5  # ours [m/s^2] braking barrier: deceleration budget used to bound the closing speed
+
+    # ---------------------------------------------------------------- ablations (Simulation 2)
+    safety_stack_off: bool = False  # True: adaptive cruise + braking barrier off, a_max -> a_max_relaxed
+    occlusion_attenuation: bool = True  # False: sigma_occ = 1 (Table 4 "w/o occ. attenuation")
+    acceleration_bound: bool = True  # False: a_max -> a_max_relaxed (Table 4 "w/o acc. bound")
+    a_max_relaxed: float = 26.0  # ours [m/s^2] the "very loose" bound of the ablations: 10 x a_max
+
+    # ---------------------------------------------------------------- decision source
+    decision: str = "rule"  # rule (LLM back ends arrive with the LLM issue)
+
+    def __post_init__(self) -> None:
+        if self.decision not in DECISIONS:
+            raise ConfigError(
+                f"hes: decision={self.decision!r} is not available (known: {', '.join(DECISIONS)}; "
+                "LLM decision sources are not implemented yet)"
+            )
+        if not self.r_out > self.r_in:
+            raise ConfigError(f"hes: need r_out > r_in (eq. 12), got r_in={self.r_in}, r_out={self.r_out}")
+        for name in ("dt", "lidar_range", "r_trigger", "a_max", "v_s", "eps_v", "spacing", "d_safe", "r_enc"):
+            if not getattr(self, name) > 0:
+                raise ConfigError(f"hes: {name} must be > 0, got {getattr(self, name)}")
+        if not 0.0 < self.sigma_occ <= 1.0:
+            raise ConfigError(f"hes: sigma_occ must be in (0, 1], got {self.sigma_occ}")
+        if self.n_rays < 8:
+            raise ConfigError(f"hes: n_rays must be >= 8, got {self.n_rays}")
+        if self.max_subswarms < 1 or self.min_size < 1 or self.n_move_max < 0:
+            raise ConfigError("hes: max_subswarms and min_size must be >= 1, n_move_max >= 0")
+
+    # -- derived
+    @property
+    def sigma(self) -> float:
+        """Occlusion factor actually applied (1 when the ablation switches it off)."""
+        return self.sigma_occ if self.occlusion_attenuation else 1.0
+
+    @property
+    def a_bound(self) -> float:
+        """Acceleration bound actually applied [m/s^2]."""
+        if self.safety_stack_off or not self.acceleration_bound:
+            return self.a_max_relaxed
+        return self.a_max
+
+    @property
+    def adaptive(self) -> bool:
+        """The adaptive motion-regulation layers (adaptive cruise, braking barrier) are on."""
+        return not self.safety_stack_off
