@@ -11,7 +11,14 @@ from swarmnav.cli import main
 
 
 def _run(*args):
-    return subprocess.run([sys.executable, "-m", "swarmnav.cli", *args], capture_output=True, text=True)
+    import os
+    from pathlib import Path
+
+    import swarmnav
+
+    src = str(Path(swarmnav.__file__).resolve().parents[1])  # works installed or from a checkout
+    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    return subprocess.run([sys.executable, "-m", "swarmnav.cli", *args], capture_output=True, text=True, env=env)
 
 
 def test_run_writes_run_directory_and_is_reproducible(tmp_path, capsys):
@@ -52,7 +59,8 @@ def test_scenario_file_and_plot(tmp_path):
     (["experiment", "nope", "--out", "X"], "unknown experiment"),
     (["experiment", "apf-scenes", "--seeds", "x-y", "--out", "X"], "--seeds"),
     (["plot", "/nonexistent/run"], "not a run directory"),
-    (["run", "--bogus-flag"], "unrecognized arguments"),
+    (["run", "--method", "apf", "--out", "X", "--bogus-flag"], "unrecognized arguments"),
+    (["run", "--bogus-flag"], "arguments are required"),
 ])
 def test_bad_input_is_one_line_exit_2(args, fragment, tmp_path):
     p = _run(*[a.replace("X", str(tmp_path / "x")) for a in args])

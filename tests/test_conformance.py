@@ -37,3 +37,11 @@ def test_registry_lists_apf_and_rejects_unknown():
         registry.make("nope")
     with pytest.raises(swarmnav.ConfigError, match="unknown parameter 'k_attt'"):
         registry.make("apf", k_attt=1.0)
+
+
+@pytest.mark.parametrize("method", [m for m in registry.names() if registry.spec(m).navigation])
+def test_periodic_world_wraps_positions(method):
+    res = swarmnav.run(method, "periodic_box:n=30,rho=1.0", seed=2, steps=30)
+    side = res.config["scenario"]["world"]["bounds"][2]
+    assert np.all((res.positions >= 0) & (res.positions < side))
+    assert np.isfinite(res.metrics["min_inter_agent_distance"])

@@ -107,7 +107,7 @@ def _inter_agent(positions: np.ndarray, contact: float, box: float | None) -> tu
         return float(d.min()), _rising_edges(d < contact)
     best, hits, prev = np.inf, 0, np.zeros(0, dtype=np.int64)
     for k in range(K1):  # one KD-tree per step: O(N log N), never N x N
-        tree = cKDTree(positions[k], boxsize=box)
+        tree = cKDTree(np.mod(positions[k], box) if box else positions[k], boxsize=box)
         dd, _ = tree.query(positions[k], k=2)
         best = min(best, float(dd[:, 1].min()))
         pairs = tree.query_pairs(contact, output_type="ndarray")

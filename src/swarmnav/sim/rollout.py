@@ -61,9 +61,13 @@ def run(
     events: list[dict] = []
     bar = _progress(progress, steps)
     t0 = time.perf_counter()
+    lo = np.array(scn.bounds[:2])
+    period = scn.bounds[2] - scn.bounds[0] if scn.periodic else None
     for k in range(steps):
         cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
+        if period is not None:  # the world is a torus whatever the method's dynamics
+            pos = lo + np.mod(pos - lo, period)
         P[k + 1], V[k + 1], C[k + 1] = pos, vel, clear(pos)
         labels = info.get("labels")
         lab[k + 1] = lab[k] if labels is None else labels
@@ -88,7 +92,7 @@ def run(
     n_struct = sum(1 for e in events if e.get("action") in ("split", "merge"))
     metrics = navigation_metrics(
         P, C, scn.goal_array, result.n_subswarms, n_struct, MetricParams(),
-        periodic_box=(scn.bounds[2] - scn.bounds[0]) if scn.periodic else None,
+        periodic_box=period,
     )
     metrics.update(m.summary())
     result.metrics = metrics

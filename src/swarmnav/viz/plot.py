@@ -1,0 +1,141 @@
+"""Static figures: a scene, and a run in the layout of HES Figure 3.
+
+Figures are built as bare :class:`matplotlib.figure.Figure` objects (no pyplot), so they
+never touch a GUI backend or pyplot's global figure list and are freed when the function
+returns.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+from matplotlib.collections import LineCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
+
+from swarmnav.metrics import MetricParams
+from swarmnav.viz.draw import (
+    END_COLOR, EVENT_MARKERS, START_COLOR, dot_size, draw_scene, event_handles, event_points, fig_size,
+    fmt_metric, label_colors, period_of, scenario_of, trajectory_segments,
+)
+from swarmnav.world.scenario import Scenario
+
+if TYPE_CHECKING:
+    from swarmnav.sim.result import RunResult
+
+#: Most trajectory segments drawn in one figure (our choice: keeps a 2000-agent, 1000-step
+#: run under a few seconds); longer runs are subsampled in time.
+MAX_SEGMENTS = 200_000
+
+
+def plot_scene(scenario: Scenario, out_png: str | Path, *, dpi: int = 150) -> Path:
+    """Write a PNG of one scene: title = scene name, subtitle = its description."""
+    out = _prepare(out_png)
+    fig = Figure(figsize=fig_size(scenario.bounds, 8.0, extra_width=1.8, extra_height=1.0), layout="constrained")
+    ax = fig.add_subplot()
+    handles = draw_scene(ax, scenario)
+    fig.suptitle(scenario.name, fontsize=13, fontweight="bold")
+    ax.set_title(f"{scenario.description}  (N = {scenario.n})".strip(), fontsize=9, color="0.3")
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    fig.savefig(out, dpi=dpi)
+    return out
+
+
+def plot_run(result: RunResult, out_png: str | Path, *, dpi: int = 150) -> Path:
+    """Write a PNG of a run in the layout of HES Figure 3.
+
+    (a) top-down trajectories: one thin curve per agent, each segment coloured by the agent's
+    sub-swarm label at that step, start (green) and end (red) positions, goal (star),
+    split / merge events at the centroid of the agents they affected;
+    (b) minimum clearance over agents [m] (red) with the d_safe threshold (grey dashed) and
+    the sub-swarm count (blue, right axis) against time t = k dt [s].
+    The title names method, scene and seed and quotes Y, R_goal, E_mean and R_unsafe.
+    """
+    out = _prepare(out_png)
+    scn = scenario_of(result)
+    P, labels = result.positions, result.labels
+    K, N = P.shape[0] - 1, P.shape[1]
+    dt = float(result.config.get("dt", 1.0))
+
+    map_w, map_h = fig_size(scn.bounds, 8.0, max_map_height=5.0)
+    fig = Figure(figsize=(max(map_w, 6.0) + 2.2, map_h + 3.6), layout="constrained")
+    ax, ax_t = fig.subplots(2, 1, height_ratios=[map_h, 2.2])
+
+    # (a) trajectories
+    handles = draw_scene(ax, scn, show_spawn=False)
+    # Subsample in time so at most MAX_SEGMENTS segments are drawn (the last state is kept).
+    stride = max(1, math.ceil(K * N / MAX_SEGMENTS))
+    ks = np.unique(np.r_[np.arange(0, K + 1, stride), K])
+    segs, valid = trajectory_segments(P[ks], period_of(scn))
+    idx, palette = label_colors(labels)
+    colors = palette[idx[ks[:-1]]]
+    lc = LineCollection(segs[valid], colors=colors[valid], linewidths=0.8 if N <= 100 else 0.4,
+                        alpha=1.0 if N <= 100 else 0.4, zorder=3)
+    ax.add_collection(lc, autolim=False)
+    s = dot_size(N)
+    ax.scatter(P[0, :, 0], P[0, :, 1], s=s, color=START_COLOR, edgecolors="none", zorder=4)
+    ax.scatter(P[-1, :, 0], P[-1, :, 1], s=s, color=END_COLOR, edgecolors="none", zorder=5)
+    handles += [
+        Line2D([], [], linestyle="none", marker="o", color=START_COLOR, markersize=5, label="start"),
+        Line2D([], [], linestyle="none", marker="o", color=END_COLOR, markersize=5, label="end"),
+    ]
+    points = event_points(P, labels, result.events)
+    for action, (marker, color) in EVENT_MARKERS.items():
+        xy = np.array([p for _, a, p in points if a == action]).reshape(-1, 2)
+        if len(xy):
+            ax.scatter(xy[:, 0], xy[:, 1], s=45, marker=marker, color=color, edgecolors="black",
+                       linewidths=0.6, zorder=7)
+    handles += [h for h in event_handles() if any(a == h.get_label() for _, a, _ in points)]
+    n_ids = len(palette)
+    if 1 < n_ids <= 8:  # few sub-swarms: name their colours; many: the colours speak for themselves
+        ids = np.unique(labels)
+        handles += [Line2D([], [], color=palette[j], linewidth=1.5, label=f"sub-swarm {ids[j]}")
+                    for j in range(n_ids)]
+    else:
+        handles.append(Line2D([], [], color=palette[0], linewidth=1.0, label="trajectory"))
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    ax.set_title("(a) trajectories", fontsize=10, loc="left")
+
+    # (b) time series
+    t = np.arange(K + 1) * dt
+    d_safe = MetricParams().d_safe
+    d_min = np.where(np.isfinite(result.min_clearance), result.min_clearance, np.nan)
+    ax_t.plot(t, d_min, color="tab:red", linewidth=1.2, label="min clearance [m]")
+    ax_t.axhline(d_safe, color="0.5", linestyle="--", linewidth=1.0, label=f"d_safe = {d_safe:g} m")
+    ax_t.set_xlabel("t [s]")
+    ax_t.set_ylabel("min clearance [m]", color="tab:red")
+    ax_t.set_xlim(t[0], t[-1] if K > 0 else dt)
+    if np.isfinite(d_min).any():  # from 0 (or below, after a collision) so d_safe is in context
+        ax_t.set_ylim(min(0.0, float(np.nanmin(d_min))), max(2 * d_safe, float(np.nanmax(d_min))) * 1.05)
+    else:
+        ax_t.text(0.5, 0.8, "no obstacles", transform=ax_t.transAxes, ha="center", va="center", color="0.5")
+        ax_t.set_ylim(0, 2 * d_safe)
+    ax_n = ax_t.twinx()
+    n_sub = result.n_subswarms
+    ax_n.plot(t, n_sub, color="tab:blue", linewidth=1.2, drawstyle="steps-post", label="sub-swarm count")
+    ax_n.set_ylabel("sub-swarms", color="tab:blue")
+    ax_n.set_ylim(0, int(n_sub.max()) + 1)
+    ax_n.yaxis.set_major_locator(MaxNLocator(integer=True))
+    lines = ax_t.get_legend_handles_labels()[0] + ax_n.get_legend_handles_labels()[0]
+    ax_t.legend(handles=lines, loc="upper left", bbox_to_anchor=(1.06, 1.0), fontsize=8, frameon=False)
+    ax_t.set_title("(b) clearance and structure", fontsize=10, loc="left")
+
+    m, cfg = result.metrics, result.config
+    fig.suptitle(
+        f"{cfg.get('method', '?')} on {scn.name}, seed {cfg.get('seed', '?')}, N = {N}, K = {K}\n"
+        f"Y = {fmt_metric(m, 'Y', '.0f')}   R_goal = {fmt_metric(m, 'R_goal', '.2f')}   "
+        f"E_mean = {fmt_metric(m, 'E_mean', '.2f', ' m')}   R_unsafe = {fmt_metric(m, 'R_unsafe', '.3f')}",
+        fontsize=11,
+    )
+    fig.savefig(out, dpi=dpi)
+    return out
+
+
+def _prepare(out: str | Path) -> Path:
+    p = Path(out)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    return p
