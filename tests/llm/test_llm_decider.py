@@ -32,7 +32,7 @@ def test_calls_at_first_step_and_every_interval_and_rule_in_between(scripted):
 def test_infeasible_answer_is_projected_to_keep_not_a_fallback(scripted):
     d = LlmDecider(scripted([SPLIT]), interval=50)
     out = d.decide(SHUT, 0, "keep")
-    assert (out.action, out.source) == ("keep", "llm") and "infeasible" in out.reason
+    assert (out.action, out.executed, out.source) == ("split", "keep", "llm") and "infeasible" in out.reason
     s = d.summary()
     assert s["llm_fallback_used"] == 0 and s["llm_projected"] == 1
     rec = d.records[0]
@@ -50,14 +50,15 @@ def test_infeasible_answer_is_projected_to_keep_not_a_fallback(scripted):
 def test_every_failure_falls_back_to_the_rule_and_is_counted(scripted, answer, kind):
     d = LlmDecider(scripted([answer]), interval=3)
     out = drive(d, 7, rule="split")
-    assert all(o.action == "split" and o.source == "rule" for o in out)
+    assert all(o.action == o.executed == "split" and o.source == "rule" for o in out)
     assert d.summary()["llm_calls"] == 3 and d.summary()["llm_fallback_used"] == 3
     assert all(r["fallback"].startswith(kind) and r["executed"] == "split" for r in d.records)
 
 
 def test_fallback_rule_action_is_projected_too(scripted):
     d = LlmDecider(scripted([""]))
-    assert d.decide(SHUT, 0, "split").action == "keep"
+    out = d.decide(SHUT, 0, "split")
+    assert (out.action, out.executed) == ("split", "keep")
 
 
 def test_fixed_latency_applies_later_against_the_state_then(scripted):
@@ -68,7 +69,7 @@ def test_fixed_latency_applies_later_against_the_state_then(scripted):
     # a call is due 3 steps after the last, but none is made while an answer is pending
     assert [s for s, _ in b.asked] == [0, 5, 10, 15]
     assert [k for k, o in enumerate(out) if o.source == "llm"] == [4, 9, 14]
-    assert out[4].action == "split" and out[14].action == "keep"  # feasibility at the apply step
+    assert out[4].executed == "split" and out[14].executed == "keep"  # feasibility at the apply step
     assert [(r["step"], r["apply_step"], r["executed"]) for r in d.records] == [
         (0, 4, "split"), (5, 9, "split"), (10, 14, "keep"), (15, None, None)]
 

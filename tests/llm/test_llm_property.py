@@ -41,9 +41,10 @@ class One:
 def test_executed_action_is_in_the_action_set_and_feasible(answer, state, rule, latency):
     d = LlmDecider(One(answer), interval=1, latency=latency)
     out = d.decide(state, 0, rule)
-    assert out.action in ACTIONS
-    assert out.action != "split" or state["can_split"]
-    assert out.action != "merge" or state["can_merge"]
+    assert out.action in ACTIONS and out.executed in ACTIONS
+    assert out.executed != "split" or state["can_split"]
+    assert out.executed != "merge" or state["can_merge"]
+    assert d.records[0]["executed"] == out.executed
     s = d.summary()
     assert s["llm_calls"] == 1
     # a fallback exactly when the answer is no action; an infeasible action is not a fallback

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from swarmnav.errors import ConfigError
@@ -79,6 +81,20 @@ def validate(p: Any) -> None:
     LatencyMode.parse(p.llm_latency)
     if getattr(p, "llm_response_format", "json_object") not in ("json_object", "json_schema", "none"):
         raise ConfigError(f"llm_response_format: expected json_object, json_schema or none, got {p.llm_response_format!r}")
+    # what a back end needs, checked here so that a sweep fails before its first run
+    if p.decision == "llamacpp":
+        if not p.llm_gguf:
+            raise ConfigError("decision=llamacpp needs llm_gguf=PATH (a .gguf model file)")
+        if not Path(p.llm_gguf).expanduser().is_file():
+            raise ConfigError(f"llm_gguf: no such model file: {p.llm_gguf}")
+        if importlib.util.find_spec("llama_cpp") is None:
+            raise ConfigError("decision=llamacpp needs llama-cpp-python: pip install 'swarmnav[llm]'")
+    if p.decision == "replay":
+        if not p.llm_replay:
+            raise ConfigError("decision=replay needs llm_replay=PATH (a run directory or its llm_transcript.jsonl)")
+        t = Path(p.llm_replay).expanduser()
+        if not (t / "llm_transcript.jsonl" if t.is_dir() else t).is_file():
+            raise ConfigError(f"llm_replay: no transcript at {t}")
 
 
 def llm_params(p: Any) -> LlmParams:

@@ -49,9 +49,10 @@ def project(action: str, state: Mapping[str, Any]) -> str:
 
 @dataclass(frozen=True, slots=True)
 class Decision:
-    """The executed structural action of one step and where it came from."""
+    """The structural action of one step and where it came from."""
 
-    action: str  # in ACTIONS, feasible
+    action: str  # the candidate a_k of eq. (21), in ACTIONS; the caller projects it
+    executed: str  # Pi_feas(a_k), eq. (22): what the caller will execute
     reason: str
     source: str  # "llm" (the model's suggestion) or "rule"
 
@@ -75,7 +76,7 @@ class LlmDecider:
 
     def decide(self, state: Mapping[str, Any], step: int, rule_action: str, rule_reason: str = "",
                projection: Callable[[str], str] | None = None) -> Decision:
-        """The executed action at step ``step``.
+        """The candidate action at step ``step`` and its projection.
 
         Args:
             state: z(k) as a dict (``DecisionState.to_dict()``).
@@ -88,19 +89,19 @@ class LlmDecider:
             self._pending = None
             return self._apply(rec, step, proj)
         if not self.due(step):
-            return Decision(proj(rule_action), rule_reason, "rule")
+            return Decision(rule_action, proj(rule_action), rule_reason, "rule")
         self._k_llm = step
         rec = self._call(state, step, rule_action)
         if rec["fallback"] is not None:
             action = proj(rule_action)
             rec.update(apply_step=step, executed=action)
             why = f"LLM fallback ({rec['fallback']})"
-            return Decision(action, f"{why}; rule: {rule_reason}" if rule_reason else why, "rule")
+            return Decision(rule_action, action, f"{why}; rule: {rule_reason}" if rule_reason else why, "rule")
         delay = self.latency.delay_steps(rec["latency_s"], float(state["dt"]))
         if delay == 0:
             return self._apply(rec, step, proj)
         self._pending = (step + delay, rec)
-        return Decision(proj(rule_action), rule_reason, "rule")
+        return Decision(rule_action, proj(rule_action), rule_reason, "rule")
 
     def _call(self, state: Mapping[str, Any], step: int, rule_action: str) -> dict[str, Any]:
         prompt = build_prompt(state)
@@ -138,7 +139,7 @@ class LlmDecider:
             reason = f"LLM suggested {rec['parsed']}, infeasible: projected to {action}"
         else:
             reason = f"LLM: {rec['reason']}" if rec["reason"] else "LLM"
-        return Decision(action, reason, "llm")
+        return Decision(rec["parsed"], action, reason, "llm")
 
     def summary(self) -> dict[str, float]:
         """Run metrics: call and fallback counts, projections, latency statistics [s]."""

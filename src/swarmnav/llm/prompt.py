@@ -79,9 +79,10 @@ OUTPUT = (
 
 
 def state_json(state: Mapping[str, Any]) -> str:
-    """z(k) as compact JSON in the paper's field order; non-finite numbers become null
-    (e.g. d_swarm_min with one sub-swarm) and floats are rounded to 3 decimals."""
-    return json.dumps({k: jsonable(state[k]) for k in _ordered(state)}, separators=(", ", ": "))
+    """The fields of z(k) (STATE_FIELDS, in the paper's order) as JSON; other keys of
+    ``state`` are left out. Non-finite numbers become null (e.g. d_swarm_min with one
+    sub-swarm) and floats are rounded to 3 decimals."""
+    return json.dumps({k: jsonable(state[k]) for k in STATE_FIELDS if k in state}, separators=(", ", ": "))
 
 
 def build_prompt(state: Mapping[str, Any]) -> str:
@@ -103,7 +104,3 @@ def jsonable(v: Any, digits: int | None = 3) -> Any:
         return None
     return f if digits is None else round(f, digits)
 
-
-def _ordered(state: Mapping[str, Any]) -> list[str]:
-    known = [k for k in STATE_FIELDS if k in state]
-    return known + sorted(k for k in state if k not in STATE_FIELDS)

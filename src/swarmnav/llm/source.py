@@ -17,7 +17,10 @@ from swarmnav.llm.decider import TRANSCRIPT, LlmDecider
 
 
 class LlmDecisionSource:
-    """``propose(z, step)``: the LLM's projected action at call steps, the rule's otherwise.
+    """``propose(z, step)``: the LLM's action at call steps, the rule's otherwise (eq. 21).
+
+    The proposal is the candidate a_k, unprojected: the method projects it with Pi_feas as it
+    projects the rule's; the transcript records that projection as the executed action.
 
     Args:
         rule: the rule source (``propose(z, step)`` -> a proposal with ``action``, ``reason``,
