@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav.dynamics import DampedDoubleIntegrator
+from swarmnav.llm import decision_source
 from swarmnav.methods.base import Observation
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.corridors import (
@@ -110,7 +111,7 @@ class Hes:
         self.geom = scenario.geometry
         n = len(positions)
         self.n = n
-        self.source: DecisionSource = self._source_override or RulePolicy(p.d_merge, p.t_cd)
+        self.source: DecisionSource = self._source_override or decision_source(p, RulePolicy(p.d_merge, p.t_cd), project)
         c = positions.mean(axis=0)
         self.leader = int(np.argmin(np.sum((positions - c) ** 2, axis=1)))  # one leader, eq. (1) roles
         self.labels = np.zeros(n, dtype=np.int64)
@@ -130,6 +131,10 @@ class Hes:
         if hasattr(self.source, "summary"):
             out.update({k: float(v) for k, v in self.source.summary().items()})
         return out
+
+    def artifacts(self) -> dict[str, str]:
+        """Extra run files: ``llm_transcript.jsonl`` when an LLM decides (docs/llm.md)."""
+        return self.source.artifacts() if hasattr(self.source, "artifacts") else {}
 
     # ------------------------------------------------------------------ one step
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:

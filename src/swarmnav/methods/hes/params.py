@@ -11,9 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from swarmnav.errors import ConfigError
-
-#: Values of ``decision`` this issue supports (LLM back ends arrive with the LLM issue).
-DECISIONS = ("rule",)
+from swarmnav.llm.config import DECISIONS, validate as validate_llm  # noqa: F401  DECISIONS: rule + LLM back ends
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,14 +95,19 @@ class HesParams:
     a_max_relaxed: float = 26.0  # ours [m/s^2] the "very loose" bound of the ablations: 10 x a_max
 
     # ---------------------------------------------------------------- decision source
-    decision: str = "rule"  # rule (LLM back ends arrive with the LLM issue)
+    decision: str = "rule"  # rule | ollama | openai | llamacpp | replay, Section 3.3 (docs/llm.md)
+    llm_url: str = ""  # model server URL; "" = the back end's default (Ollama :11434, OpenAI-compatible :8000/v1)
+    llm_model: str = "qwen2.5:3b"  # model name, Section 3.3 (the paper also runs qwen3.5:4b)
+    llm_timeout: float = 120.0  # [s] per-call timeout, Section 3.3
+    llm_interval: int = 50  # T_llm [steps] between LLM calls, eq. (20) (5 s at dt = 0.1 s, Section 3.3)
+    llm_gguf: str = ""  # GGUF model file for decision=llamacpp
+    llm_latency: str = "blocking"  # blocking (paper) | real | fixed:SECONDS (ours: the swarm flies on while the model thinks)
+    llm_replay: str = ""  # transcript or run directory for decision=replay
+    llm_response_format: str = "json_object"  # openai back end: json_object | json_schema | none
+    llm_threads: int = 0  # llama.cpp CPU threads (0: llama-cpp-python's default)
 
     def __post_init__(self) -> None:
-        if self.decision not in DECISIONS:
-            raise ConfigError(
-                f"hes: decision={self.decision!r} is not available (known: {', '.join(DECISIONS)}; "
-                "LLM decision sources are not implemented yet)"
-            )
+        validate_llm(self)  # decision and llm_* (raises ConfigError)
         if not self.r_out > self.r_in:
             raise ConfigError(f"hes: need r_out > r_in (eq. 12), got r_in={self.r_in}, r_out={self.r_out}")
         for name in ("dt", "lidar_range", "r_trigger", "a_max", "v_s", "eps_v", "spacing", "d_safe", "r_enc"):
