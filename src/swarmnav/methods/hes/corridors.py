@@ -125,19 +125,20 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
 
 
 @njit(cache=True)
-def segment_clear(ring, px, py, cos_t, sin_t, gx, gy, rho, max_range):
-    """True if no LiDAR return lies within ``rho`` [m] of the segment from the agent to ``g``
-    (a straight route of half-width ``rho`` is free as far as the ring can tell)."""
+def segment_clear(ring, sx, sy, cos_t, sin_t, ax, ay, bx, by, rho, max_range):
+    """True if no return of the ring sensed at ``(sx, sy)`` lies within ``rho`` [m] of the segment
+    ``(ax, ay) -> (bx, by)`` (world coordinates): a straight route of half-width ``rho`` is free
+    as far as this ring can tell."""
     n = ring.shape[0]
-    ex = gx - px
-    ey = gy - py
+    ex = bx - ax
+    ey = by - ay
     ee = ex * ex + ey * ey
     for r in range(n):
         d = ring[r]
         if d >= max_range:
             continue
-        qx = d * cos_t[r]
-        qy = d * sin_t[r]
+        qx = sx + d * cos_t[r] - ax
+        qy = sy + d * sin_t[r] - ay
         s = 0.0
         if ee > 0.0:
             s = min(max((qx * ex + qy * ey) / ee, 0.0), 1.0)
@@ -190,12 +191,13 @@ class Corridor:
 
 
 def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pass: float, toward_deg: float,
-                     through: float) -> list[Corridor]:
+                     through: float, visible=None) -> list[Corridor]:
     """The candidate corridors leading toward the goal among the openings ``gaps`` seen from ``p``.
 
     Keeps openings at least ``w_pass`` wide whose exit direction is within ``toward_deg`` of the
-    bearing to the goal. Cost = ``|mid - p| + |goal - mid|`` [m] (the length of the route
-    through the throat midpoint). Sorted by cost.
+    bearing to the goal and, if given, for which ``visible(mid)`` is True (the throat can be
+    reached in a straight line). Cost = ``|mid - p| + |goal - mid|`` [m] (the length of the
+    route through the throat midpoint). Sorted by cost.
     """
     out: list[Corridor] = []
     if len(gaps) == 0:
@@ -212,6 +214,8 @@ def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pas
         if nrm[0] * gu[0] + nrm[1] * gu[1] < cmin:
             continue
         mid = 0.5 * (row[GAP_QA_X:GAP_QA_Y + 1] + row[GAP_QB_X:GAP_QB_Y + 1])
+        if visible is not None and not visible(mid):
+            continue
         cost = math.hypot(*(mid - p)) + math.hypot(*(goal - mid))
         out.append(Corridor(mid=mid, normal=nrm.copy(), width=float(w), target=mid + through * nrm, cost=cost))
     out.sort(key=lambda c: c.cost)

@@ -298,30 +298,67 @@ def saturate(a, a_max):
 # --------------------------------------------------------------------------- safety stack (ours)
 
 @njit(cache=True)
-def braking_barrier(ring, v, cos_t, sin_t, margin, a_brake, dt, max_range):
-    """Braking barrier (ours; an adaptive motion-regulation layer of the safety stack, Section 5.3).
+def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_range):
+    """Adaptive motion regulation (ours; the safety stack's layers around eq. (38), Section 5.3).
 
-    The closing speed ``c = v . u`` toward an agent's nearest LiDAR return (range d along ray u)
-    is bounded by what a deceleration ``a_brake`` stops within ``d - margin``:
-    ``c_max = sqrt(2 a_brake max(d - margin, 0))``. An excess is removed within one step,
-    ``a = -min((c - c_max) / dt, 4 a_brake) u``; zero when the agent is slow enough.
+    Projects each agent's commanded next velocity ``v + a dt`` onto
+
+    1. the speed cap ``||v_next|| <= v_cap`` (scaled down if longer), then
+    2. the braking barrier: for every LiDAR ray r (range d_r < R_L, direction u_r) the closing
+       speed ``v_next . u_r`` may not exceed ``sqrt(2 a_brake max(d_r - margin, 0))``, the speed
+       a deceleration ``a_brake`` can stop within the remaining distance; an excess is removed
+       along u_r (rays processed in order, a greedy projection onto the half-planes),
+
+    and returns the acceleration ``(v_next - v) / dt`` that realises it. Saturation (eq. 39)
+    is applied afterwards by the caller.
     """
     n, nr = ring.shape
-    out = np.zeros((n, 2))
+    out = np.empty((n, 2))
     for i in range(n):
+        wx = v[i, 0] + dt * a[i, 0]
+        wy = v[i, 1] + dt * a[i, 1]
+        s = math.sqrt(wx * wx + wy * wy)
+        if s > v_cap:
+            wx *= v_cap / s
+            wy *= v_cap / s
         row = ring[i]
-        r = 0
-        d = row[0]
-        for k in range(1, nr):
-            if row[k] < d:
-                d = row[k]
-                r = k
-        if d >= max_range:
-            continue
-        c = v[i, 0] * cos_t[r] + v[i, 1] * sin_t[r]
-        c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
-        if c > c_max:
-            b = min((c - c_max) / dt, 4.0 * a_brake)
-            out[i, 0] = -b * cos_t[r]
-            out[i, 1] = -b * sin_t[r]
+        for r in range(nr):
+            d = row[r]
+            if d >= max_range:
+                continue
+            c = wx * cos_t[r] + wy * sin_t[r]
+            if c <= 0.0:
+                continue
+            c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
+            if c > c_max:
+                wx -= (c - c_max) * cos_t[r]
+                wy -= (c - c_max) * sin_t[r]
+        out[i, 0] = (wx - v[i, 0]) / dt
+        out[i, 1] = (wy - v[i, 1]) / dt
     return out
+
+
+@njit(cache=True)
+def push_clear(px, py, ring, sx, sy, cos_t, sin_t, clear, max_range, iters):
+    """Move point ``(px, py)`` away from the returns of the ring sensed at ``(sx, sy)`` until it is
+    ``clear`` [m] from the nearest one (at most ``iters`` pushes); used to keep a waypoint off walls."""
+    n = ring.shape[0]
+    for _ in range(iters):
+        best = np.inf
+        qx = qy = 0.0
+        for r in range(n):
+            d = ring[r]
+            if d >= max_range:
+                continue
+            hx = sx + d * cos_t[r]
+            hy = sy + d * sin_t[r]
+            e2 = (px - hx) ** 2 + (py - hy) ** 2
+            if e2 < best:
+                best = e2
+                qx, qy = hx, hy
+        dist = math.sqrt(best)
+        if not dist < clear or dist == 0.0:
+            break
+        px = qx + (px - qx) * clear / dist
+        py = qy + (py - qy) * clear / dist
+    return px, py

@@ -66,6 +66,8 @@ from swarmnav.world.scenario import Scenario
 _NEVER = -(10**9)
 _RING_ANGLES = np.linspace(0.0, 2 * math.pi, 72, endpoint=False)  # encircle slot candidates (5 deg)
 _SLOT_REFRESH = 10  # steps between re-solving the slot assignment (ours: 1 s)
+_RHO_VIS = 0.4  # [m] half-width of the straight line from the centroid to a throat that must be free (ours)
+_COMMIT_S = 20.0  # [s] a split's corridor assignment lapses after this long if the throat is not passed (ours)
 
 
 @dataclass(slots=True)
@@ -78,6 +80,7 @@ class SubSwarm:
     mode: int = NAVIGATE
     route: Corridor | None = None  # corridor currently followed
     committed: bool = False  # assigned by a split: follow it until its throat is passed
+    commit_step: int = 0  # step of the split that assigned the corridor
     alpha: float = 1.0  # formation scale alpha_s(k)
     slot_index: dict[int, int] = field(default_factory=dict)  # agent -> template row (r_i)
     slot_step: int = _NEVER  # step of the last slot assignment
@@ -143,6 +146,7 @@ class Hes:
         x = np.ascontiguousarray(obs.positions, dtype=np.float64)
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         ring = self._sense(x)
+        self._k = k
         events: list[dict] = []
 
         # 2. reports from subleaders, 3. decision through Pi_feas
@@ -188,8 +192,15 @@ class Hes:
         members = np.flatnonzero(self.labels == s)
         pack = make_pack(s, sub.subleader, members, x, v)
         a = sub.subleader
-        gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], self._cos, self._sin, p.lidar_range, p.h_open)
-        cors = corridors_toward(gaps, x[a], self.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through)
+        ra, sx, sy = ring[a], x[a, 0], x[a, 1]
+        gaps = detect_gaps(ra, sx, sy, self._cos, self._sin, p.lidar_range, p.h_open)
+        c = pack.centroid
+
+        def visible(q: np.ndarray) -> bool:  # the throat is reachable straight from the centroid
+            return segment_clear(ra, sx, sy, self._cos, self._sin, c[0], c[1], q[0], q[1], _RHO_VIS, p.lidar_range)
+
+        cors = corridors_toward(gaps, x[a], self.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
+                                visible=visible)
         return Report(pack, tuple(cors), float(ring[members].min()))
 
     def decision_state(self, k: int, reports: dict[int, Report]) -> DecisionState:
@@ -243,7 +254,8 @@ class Hes:
             sl = choose_subleader(x, g, self.leader)
             self.labels[g] = sid
             wp = old.waypoint.copy() if sid == s0 else x[g].mean(axis=0)
-            self.subs[sid] = SubSwarm(sid, sl, wp, mode=old.mode, route=c, committed=True, alpha=old.alpha)
+            self.subs[sid] = SubSwarm(sid, sl, wp, mode=old.mode, route=c, committed=True, commit_step=self._k,
+                                      alpha=old.alpha)
         if s0 not in self.subs:  # leader-less split cannot happen, but keep ids consistent
             pass
         self.stats["splits"] += 1
@@ -294,7 +306,7 @@ class Hes:
             sub.waypoint = self.goal.copy()
             sub.alpha = 1.0
             return
-        route = self._choose_route(sub, rep, x)
+        route = self._choose_route(sub, rep, x, k)
         sub.route = route
         target = route.target if route is not None else self.goal
         # virtual leader: advance toward the target at the (adaptive) cruise speed ...
@@ -308,10 +320,15 @@ class Hes:
         if on > p.lead:
             sub.waypoint = cent + off * (p.lead / on)
         w = route.width if route is not None else math.inf
+        if p.adaptive:  # keep the waypoint off the walls the subleader sees
+            a = sub.subleader
+            clear = min(p.wp_clear, 0.5 * w)
+            sub.waypoint = np.array(F.push_clear(sub.waypoint[0], sub.waypoint[1], self._ring[a], x[a, 0], x[a, 1],
+                                                 self._cos, self._sin, clear, p.lidar_range, 3))
         a_target = float(np.clip(w / p.w_ref, p.alpha_min, 1.0)) if math.isfinite(w) else 1.0
         sub.alpha += float(np.clip(a_target - sub.alpha, -0.05, 0.05))
 
-    def _choose_route(self, sub: SubSwarm, rep: Report, x: np.ndarray) -> Corridor | None:
+    def _choose_route(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int) -> Corridor | None:
         """The corridor this sub-swarm follows: the direct route if the goal is in clear view,
         else the cheapest candidate, kept (hysteresis ``switch_margin``) while it is still seen,
         and kept unconditionally while a split's commitment lasts."""
@@ -320,14 +337,18 @@ class Hes:
         sl = x[a]
         cands = list(rep.corridors)
         ring_a = self._ring[a]
-        if segment_clear(ring_a, sl[0], sl[1], self._cos, self._sin, self.goal[0], self.goal[1], p.d_safe,
-                         p.lidar_range):
-            cands.insert(0, direct_corridor(sl, self.goal))
+        cent = rep.pack.centroid
+        if segment_clear(ring_a, sl[0], sl[1], self._cos, self._sin, cent[0], cent[1], self.goal[0], self.goal[1],
+                         p.d_safe, p.lidar_range):
+            cands.insert(0, direct_corridor(cent, self.goal))
         prev = sub.route
         if sub.committed and prev is not None:
-            cent = rep.pack.centroid
-            if float(np.dot(cent - prev.mid, prev.normal)) > 0.0:
+            # a split's assignment holds (even when the subleader's view of the throat changes)
+            # until the centroid has passed the throat or the commitment has lapsed
+            if float(np.dot(cent - prev.mid, prev.normal)) > 0.0 or (k - sub.commit_step) * p.dt > _COMMIT_S:
                 sub.committed = False
+            else:
+                return prev
         if not cands:
             return prev
         m = len(rep.pack.members)
@@ -339,7 +360,7 @@ class Hes:
         if same is None:
             sub.committed = False
             return cands[best]
-        if sub.committed or cost[best] >= cost[same] - p.switch_margin:
+        if cost[best] >= cost[same] - p.switch_margin:
             return cands[same]
         return cands[best]
 
@@ -450,7 +471,8 @@ class Hes:
         a = F.synthesize(x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig,
                          ring, self._cos, self._sin, self._gains)
         if p.adaptive:
-            a = a + F.braking_barrier(ring, v, self._cos, self._sin, p.brake_margin, p.a_brake, p.dt, p.lidar_range)
+            a = F.safety_filter(a, v, ring, self._cos, self._sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake,
+                                p.brake_margin, p.lidar_range)
         return F.saturate(a, p.a_bound)
 
     def _occlusion(self, x, slot, nn, sl_idx, cent) -> np.ndarray:

@@ -85,11 +85,13 @@ class HesParams:
     # ---------------------------------------------------------------- safety stack (ours; Section 5.3)
     v_min_frac: float = 0.5  # ours [-] adaptive cruise: v_s is scaled down to this fraction in tight places
     clr_slow: float = 3.0  # ours [m] adaptive cruise acts when the sub-swarm's closest LiDAR return is nearer than this
-    brake_margin: float = 0.6  # ours [m] braking barrier: stop distance kept from the nearest LiDAR return
-    a_brake: float = 1.5  # ours [m/s^2] braking barrier: deceleration budget used to bound the closing speed
+    v_cap_frac: float = 1.3  # ours [-] speed cap of the safety filter: 1.3 v_s (room to catch up with the formation)
+    brake_margin: float = 0.5  # ours [m] braking barrier: stopping distance kept from every LiDAR return
+    a_brake: float = 1.5  # ours [m/s^2] braking barrier: deceleration budget (< a_max, leaves room for the other terms)
+    wp_clear: float = 2.0  # ours [m] the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if narrower)
 
     # ---------------------------------------------------------------- ablations (Simulation 2)
-    safety_stack_off: bool = False  # True: adaptive cruise + braking barrier off, a_max -> a_max_relaxed
+    safety_stack_off: bool = False  # True: adaptive cruise, safety filter and waypoint clearance off, a_max -> a_max_relaxed
     occlusion_attenuation: bool = True  # False: sigma_occ = 1 (Table 4 "w/o occ. attenuation")
     acceleration_bound: bool = True  # False: a_max -> a_max_relaxed (Table 4 "w/o acc. bound")
     a_max_relaxed: float = 26.0  # ours [m/s^2] the "very loose" bound of the ablations: 10 x a_max
@@ -135,5 +137,5 @@ class HesParams:
 
     @property
     def adaptive(self) -> bool:
-        """The adaptive motion-regulation layers (adaptive cruise, braking barrier) are on."""
+        """The adaptive motion-regulation layers (adaptive cruise, safety filter, waypoint clearance) are on."""
         return not self.safety_stack_off
