@@ -126,10 +126,11 @@ class RulePolicy:
 
     1. split when a split is feasible and at least two corridors lead to the goal;
     2. merge when a merge is feasible and two sub-swarms are near the goal;
-    3. merge when a merge is feasible because two sub-swarms are closer than d_merge, once the
+    3. merge when a merge is feasible because two sub-swarms are closer than d_merge, no longer
+       see two corridors (n_c < 2: the paths that motivated the split have rejoined) and the
        split-merge cooldown T_cd has passed since the last change of S (ours: eq. 16 puts no
        cooldown on merges, but merging two sub-swarms that have just been split, and are still
-       side by side, would undo every split at the next step);
+       side by side on their way to different corridors, would undo every split);
     4. keep otherwise.
 
     The source watches S(k) to know when the structure last changed (its only state).
@@ -150,6 +151,6 @@ class RulePolicy:
             return Proposal("split", f"{z.n_c} corridors toward the goal (w {z.w_min:.1f}-{z.w_max:.1f} m)", "rule")
         if z.can_merge and z.n_near >= 2:
             return Proposal("merge", f"{z.n_near} sub-swarms within r_merge of the goal", "rule")
-        if z.can_merge and z.d_swarm_min < self.d_merge and t - self._t_change >= self.cooldown_s:
+        if z.can_merge and z.d_swarm_min < self.d_merge and z.n_c < 2 and t - self._t_change >= self.cooldown_s:
             return Proposal("merge", f"sub-swarms {z.d_swarm_min:.1f} m apart (< d_merge)", "rule")
         return Proposal("keep", "no structural change needed", "rule")

@@ -81,7 +81,8 @@ class SubSwarm:
     route: Corridor | None = None  # corridor currently followed
     committed: bool = False  # assigned by a split: follow it until its throat is passed
     commit_step: int = 0  # step of the split that assigned the corridor
-    alpha: float = 1.0  # formation scale alpha_s(k)
+    squeeze: float = 1.0  # lateral factor of the template in a narrow corridor (longitudinal: 1 / squeeze)
+    heading: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))  # formation axis (unit)
     slot_index: dict[int, int] = field(default_factory=dict)  # agent -> template row (r_i)
     slot_step: int = _NEVER  # step of the last slot assignment
     ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
@@ -255,7 +256,7 @@ class Hes:
             self.labels[g] = sid
             wp = old.waypoint.copy() if sid == s0 else x[g].mean(axis=0)
             self.subs[sid] = SubSwarm(sid, sl, wp, mode=old.mode, route=c, committed=True, commit_step=self._k,
-                                      alpha=old.alpha)
+                                      squeeze=old.squeeze, heading=old.heading.copy())
         if s0 not in self.subs:  # leader-less split cannot happen, but keep ids consistent
             pass
         self.stats["splits"] += 1
@@ -304,7 +305,6 @@ class Hes:
         sub.mode = mode
         if mode == ENCIRCLE:
             sub.waypoint = self.goal.copy()
-            sub.alpha = 1.0
             return
         route = self._choose_route(sub, rep, x, k)
         sub.route = route
@@ -325,8 +325,16 @@ class Hes:
             clear = min(p.wp_clear, 0.5 * w)
             sub.waypoint = np.array(F.push_clear(sub.waypoint[0], sub.waypoint[1], self._ring[a], x[a, 0], x[a, 1],
                                                  self._cos, self._sin, clear, p.lidar_range, 3))
-        a_target = float(np.clip(w / p.w_ref, p.alpha_min, 1.0)) if math.isfinite(w) else 1.0
-        sub.alpha += float(np.clip(a_target - sub.alpha, -0.05, 0.05))
+        # formation axis along the motion of c_s; squeeze across a corridor narrower than the formation
+        h = target - sub.waypoint
+        hn = math.hypot(h[0], h[1])
+        if hn > 0.5:
+            h = 0.8 * sub.heading + 0.2 * h / hn
+            sub.heading = h / max(math.hypot(h[0], h[1]), 1e-9)
+        m = len(rep.pack.members)
+        w_iso = float(np.ptp(hex_template(m)[:, 1])) * p.spacing + p.spacing if m > 1 else p.spacing
+        lam = float(np.clip((w - 2 * p.lane_margin) / w_iso, 1 / math.sqrt(p.aspect_max), 1.0)) if math.isfinite(w) else 1.0
+        sub.squeeze += float(np.clip(lam - sub.squeeze, -0.05, 0.05))
 
     def _choose_route(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int) -> Corridor | None:
         """The corridor this sub-swarm follows: the direct route if the goal is in clear view,
@@ -442,7 +450,7 @@ class Hes:
                 slot[members] = self.goal + sub.ring_offsets
                 speed[members] = p.v_s
                 continue
-            tmpl = hex_template(m) * (p.spacing * sub.alpha)
+            tmpl = self._template(m, sub)
             if k - sub.slot_step >= _SLOT_REFRESH or set(sub.slot_index) != set(members.tolist()):
                 r_i = assign_slots(x[members], sub.waypoint + tmpl)
                 sub.slot_index = dict(zip(members.tolist(), r_i.tolist()))
@@ -451,6 +459,21 @@ class Hes:
             slot[members] = sub.waypoint + tmpl[r_i]
             speed[members] = p.v_s
         return slot, speed
+
+    def _template(self, m: int, sub: SubSwarm) -> np.ndarray:
+        """alpha_s R(psi_s) Delta_f of eq. (23) for a sub-swarm of m agents, (m, 2) [m].
+
+        Delta_f: the unit hex template, squeezed across the formation axis by ``squeeze`` and
+        stretched along it by ``1 / squeeze``; alpha_s = spacing (k_p + k_path) / k_p, so that
+        where the slot attraction (eq. 24) balances the corridor centering toward c_s (eq. 32) the
+        agents sit ``spacing`` apart."""
+        p = self.params
+        alpha = p.spacing * (p.k_p + p.k_path) / p.k_p
+        t = hex_template(m)
+        hx, hy = sub.heading
+        u = t[:, 0] / sub.squeeze
+        w = t[:, 1] * sub.squeeze
+        return alpha * np.column_stack([hx * u - hy * w, hy * u + hx * w])
 
     # ------------------------------------------------------------------ control, eq. (38)-(39)
     def _control(self, x: np.ndarray, v: np.ndarray, ring: np.ndarray, slot: np.ndarray,

@@ -57,9 +57,9 @@ class HesParams:
     # ---------------------------------------------------------------- reference trajectory (ours)
     v_s: float = 2.5  # ours [m/s] cruise speed v_s: 100 s horizon covers the ~110 m gate zig-zag with margin
     eps_v: float = 0.5  # ours [m] eps_v of eq. (23): the slot velocity ramps down within ~0.5 m of the slot
-    spacing: float = 2.0  # ours [m] lattice spacing of the formation template Delta_f (before k_path compresses it)
-    alpha_min: float = 0.35  # ours [-] smallest formation scale alpha_s in a narrow corridor
-    w_ref: float = 10.0  # ours [m] corridor width at (and above) which alpha_s = 1
+    spacing: float = 1.4  # ours [m] spacing of the equilibrium formation (alpha_s = spacing (k_p + k_path) / k_p, see docs)
+    aspect_max: float = 3.0  # ours [-] the template is squeezed across a narrow corridor (area kept) up to this aspect ratio
+    lane_margin: float = 2.0  # ours [m] the squeezed formation keeps this from each side of the corridor (d_safe + 0.5)
     lead: float = 3.0  # ours [m] leash: waypoint c_s stays within this distance ahead of the sub-swarm centroid
     through: float = 3.0  # ours [m] the corridor target lies this far beyond the gap's throat
     r_enc: float = 6.0  # ours [m] encircle radius: paper's E_mean = 6.1 m with R_goal = 1 (r_succ = 8 m)
@@ -77,7 +77,7 @@ class HesParams:
     w_pass: float = 2.0  # ours [m] narrowest gap a UAV may be routed through (0.4 m body + margins)
     w_split: float = 6.0  # ours [m] a gap counts as a split path (n_c) if a >=5-agent sub-swarm (~3 m across) passes it with d_safe = 1.5 m each side
     h_open: float = 0.5  # ours [m] the ring must rise this much between two minima to form an opening
-    toward_deg: float = 100.0  # ours [deg] a corridor leads toward the goal if its exit direction is within this of the goal bearing
+    toward_deg: float = 80.0  # ours [deg] a corridor leads toward the goal if its exit direction is within this of the goal bearing (< 90: never back)
     switch_margin: float = 3.0  # ours [m] route-cost margin before a sub-swarm switches corridor (hysteresis)
     max_subswarms: int = 3  # ours [-] a split creates at most this many sub-swarms
     min_size: int = 4  # ours [-] smallest sub-swarm a split may create
