@@ -308,7 +308,13 @@ class Hes:
             return
         route = self._choose_route(sub, rep, x, k)
         sub.route = route
-        target = route.target if route is not None else self.goal
+        if route is None:
+            target = self.goal
+        elif route.direct:
+            target = route.target
+        else:  # `through` metres past the throat, or past the centroid once that is beyond the throat
+            along = max(float(np.dot(cent - route.mid, route.normal)), 0.0)
+            target = route.mid + (along + p.through) * route.normal
         # virtual leader: advance toward the target at the (adaptive) cruise speed ...
         step = self._cruise(rep) * p.dt
         d = target - sub.waypoint
