@@ -16,6 +16,7 @@ stall the simulation.
 
 from __future__ import annotations
 
+import atexit
 import http.client
 import json
 import socket
@@ -224,7 +225,7 @@ class OpenAIBackend:
 # ---------------------------------------------------------------------------------------------
 # llama.cpp in-process
 
-_LOADED: dict[tuple, Any] = {}  # (path, n_ctx, n_threads) -> llama_cpp.Llama, one load per process
+_LOADED: dict[tuple, Any] = {}  # (path, n_ctx, n_threads) -> (llama_cpp.Llama, its lock), one load per process
 _LOAD_LOCK = threading.Lock()
 
 
@@ -232,8 +233,10 @@ class LlamaCppBackend:
     """llama-cpp-python in-process on the GGUF file ``gguf``.
 
     The model is loaded at the first call and kept for the process (a sweep's runs share it).
-    The timeout is enforced between tokens by a stopping criterion; an answer cut by it is a
-    timeout failure.
+    Generation runs in a worker thread so the timeout holds: past it the call fails, the
+    thread finishes its (at most 64) tokens in the background, and calls made while it is
+    still busy fail at once (one model, one generation at a time). ``latency`` is the
+    generation's wall time, without the one-off model load.
     """
 
     name = "llamacpp"
@@ -252,43 +255,64 @@ class LlamaCppBackend:
         self.model = path.name
 
     def llama(self):
-        """The loaded ``llama_cpp.Llama`` (loaded once per process and path)."""
+        """(the loaded ``llama_cpp.Llama``, the lock that serialises its use); loaded once per
+        process and path."""
         key = (str(self.path.resolve()), self.n_ctx, self.n_threads)
         with _LOAD_LOCK:
             if key not in _LOADED:
                 from llama_cpp import Llama
 
                 kw = {"n_threads": self.n_threads} if self.n_threads > 0 else {}
-                _LOADED[key] = Llama(model_path=key[0], n_ctx=self.n_ctx, verbose=False, **kw)
+                _LOADED[key] = (Llama(model_path=key[0], n_ctx=self.n_ctx, verbose=False, **kw), threading.Lock())
             return _LOADED[key]
 
     def complete(self, prompt: str, step: int) -> Reply:
-        from llama_cpp import StoppingCriteriaList
-
-        t0 = time.perf_counter()
         try:
-            llm = self.llama()
+            llm, lock = self.llama()
         except (ValueError, RuntimeError, OSError) as e:
             raise LlmError("connection", f"cannot load {self.path}: {e}") from None
-        deadline = t0 + self.timeout
-        try:
-            out = llm.create_chat_completion(
-                messages=[{"role": "user", "content": prompt}],
-                temperature=TEMPERATURE,
-                max_tokens=MAX_TOKENS,
-                response_format={"type": "json_object", "schema": SCHEMA},
-                stopping_criteria=StoppingCriteriaList([lambda ids, logits: time.perf_counter() > deadline]),
-            )
-        except (ValueError, RuntimeError) as e:
-            raise LlmError("bad-response", f"llama.cpp: {e}") from None
+        if not lock.acquire(blocking=False):
+            raise LlmError("timeout", "llama.cpp is still generating the answer of a call that timed out")
+        box: dict[str, Any] = {}
+
+        def generate() -> None:
+            try:
+                box["out"] = llm.create_chat_completion(
+                    messages=[{"role": "user", "content": prompt}],
+                    temperature=TEMPERATURE,
+                    max_tokens=MAX_TOKENS,
+                    response_format={"type": "json_object", "schema": SCHEMA},
+                )
+            except BaseException as e:  # handed to the caller's thread
+                box["error"] = e
+            finally:
+                lock.release()
+
+        worker = threading.Thread(target=generate, name="swarmnav-llamacpp", daemon=True)
+        t0 = time.perf_counter()
+        worker.start()
+        worker.join(self.timeout)
         latency = time.perf_counter() - t0
-        if latency > self.timeout:
-            raise LlmError("timeout", f"llama.cpp took longer than {self.timeout:g} s")
+        if worker.is_alive():
+            _BUSY.append(worker)
+            raise LlmError("timeout", f"llama.cpp gave no answer within {self.timeout:g} s")
+        if "error" in box:
+            raise LlmError("bad-response", f"llama.cpp: {type(box['error']).__name__}: {box['error']}")
         try:
-            text = out["choices"][0]["message"]["content"]
+            text = box["out"]["choices"][0]["message"]["content"]
         except (KeyError, IndexError, TypeError):
             text = None
         return Reply(_content(text, "llama.cpp"), latency)
+
+
+_BUSY: list[threading.Thread] = []  # generations that outlived their timeout
+
+
+@atexit.register
+def _finish_generations() -> None:
+    """Let timed-out generations end before the interpreter (and llama.cpp) shuts down."""
+    for t in _BUSY:
+        t.join(30.0)
 
 
 # ---------------------------------------------------------------------------------------------
