@@ -163,14 +163,26 @@ def _cmd_experiment(args) -> int:
     if args.workers < 1:
         raise ConfigError(f"experiment: --workers must be >= 1, got {args.workers}")
     exp = load_experiment(args.spec or args.name, overrides=_parse_sets(args.set), seeds=args.seeds)
-    rows, summary = run_experiment(exp, args.out, workers=args.workers, save_runs=args.save_runs,
+    rows, summary = run_experiment(exp, args.out, workers=args.workers, backend=args.backend,
+                                   ray_address=args.ray_address, save_trajectories=not args.no_trajectories,
                                    progress=not args.quiet)
     failed = sum(r["status"] != "done" for r in rows)
-    print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/runs.csv, {args.out}/summary.csv")
+    print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/results.sqlite, runs.csv, summary.csv")
     for s in summary:
         keys = [k for k in ("Y_mean", "R_goal_mean", "E_mean_mean", "R_unsafe_mean") if k in s]
         print(f"  {s['variant']:32s} " + "  ".join(f"{k}={s[k]:.3f}" for k in keys))
+    if failed:
+        print(f"  {failed} run(s) failed (see the error column of runs.csv); rerun the same command to retry them",
+              file=sys.stderr)
     return 1 if failed else 0
+
+
+def _cmd_report(args) -> int:
+    from swarmnav.experiments.report import write_report
+
+    for path in write_report(args.dir, experiment=args.experiment):
+        print(f"wrote {path}")
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -220,10 +232,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seeds", help="e.g. 1-10 or 1,3,5 (default: the spec's)")
     s.add_argument("--workers", type=int, default=1)
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="override for every variant; a|b|c sweeps")
-    s.add_argument("--out", metavar="DIR")
-    s.add_argument("--save-runs", action="store_true", help="also keep every run directory under DIR/runs")
+    s.add_argument("--out", metavar="DIR", help="results directory (a rerun into it resumes)")
+    s.add_argument("--backend", choices=["local", "ray"], default="local")
+    s.add_argument("--ray-address", metavar="ADDR", help="join an existing Ray cluster (default: start a local one)")
+    s.add_argument("--no-trajectories", action="store_true", help="store metrics only, no trajectory files")
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(fn=_cmd_experiment)
+
+    s = sub.add_parser("report", help="write report.md and report.html for a results directory")
+    s.add_argument("dir")
+    s.add_argument("--experiment", help="which experiment of the store (default: the last one run)")
+    s.set_defaults(fn=_cmd_report)
 
     s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question")
     s.add_argument("action", choices=["check"])

@@ -1,58 +1,141 @@
-"""Run an experiment's (variant, seed) grid on a local process pool; write runs.csv and summary.csv."""
+"""Run an experiment's (variant, seed) grid on a back end, into a resumable results store.
+
+The driver owns the store: workers compute a run and write its trajectory file, the driver
+commits the row. Rerunning into the same directory runs only what is missing or failed, so
+a sweep killed at any moment (driver or worker, even by SIGKILL) loses no finished run and
+ends, after a rerun, with exactly the runs of an uninterrupted sweep.
+"""
 
 from __future__ import annotations
 
 import csv
+import hashlib
+import io
 import math
 import os
 import sys
 import time
-import traceback
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
+from swarmnav._version import __version__
 from swarmnav.errors import ConfigError, SwarmnavError
 from swarmnav.experiments.spec import Experiment, Variant
+from swarmnav.experiments.store import Store, config_key
 
 #: Metrics where the worst case over seeds matters: summary.csv also gets ``<metric>_min``.
 MIN_METRICS = ("d_clr_min", "min_inter_agent_distance", "Y", "R_goal")
 
 
-def check(exp: Experiment) -> None:
-    """Fail fast (before any worker starts) on a bad method, parameter or scene."""
+@dataclass(frozen=True, slots=True)
+class Job:
+    """One run to do: a variant, a seed, and the key of its full configuration."""
+
+    key: str
+    experiment: str
+    variant: Variant
+    seed: int
+    config: dict[str, Any]
+
+
+def plan(exp: Experiment) -> list[Job]:
+    """The experiment's jobs in spec order, each keyed by the hash of its configuration.
+
+    Fails fast (before any worker starts) on a bad method, parameter or scene. The key covers
+    the method, its fully resolved parameters (defaults included), the scene's identity (the
+    text of a scene file, or a generator spec), swarm size, steps and seed.
+    """
     from swarmnav.methods import registry
+    from swarmnav.params import as_dict
     from swarmnav.world.scenario import load_scenario
 
+    jobs = []
     for v in exp.variants:
         try:
-            registry.make(v.method, **v.params)
-            load_scenario(v.scenario, n=v.n)
+            params = as_dict(registry.make(v.method, **v.params).params)
+            load_scenario(v.scenario.replace("{seed}", str(exp.seeds[0])), n=v.n)
         except SwarmnavError as e:
             raise ConfigError(f"{exp.name} variant '{v.name}': {e}") from None
+        for s in exp.seeds:
+            scenario = v.scenario.replace("{seed}", str(s))
+            config = {"method": v.method, "params": params, "scene": _scene_identity(scenario),
+                      "n": v.n, "steps": v.steps, "seed": s}
+            jobs.append(Job(config_key(config), exp.name, v, s, config))
+    return jobs
 
 
-def run_one(variant: Variant, seed: int, save_dir: str | None = None) -> dict[str, Any]:
-    """One run -> one runs.csv row (config columns, seed, status, every metric)."""
+def _scene_identity(scenario: str) -> str:
+    """A file's or built-in scene's content hash; a generator spec is its own identity."""
+    from swarmnav.world.scenario import builtin_names
+
+    if scenario in builtin_names():
+        text = resources.files("swarmnav.world").joinpath("scenes", f"{scenario}.toml").read_bytes()
+        return f"{scenario}@{hashlib.sha256(text).hexdigest()[:16]}"
+    p = Path(scenario)
+    if scenario.endswith(".toml") and p.is_file():
+        return f"{p.name}@{hashlib.sha256(p.read_bytes()).hexdigest()[:16]}"
+    return scenario
+
+
+def execute(job: Job, keep_trajectory: bool = True) -> dict[str, Any]:
+    """Run one job (in a worker) -> the store row. Never raises: a failed run is a row too.
+
+    The trajectory travels back to the driver as compressed ``.npz`` bytes (``row["_npz"]``),
+    so workers need no shared filesystem (a Ray cluster) and only the driver writes files.
+    """
     from swarmnav.sim import run
     from swarmnav.world.scenario import load_scenario
 
-    row: dict[str, Any] = {**variant.columns(), "seed": seed}
+    v = job.variant
+    row: dict[str, Any] = {
+        "key": job.key, "experiment": job.experiment, "variant": v.name,
+        "scenario": v.scenario.replace("{seed}", str(job.seed)), "method": v.method, "seed": job.seed,
+        "n": v.n, "steps": v.steps, "params": v.params, "config": job.config, "version": __version__,
+        "metrics": {}, "trajectory": "", "error": "",
+    }
     t0 = time.perf_counter()
     try:
-        scn = load_scenario(variant.scenario, n=variant.n)
-        res = run(variant.method, scn, seed=seed, steps=variant.steps, **variant.params)
-        if save_dir:
-            res.save(Path(save_dir) / _safe(variant.name) / f"seed{seed}")
-        row.update(status="done", error="")
-        row.update(res.metrics)
-    except Exception as e:  # a failed run is recorded, never fatal to the sweep
-        row.update(status="failed", error=f"{type(e).__name__}: {e}".splitlines()[0])
-        row["traceback"] = traceback.format_exc(limit=3)
+        res = run(v.method, load_scenario(row["scenario"], n=v.n), seed=job.seed, steps=v.steps, **v.params)
+        if keep_trajectory:
+            buf = io.BytesIO()
+            np.savez_compressed(buf, positions=res.positions.astype(np.float32), labels=res.labels,
+                                min_clearance=res.min_clearance.astype(np.float32))
+            row["_npz"] = buf.getvalue()
+        row.update(status="done", metrics=res.metrics)
+    except Exception as e:  # noqa: BLE001 - a failed run is recorded, never fatal to the sweep
+        row.update(status="failed", error=f"{type(e).__name__}: {e}".splitlines()[0][:500])
     row["wall_time_s"] = time.perf_counter() - t0
     return row
+
+
+def failed_row(job: Job, error: str) -> dict[str, Any]:
+    """The row of a run whose worker never returned (it died, or the back end lost it)."""
+    v = job.variant
+    return {"key": job.key, "experiment": job.experiment, "variant": v.name,
+            "scenario": v.scenario.replace("{seed}", str(job.seed)), "method": v.method, "seed": job.seed,
+            "n": v.n, "steps": v.steps, "params": v.params, "config": job.config, "version": __version__,
+            "metrics": {}, "trajectory": "", "status": "failed", "error": error[:500], "wall_time_s": None}
+
+
+def _write_trajectory(root: Path, row: dict) -> None:
+    """Write a row's trajectory bytes under ``trajectories/`` (temp name + rename)."""
+    data = row.pop("_npz", None)
+    if data is None:
+        return
+    rel = Path("trajectories") / row["key"][:2] / f"{row['key']}.npz"
+    path = root / rel
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    row["trajectory"] = str(rel)
 
 
 def run_experiment(
@@ -60,52 +143,93 @@ def run_experiment(
     out: str | Path,
     *,
     workers: int = 1,
-    save_runs: bool = False,
+    backend: str = "local",
+    ray_address: str | None = None,
+    save_trajectories: bool = True,
     progress: bool = True,
     on_row: Callable[[dict], None] | None = None,
 ) -> tuple[list[dict], list[dict]]:
-    """Run every (variant, seed); write ``out/runs.csv`` and ``out/summary.csv``."""
-    check(exp)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    jobs = [(v, s) for v in exp.variants for s in exp.seeds]
-    save_dir = str(out / "runs") if save_runs else None
-    rows: list[dict] = []
-    bar = _bar(len(jobs), progress)
-    if workers <= 1:
-        for v, s in jobs:
-            rows.append(run_one(v, s, save_dir))
-            _tick(bar, rows[-1], on_row)
-    else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            futs = [pool.submit(run_one, v, s, save_dir) for v, s in jobs]
-            for f in as_completed(futs):
-                rows.append(f.result())
-                _tick(bar, rows[-1], on_row)
-    if bar is not None:
+    """Run every missing (variant, seed) of ``exp`` into the store in ``out``.
+
+    Returns the exported ``runs.csv`` and ``summary.csv`` rows (also written to ``out``).
+    """
+    from swarmnav.experiments.backends import BACKENDS
+
+    if backend not in BACKENDS:
+        raise ConfigError(f"unknown backend '{backend}' (known: {', '.join(BACKENDS)})")
+    if workers < 1:
+        raise ConfigError(f"--workers must be >= 1, got {workers}")
+    jobs = plan(exp)
+    store = Store(out)
+    store.set_meta(f"experiment:{exp.name}", _spec_meta(exp, jobs))
+    store.set_meta("last_experiment", exp.name)
+    done = store.done_keys()
+    todo = [j for j in jobs if j.key not in done]
+    bar = _Progress(len(jobs), len(jobs) - len(todo), progress)
+
+    def finished(row: dict) -> None:
+        _write_trajectory(store.root, row)  # the file exists before the row that names it
+        store.put(row)  # committed before anything else learns of it
+        bar.update(row)
+        if on_row is not None:
+            on_row(row)
+
+    try:
+        if todo:
+            BACKENDS[backend](todo, workers=workers, on_result=finished, keep_trajectory=save_trajectories,
+                              ray_address=ray_address)
+    finally:
         bar.close()
-    order = {(v.name, s): k for k, (v, s) in enumerate(jobs)}
-    rows.sort(key=lambda r: order[(r["variant"], r["seed"])])
-    for r in rows:
-        r.pop("traceback", None)
-    summary = summarize(rows, exp.variants)
-    write_csv(out / "runs.csv", rows)
-    write_csv(out / "summary.csv", summary)
-    return rows, summary
+    return export(store, exp.name)
 
 
-def summarize(rows: list[dict], variants) -> list[dict]:
+def export(store: Store, experiment: str) -> tuple[list[dict], list[dict]]:
+    """Write ``runs.csv`` and ``summary.csv`` for ``experiment`` from the store; return them."""
+    meta = store.meta(f"experiment:{experiment}")
+    if meta is None:
+        raise SwarmnavError(f"{store.root}: no experiment '{experiment}' in the store")
+    stored = store.rows(keys=meta["keys"])
+    runs = [_csv_row(r) for r in stored]
+    variants = meta["variants"]
+    summary = summarize(runs, variants)
+    write_csv(store.root / "runs.csv", runs)
+    write_csv(store.root / "summary.csv", summary)
+    return runs, summary
+
+
+def _spec_meta(exp: Experiment, jobs: list[Job]) -> dict:
+    return {
+        "name": exp.name, "description": exp.description, "seeds": list(exp.seeds),
+        "variants": [{"name": v.name, "columns": v.columns()} for v in exp.variants],
+        "keys": [j.key for j in jobs], "report": exp.report,
+    }
+
+
+def _csv_row(r: dict) -> dict[str, Any]:
+    params = {f"param.{k}": v for k, v in sorted(r["params"].items())}
+    row = {"variant": r["variant"], "method": r["method"], "scenario": r["scenario"], "steps": r["steps"],
+           "n": r["n"] if r["n"] is not None else "", **params, "seed": r["seed"], "status": r["status"],
+           "error": r["error"]}
+    row.update(r["metrics"])
+    row.update(wall_time_s=r["wall_time_s"], trajectory=r["trajectory"], key=r["key"], version=r["version"])
+    return row
+
+
+def summarize(rows: list[dict], variants: list[dict]) -> list[dict]:
     """One row per variant: mean and population std of each metric (``<m>_mean``, ``<m>_std``),
     ``<m>_min`` for :data:`MIN_METRICS`, and run counts."""
     out = []
+    skip = {"seed", "status", "error", "wall_time_s", "trajectory", "key", "version", "steps", "n"}
     for v in variants:
-        mine = [r for r in rows if r["variant"] == v.name]
+        mine = [r for r in rows if r["variant"] == v["name"]]
         done = [r for r in mine if r["status"] == "done"]
-        s: dict[str, Any] = {**v.columns(), "runs": len(mine), "failed": len(mine) - len(done)}
-        keys = [k for k in (done[0] if done else {}) if k not in s and k not in ("seed", "status", "error")
+        s: dict[str, Any] = {**v["columns"], "runs": len(mine), "done": len(done), "failed": len(mine) - len(done)}
+        keys = [k for k in (done[0] if done else {}) if k not in s and k not in skip and not k.startswith("param.")
                 and _is_number(done[0][k])]
         for k in keys:
-            vals = np.array([float(r[k]) for r in done], dtype=float)
+            vals = np.array([float(r[k]) for r in done if _is_number(r.get(k))], dtype=float)
+            if not len(vals):
+                continue
             s[f"{k}_mean"] = float(np.mean(vals))
             s[f"{k}_std"] = float(np.std(vals))  # population form, as the HES paper
             if k in MIN_METRICS:
@@ -137,22 +261,34 @@ def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool)
 
 
-def _safe(name: str) -> str:
-    return "".join(c if c.isalnum() or c in "-_.=" else "_" for c in name)
+class _Progress:
+    """tqdm bar over all runs of the experiment: done / failed / remaining, with an ETA."""
 
+    def __init__(self, total: int, already: int, enabled: bool):
+        self.failed = 0
+        self.done = already
+        self.total = total
+        self.bar = None
+        if enabled and sys.stderr.isatty():
+            from tqdm import tqdm
 
-def _bar(total: int, progress: bool):
-    if not progress or not sys.stderr.isatty():
-        return None
-    from tqdm import tqdm
+            self.bar = tqdm(total=total, initial=already, unit="run", dynamic_ncols=True)
+            self._postfix()
 
-    return tqdm(total=total, unit="run", dynamic_ncols=True)
+    def _postfix(self) -> None:
+        self.bar.set_postfix_str(f"done {self.done - self.failed}, failed {self.failed}, "
+                                 f"remaining {self.total - self.done}")
 
-
-def _tick(bar, row: dict, on_row) -> None:
-    if bar is not None:
-        bar.update(1)
+    def update(self, row: dict) -> None:
+        self.done += 1
         if row["status"] != "done":
-            bar.write(f"failed: {row['variant']} seed {row['seed']}: {row['error']}")
-    if on_row is not None:
-        on_row(row)
+            self.failed += 1
+        if self.bar is not None:
+            self.bar.update(1)
+            self._postfix()
+            if row["status"] != "done":
+                self.bar.write(f"failed: {row['variant']} seed {row['seed']}: {row['error']}")
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()

@@ -15,6 +15,13 @@ A spec is a TOML file (shipped ones live in ``swarmnav/experiments/specs``)::
     [variants.params]
     k_rep = 4.0
 
+A ``[matrix]`` table crosses lists into variants named ``a/b``: ``matrix = {method = ["hes",
+"apf"], scenario = ["default_corridor", "off_axis_goal"]}`` gives four variants (added to any
+``[[variants]]``). A ``[report]`` table tells ``swarmnav report`` which published table the
+experiment reproduces: ``reference = "hes.table3"`` (a table of the packaged
+``paper_results.toml``), ``metrics = [...]`` (columns, in order), optional ``title`` and
+``variant_map = {variant = "reference_key"}`` when names differ.
+
 ``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
 ``n`` (swarm size) or a method parameter. ``key=a|b|c`` sweeps: every variant is repeated for
 each value, and the value is appended to the variant name.
@@ -31,7 +38,10 @@ from typing import Any
 
 from swarmnav.errors import ConfigError
 
-_SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "seeds", "n", "params", "variants"}
+_SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "seeds", "n", "params", "variants", "matrix",
+              "report"}
+_REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "figures"}
+_MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "n", "params"}
 _RUN_KEYS = {"method", "scenario", "steps", "n"}
 
@@ -61,6 +71,7 @@ class Experiment:
     description: str
     variants: tuple[Variant, ...]
     seeds: tuple[int, ...]
+    report: dict[str, Any] = field(default_factory=dict)
 
 
 def builtin_names() -> list[str]:
@@ -96,7 +107,20 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
     name = data.get("name", Path(source).stem)
     base = {k: data[k] for k in _RUN_KEYS if k in data}
     base_params = dict(data.get("params", {}))
-    raw_variants = data.get("variants") or [{"name": "default"}]
+    raw_variants = list(data.get("variants", []))
+    matrix = data.get("matrix", {})
+    if not isinstance(matrix, dict) or set(matrix) - _MATRIX_KEYS:
+        raise ConfigError(f"{source}: [matrix] may only list {sorted(_MATRIX_KEYS)}")
+    if matrix:
+        axes = list(matrix)
+        lists = [m if isinstance(m, list) else [m] for m in matrix.values()]
+        for combo in itertools.product(*lists):
+            raw_variants.append({"name": "/".join(str(c) for c in combo), **dict(zip(axes, combo))})
+    raw_variants = raw_variants or [{"name": "default"}]
+    report = data.get("report", {})
+    if not isinstance(report, dict) or set(report) - _REPORT_KEYS:
+        raise ConfigError(f"{source}: [report] unknown key(s) {sorted(set(report) - _REPORT_KEYS)} "
+                          f"(allowed: {sorted(_REPORT_KEYS)})")
     variants: list[Variant] = []
     for k, v in enumerate(raw_variants):
         bad = set(v) - _VARIANT_KEYS
@@ -112,7 +136,11 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         ))
     variants = _apply_overrides(variants, overrides)
     seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
-    return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants), seeds=seed_list)
+    names = [v.name for v in variants]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"{source}: variant names must be unique, got {names}")
+    return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants),
+                      seeds=seed_list, report=dict(report))
 
 
 def _apply_overrides(variants: list[Variant], overrides: dict[str, str]) -> list[Variant]:

@@ -1,0 +1,249 @@
+"""Reports of a results directory: ``report.md`` and a self-contained ``report.html``.
+
+Tables are in the papers' format (mean ± population std over seeds) with the published
+values beside them when the experiment's spec names a reference table of the packaged
+``paper_results.toml``; figures are bars with error bars (HES Figures 4 and 9) and per-seed
+box plots (HES Figure 7). Reads the store only; never runs a simulation.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from swarmnav.errors import SwarmnavError
+from swarmnav.experiments.store import DB_NAME, Store
+
+#: Columns shown when a spec's [report] does not list its own.
+DEFAULT_METRICS = ("Y", "R_goal", "E_mean", "R_unsafe", "d_clr_min", "L_mean", "N_swarm", "S_scene")
+UNITS = {"E_mean": "m", "E_90": "m", "sigma_E": "m", "d_clr_min": "m", "L_mean": "m",
+         "min_inter_agent_distance": "m", "flight_distance": "m", "flight_time": "s", "average_velocity": "m/s",
+         "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%"}
+
+
+def paper_results() -> dict:
+    """The published figures of the three papers (a copy of the project's shared reference)."""
+    text = resources.files("swarmnav.experiments").joinpath("reference", "paper_results.toml").read_text("utf-8")
+    return tomllib.loads(text)
+
+
+def _lookup(tree: dict, dotted: str) -> Any:
+    node: Any = tree
+    for part in _split_dotted(dotted):
+        if not isinstance(node, dict) or part not in node:
+            return None
+        node = node[part]
+    return node
+
+
+def _split_dotted(s: str) -> list[str]:
+    out, cur, quoted = [], "", False
+    for ch in s:
+        if ch == '"':
+            quoted = not quoted
+        elif ch == "." and not quoted:
+            out.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    out.append(cur)
+    return out
+
+
+def _fmt_ref(v: Any, index: int | None) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, dict):
+        return ""
+    if isinstance(v, list):
+        if index is not None:
+            return _num(v[index]) if index < len(v) else ""
+        if len(v) == 2:
+            return f"{_num(v[0])} ± {_num(v[1])}"
+        if len(v) == 4:
+            return f"{_num(v[0])} [{_num(v[1])}, {_num(v[2])}, {_num(v[3])}]"
+        return ", ".join(_num(x) for x in v)
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    return _num(v)
+
+
+def _num(x: Any) -> str:
+    if isinstance(x, (int, np.integer)) and not isinstance(x, bool):
+        return str(x)
+    x = float(x)
+    if not np.isfinite(x):
+        return str(x)
+    a = abs(x)
+    return f"{x:.2f}" if a >= 100 else f"{x:.3f}" if a >= 0.01 or a == 0 else f"{x:.2e}"
+
+
+def build_tables(store: Store, experiment: str) -> dict[str, Any]:
+    """Per-variant statistics and the matching published values (pure data, no formatting)."""
+    meta = store.meta(f"experiment:{experiment}")
+    if meta is None:
+        raise SwarmnavError(f"{store.root}: no experiment '{experiment}' in the store")
+    rows = store.rows(keys=meta["keys"])
+    spec = meta.get("report") or {}
+    metric_names = list(spec.get("metrics") or [])
+    if not metric_names:
+        present = set().union(*(r["metrics"] for r in rows if r["status"] == "done")) if rows else set()
+        metric_names = [m for m in DEFAULT_METRICS if m in present]
+    ref_root = _lookup(paper_results(), spec["reference"]) if spec.get("reference") else None
+    vmap = spec.get("variant_map") or {}
+    variants = []
+    for v in meta["variants"]:
+        mine = [r for r in rows if r["variant"] == v["name"]]
+        done = [r for r in mine if r["status"] == "done"]
+        per_metric = {}
+        for m in metric_names:
+            vals = np.array([float(r["metrics"][m]) for r in done if m in r["metrics"]
+                             and r["metrics"][m] is not None], dtype=float)
+            per_metric[m] = vals
+        ref = _lookup(ref_root, vmap.get(v["name"], v["name"])) if isinstance(ref_root, dict) else None
+        variants.append({"name": v["name"], "runs": len(mine), "done": len(done), "values": per_metric,
+                         "seeds": [r["seed"] for r in done], "reference": ref if isinstance(ref, dict) else None})
+    return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
+            "variants": variants, "reference": spec.get("reference"), "reference_index": spec.get("reference_index"),
+            "title": spec.get("title") or experiment, "n_runs": len(rows)}
+
+
+def _cell(vals: np.ndarray) -> str:
+    if not len(vals):
+        return "–"
+    if len(vals) == 1:
+        return _num(vals[0])
+    return f"{_num(np.mean(vals))} ± {_num(np.std(vals))}"
+
+
+def _header(m: str) -> str:
+    u = UNITS.get(m)
+    return f"{m} [{u}]" if u else m
+
+
+def table_rows(t: dict) -> tuple[list[str], list[list[str]]]:
+    """Header and body of the comparison table: each metric ours, then the paper's if any."""
+    has_ref = any(v["reference"] for v in t["variants"])
+    head = ["variant", "runs"]
+    for m in t["metrics"]:
+        head.append(_header(m))
+        if has_ref:
+            head.append(f"{m} (paper)")
+    body = []
+    for v in t["variants"]:
+        row = [v["name"], f"{v['done']}/{v['runs']}"]
+        for m in t["metrics"]:
+            row.append(_cell(v["values"][m]))
+            if has_ref:
+                row.append(_fmt_ref((v["reference"] or {}).get(m), t["reference_index"]))
+        body.append(row)
+    return head, body
+
+
+def figures(t: dict) -> list[tuple[str, bytes]]:
+    """PNG figures: bars of mean ± std per metric (HES Fig. 4/9) and per-seed box plots (Fig. 7)."""
+    from matplotlib.figure import Figure
+
+    names = [v["name"] for v in t["variants"]]
+    metrics = [m for m in t["metrics"] if any(len(v["values"][m]) for v in t["variants"])]
+    out = []
+    if not metrics:
+        return out
+    ncol = min(4, len(metrics))
+    nrow = int(np.ceil(len(metrics) / ncol))
+    width = max(3.2, 0.5 * len(names) + 1.5)
+    fig = Figure(figsize=(width * ncol, 3.0 * nrow), layout="constrained")
+    for k, m in enumerate(metrics):
+        ax = fig.add_subplot(nrow, ncol, k + 1)
+        means = [np.mean(v["values"][m]) if len(v["values"][m]) else np.nan for v in t["variants"]]
+        stds = [np.std(v["values"][m]) if len(v["values"][m]) else 0.0 for v in t["variants"]]
+        x = np.arange(len(names))
+        ax.bar(x, means, yerr=stds, capsize=3, color=[f"C{i % 10}" for i in range(len(names))], alpha=0.85)
+        ax.set_xticks(x, names, rotation=35, ha="right", fontsize=7)
+        ax.set_title(_header(m), fontsize=9)
+        ax.grid(axis="y", alpha=0.3)
+    fig.suptitle(f"{t['title']}: mean ± std over seeds", fontsize=10)
+    out.append(("bars.png", _png(fig)))
+    box_metrics = metrics[:4]
+    fig = Figure(figsize=(width * len(box_metrics), 3.2), layout="constrained")
+    for k, m in enumerate(box_metrics):
+        ax = fig.add_subplot(1, len(box_metrics), k + 1)
+        data = [v["values"][m] if len(v["values"][m]) else np.array([np.nan]) for v in t["variants"]]
+        ax.boxplot(data, showmeans=True, widths=0.6)
+        rng = np.random.default_rng(0)  # fixed jitter: the figure is reproducible
+        for i, d in enumerate(data):  # the seeds as dots; a fixed subsample of 200 for big sweeps
+            shown = d if len(d) <= 200 else rng.choice(d, 200, replace=False)
+            ax.plot(i + 1 + rng.uniform(-0.12, 0.12, len(shown)), shown, ".", ms=3, alpha=0.6, color="k")
+        ax.set_xticks(np.arange(1, len(names) + 1), names, rotation=35, ha="right", fontsize=7)
+        ax.set_title(_header(m), fontsize=9)
+    fig.suptitle(f"{t['title']}: per-seed distribution (box: IQR, line: median, triangle: mean)", fontsize=10)
+    out.append(("boxes.png", _png(fig)))
+    return out
+
+
+def _png(fig) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return buf.getvalue()
+
+
+def write_report(directory: str | Path, experiment: str | None = None) -> list[Path]:
+    """Write ``report.md`` (+ ``report_files/*.png``) and ``report.html`` into ``directory``."""
+    d = Path(directory)
+    if not (d / DB_NAME).exists():
+        raise SwarmnavError(f"{d}: no results store ({DB_NAME}); run 'swarmnav experiment ... --out {d}' first")
+    store = Store(d)
+    experiment = experiment or store.meta("last_experiment")
+    if experiment is None:
+        raise SwarmnavError(f"{d}: the store names no experiment")
+    t = build_tables(store, experiment)
+    head, body = table_rows(t)
+    figs = figures(t)
+    files = d / "report_files"
+    files.mkdir(exist_ok=True)
+    for name, data in figs:
+        (files / name).write_bytes(data)
+    ref_note = (f"Published values: `{t['reference']}` of the packaged paper_results.toml "
+                f"(the papers' figures, copied as published)." if t["reference"] else "No published table to compare.")
+    md = [f"# {t['title']}", "", t["description"], "",
+          f"Experiment `{experiment}`, {t['n_runs']} runs. Cells are mean ± population std over seeds.", ref_note, "",
+          "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    md += ["| " + " | ".join(r) + " |" for r in body]
+    md += [""] + [f"![{n}](report_files/{n})" for n, _ in figs] + [""]
+    md_path = d / "report.md"
+    md_path.write_text("\n".join(md), encoding="utf-8")
+    e = html.escape
+    rows_html = "\n".join("<tr>" + "".join(f"<td>{e(c)}</td>" for c in r) + "</tr>" for r in body)
+    imgs = "\n".join(f'<figure><img alt="{e(n)}" src="data:image/png;base64,{base64.b64encode(b).decode()}">'
+                     f"</figure>" for n, b in figs)
+    page = f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>{e(t['title'])}</title>
+<style>
+body {{ font-family: system-ui, sans-serif; margin: 2em; color: #222; }}
+table {{ border-collapse: collapse; font-size: 13px; }}
+th, td {{ border: 1px solid #ccc; padding: 4px 8px; text-align: right; }}
+th {{ background: #eef3f8; }} td:first-child, th:first-child {{ text-align: left; }}
+tr:nth-child(even) td {{ background: #fafafa; }}
+img {{ max-width: 100%; }}
+</style></head><body>
+<h1>{e(t['title'])}</h1>
+<p>{e(t['description'])}</p>
+<p>Experiment <code>{e(experiment)}</code>, {t['n_runs']} runs. Cells are mean ± population std over seeds.
+{e(ref_note)}</p>
+<table id="results"><thead><tr>{''.join(f'<th>{e(h)}</th>' for h in head)}</tr></thead>
+<tbody>
+{rows_html}
+</tbody></table>
+{imgs}
+</body></html>
+"""
+    html_path = d / "report.html"
+    html_path.write_text(page, encoding="utf-8")
+    return [md_path, html_path]

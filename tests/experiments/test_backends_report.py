@@ -1,0 +1,91 @@
+"""Ray back end parity, spec validation, and the report rendered in a real headless browser."""
+
+import csv
+import shutil
+import subprocess
+
+import pytest
+
+from swarmnav.errors import ConfigError
+from swarmnav.experiments import load_experiment, run_experiment
+from swarmnav.experiments.report import paper_results, write_report
+
+
+def _rows(out):
+    return {r["key"]: {k: v for k, v in r.items() if k != "wall_time_s"} for r in csv.DictReader(open(out / "runs.csv"))}
+
+
+def test_ray_backend_gives_identical_runs(tmp_path):
+    pytest.importorskip("ray", reason="Ray is the optional extra swarmnav[ray]; CI installs it")
+    exp = load_experiment("apf-scenes", overrides={"steps": "60"}, seeds="1-2")
+    run_experiment(exp, tmp_path / "local", workers=2, progress=False)
+    run_experiment(exp, tmp_path / "ray", workers=2, backend="ray", progress=False)
+    assert _rows(tmp_path / "local") == _rows(tmp_path / "ray")
+
+
+def test_worker_count_does_not_change_results(tmp_path):
+    exp = load_experiment("apf-scenes", overrides={"steps": "40"}, seeds="1-2")
+    run_experiment(exp, tmp_path / "w1", workers=1, progress=False)
+    run_experiment(exp, tmp_path / "w2", workers=2, progress=False)
+    assert _rows(tmp_path / "w1") == _rows(tmp_path / "w2")
+
+
+def test_user_spec_file_with_matrix_and_report(tmp_path):
+    spec = tmp_path / "mine.toml"
+    spec.write_text('name = "mine"\nsteps = 30\nseeds = "1-2"\n'
+                    'matrix = { method = ["apf"], scenario = ["default_corridor", "off_axis_goal"] }\n'
+                    '[report]\nreference = "hes.table5"\nreference_index = 0\nmetrics = ["Y", "R_goal", "E_mean"]\n'
+                    'variant_map = { "apf/default_corridor" = "default_corridor", "apf/off_axis_goal" = "off_axis_goal" }\n')
+    exp = load_experiment(str(spec))
+    assert [v.name for v in exp.variants] == ["apf/default_corridor", "apf/off_axis_goal"]
+    run_experiment(exp, tmp_path / "o", workers=1, progress=False)
+    md, html = write_report(tmp_path / "o")
+    text = md.read_text()
+    assert "| apf/default_corridor | 2/2 |" in text
+    assert "6.126" in text  # the paper's rule E_mean for default_corridor sits beside ours
+    assert "Y (paper)" in text
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ('name = "x"\nmethod = "apf"\nscenario = "default_corridor"\nsteps = 5\nbogus = 1\n', "unknown key"),
+    ('name = "x"\nmethod = "apf"\nsteps = 5\n', "has no 'scenario'"),
+    ('name = "x"\nmethod = "apf"\nscenario = "default_corridor"\nsteps = 5\n[report]\nrefrence = "a"\n', "[report] unknown"),
+    ('name = "x"\nmethod = "apf"\nscenario = "default_corridor"\nsteps = 5\n[params]\nk_atx = 1\n', "unknown parameter 'k_atx'"),
+    ('name = "x"\nmethod = "apf"\nscenario = "nowhere"\nsteps = 5\n', "unknown scene"),
+    ('name = "x"\nmethod = "apf"\nscenario = "default_corridor"\nsteps = 5\n[[variants]]\nname = "a"\n[[variants]]\nname = "a"\n', "unique"),
+])
+def test_bad_spec_files(tmp_path, text, fragment):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(ConfigError, match=fragment.replace("[", r"\[")):
+        exp = load_experiment(str(f))
+        run_experiment(exp, tmp_path / "o", progress=False)
+
+
+def test_packaged_reference_matches_the_papers_tables():
+    ref = paper_results()
+    assert ref["hes"]["table2"]["rule"]["E_mean"] == [6.126, 0.068]
+    assert ref["hwvem"]["table1"]["N100"]["HWVEM"]["k_con"][0] == 12.23
+
+
+def test_report_html_renders_in_headless_chromium(tmp_path):
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("Debian's chromium is not installed (CI installs it)")
+    exp = load_experiment("apf-scenes", overrides={"steps": "30"}, seeds="1-2")
+    run_experiment(exp, tmp_path, workers=1, progress=False)
+    _, html = write_report(tmp_path)
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             f"--user-data-dir={tmp_path / 'profile'}"]
+    dom = subprocess.run([browser, *flags, "--dump-dom", html.as_uri()], capture_output=True, text=True, timeout=120)
+    assert "<table id=\"results\">" in dom.stdout and "narrow_alternating_gates" in dom.stdout
+    assert dom.stdout.count("data:image/png;base64,") == 2  # figures are embedded: the page is self-contained
+    shot = tmp_path / "shot.png"
+    subprocess.run([browser, *flags, "--window-size=1400,1800", f"--screenshot={shot}", html.as_uri()],
+                   capture_output=True, timeout=120)
+    from PIL import Image
+
+    img = Image.open(shot).convert("RGB")
+    colours = img.getcolors(maxcolors=1 << 20)
+    assert img.size == (1400, 1800) and colours is not None and len(colours) > 50  # text, table and plots drawn
