@@ -118,3 +118,12 @@ def test_experiment_sweep_syntax(tmp_path):
     exp = load_experiment("apf-scenes", overrides={"k_att": "1|2"}, seeds="1")
     assert len(exp.variants) == 8
     assert exp.variants[0].name == "default_corridor[k_att=1]"
+
+
+def test_readme_main_job_command(tmp_path, capsys):
+    """The README's main job: a 1000-step HES run with its figure (kept short here)."""
+    out = tmp_path / "demo"
+    assert main(["run", "--method", "hes", "--scenario", "default_corridor", "--seed", "1", "--steps", "120",
+                 "--out", str(out), "--plot"]) == 0
+    assert (out / "trajectory.png").stat().st_size > 10_000
+    assert "Y =" in capsys.readouterr().out

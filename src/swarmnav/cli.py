@@ -114,7 +114,7 @@ def _cmd_run(args) -> int:
         from swarmnav.viz import plot_run
 
         print(f"  figure: {plot_run(res, out / 'trajectory.png')}")
-    if "llm_calls" in m:
+    if m.get("llm_calls", 0) > 0 and "llm_latency_median_s" in m:
         print(f"  LLM: {m['llm_calls']:.0f} calls, {m['llm_fallback_used']:.0f} fallbacks, "
               f"{m['llm_projected']:.0f} projected to keep, latency median {m['llm_latency_median_s']:.2f} s "
               f"(max {m['llm_latency_max_s']:.2f} s)")
