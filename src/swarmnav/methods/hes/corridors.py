@@ -101,7 +101,7 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
             for t in range(pk + 1, span + 1):
                 rb = (a + t) % n
                 db = ring[rb]
-                if db >= max_range:
+                if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
                     continue
                 ux = px + db * cos_t[rb] - qx
                 uy = py + db * sin_t[rb] - qy
@@ -190,36 +190,69 @@ class Corridor:
     direct: bool = False
 
 
+@njit(cache=True)
+def _filter_gaps(gaps, px, py, gx, gy, w_pass, cos_toward, ring, sx, sy, cos_t, sin_t, cx, cy, rho_vis,
+                 max_range, check_vis):
+    """Rows of ``gaps`` that are candidate corridors toward the goal, and their route costs."""
+    m = gaps.shape[0]
+    keep = np.zeros(m, dtype=np.bool_)
+    cost = np.empty(m)
+    ux = gx - px
+    uy = gy - py
+    un = math.sqrt(ux * ux + uy * uy)
+    if un > 0.0:
+        ux /= un
+        uy /= un
+    else:
+        ux, uy = 1.0, 0.0
+    for j in range(m):
+        if gaps[j, 4] < w_pass or gaps[j, 5] * ux + gaps[j, 6] * uy < cos_toward:
+            continue
+        mx = 0.5 * (gaps[j, 0] + gaps[j, 2])
+        my = 0.5 * (gaps[j, 1] + gaps[j, 3])
+        if check_vis and not segment_clear(ring, sx, sy, cos_t, sin_t, cx, cy, mx, my, rho_vis, max_range):
+            continue
+        keep[j] = True
+        cost[j] = math.sqrt((mx - px) ** 2 + (my - py) ** 2) + math.sqrt((gx - mx) ** 2 + (gy - my) ** 2)
+    return keep, cost
+
+
 def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pass: float, toward_deg: float,
-                     through: float, visible=None) -> list[Corridor]:
+                     through: float, ring: np.ndarray | None = None, sensor: np.ndarray | None = None,
+                     origin: np.ndarray | None = None, rho_vis: float = 0.4, max_range: float = 20.0,
+                     rays: tuple[np.ndarray, np.ndarray] | None = None) -> list[Corridor]:
     """The candidate corridors leading toward the goal among the openings ``gaps`` seen from ``p``.
 
     Keeps openings at least ``w_pass`` wide whose exit direction is within ``toward_deg`` of the
-    bearing to the goal and, if given, for which ``visible(mid)`` is True (the throat can be
-    reached in a straight line). Cost = ``|mid - p| + |goal - mid|`` [m] (the length of the
-    route through the throat midpoint). Sorted by cost.
+    bearing to the goal and, if ``ring`` (sensed at ``sensor``) and ``origin`` are given, whose
+    throat midpoint can be reached from ``origin`` along a straight line of half-width
+    ``rho_vis`` free of that ring's returns. Cost = ``|mid - p| + |goal - mid|`` [m] (the length
+    of the route through the throat midpoint). Sorted by cost.
     """
-    out: list[Corridor] = []
     if len(gaps) == 0:
-        return out
-    g = goal - p
-    gn = math.hypot(g[0], g[1])
-    gu = g / gn if gn > 0 else np.array([1.0, 0.0])
-    cmin = math.cos(math.radians(toward_deg))
-    for row in gaps:
-        w = row[GAP_W]
-        if w < w_pass:
-            continue
-        nrm = row[GAP_NX:GAP_NY + 1]
-        if nrm[0] * gu[0] + nrm[1] * gu[1] < cmin:
-            continue
+        return []
+    check = ring is not None and origin is not None
+    if not check:
+        ring, sensor, origin = np.zeros(1), np.zeros(2), np.zeros(2)
+    cos_t, sin_t = rays if rays is not None else _rays(len(ring))
+    keep, cost = _filter_gaps(gaps, float(p[0]), float(p[1]), float(goal[0]), float(goal[1]), w_pass,
+                              math.cos(math.radians(toward_deg)), ring, float(sensor[0]), float(sensor[1]), cos_t, sin_t,
+                              float(origin[0]), float(origin[1]), rho_vis, max_range, check)
+    out: list[Corridor] = []
+    for j in np.flatnonzero(keep):
+        row = gaps[j]
         mid = 0.5 * (row[GAP_QA_X:GAP_QA_Y + 1] + row[GAP_QB_X:GAP_QB_Y + 1])
-        if visible is not None and not visible(mid):
-            continue
-        cost = math.hypot(*(mid - p)) + math.hypot(*(goal - mid))
-        out.append(Corridor(mid=mid, normal=nrm.copy(), width=float(w), target=mid + through * nrm, cost=cost))
+        nrm = row[GAP_NX:GAP_NY + 1].copy()
+        out.append(Corridor(mid=mid, normal=nrm, width=float(row[GAP_W]), target=mid + through * nrm,
+                            cost=float(cost[j])))
     out.sort(key=lambda c: c.cost)
     return out
+
+
+def _rays(n: int) -> tuple[np.ndarray, np.ndarray]:
+    from swarmnav.sensing.lidar import _ray_table
+
+    return _ray_table(max(n, 1))
 
 
 def direct_corridor(p: np.ndarray, goal: np.ndarray) -> Corridor:

@@ -69,6 +69,22 @@ def slot_velocity(x, slot, speed, eps_v):
     return out
 
 
+@njit(cache=True)
+def group_centroids(x, col, n_groups):
+    """Eq. (2) for all sub-swarms at once: (S, 2) mean position of the agents with ``col == s``."""
+    out = np.zeros((n_groups, 2))
+    cnt = np.zeros(n_groups)
+    for i in range(x.shape[0]):
+        out[col[i], 0] += x[i, 0]
+        out[col[i], 1] += x[i, 1]
+        cnt[col[i]] += 1.0
+    for s in range(n_groups):
+        if cnt[s] > 0:
+            out[s, 0] /= cnt[s]
+            out[s, 1] /= cnt[s]
+    return out
+
+
 # --------------------------------------------------------------------------- the eight terms
 
 @njit(cache=True)

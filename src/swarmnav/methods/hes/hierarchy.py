@@ -39,10 +39,7 @@ class Pack:
     members: np.ndarray  # (m,) agent indices j
     positions: np.ndarray  # (m, 2) p_j [m]
     velocities: np.ndarray  # (m, 2) v_j [m/s]
-
-    @property
-    def centroid(self) -> np.ndarray:
-        return self.positions.mean(axis=0)
+    centroid: np.ndarray  # (2,) pbar_s of eq. (2), computed by the subleader from the rows above
 
     @property
     def subleader_position(self) -> np.ndarray:
@@ -65,7 +62,8 @@ class Report:
 
 
 def make_pack(sid: int, subleader: int, members: np.ndarray, x: np.ndarray, v: np.ndarray) -> Pack:
-    return Pack(sid, subleader, members, x[members].copy(), v[members].copy())
+    pos = x[members]
+    return Pack(sid, subleader, members, pos, v[members], pos.mean(axis=0))
 
 
 # --------------------------------------------------------------------------- split and merge

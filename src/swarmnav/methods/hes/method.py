@@ -59,8 +59,8 @@ from swarmnav.methods.hes.hierarchy import (
 )
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.params import build
-from swarmnav.sensing import segments_blocked
-from swarmnav.sensing.lidar import _ray_table, lidar_ring
+from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, segments_blocked_kernel
+from swarmnav.sensing.lidar import _ray_table
 from swarmnav.world.scenario import Scenario
 
 _NEVER = -(10**9)
@@ -83,7 +83,8 @@ class SubSwarm:
     commit_step: int = 0  # step of the split that assigned the corridor
     squeeze: float = 1.0  # lateral factor of the template in a narrow corridor (longitudinal: 1 / squeeze)
     heading: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))  # formation axis (unit)
-    slot_index: dict[int, int] = field(default_factory=dict)  # agent -> template row (r_i)
+    slot_members: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # agents (sorted) ...
+    slot_index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # ... and their r_i
     slot_step: int = _NEVER  # step of the last slot assignment
     ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
 
@@ -113,6 +114,9 @@ class Hes:
         self.scenario = scenario
         self.goal = scenario.goal_array.astype(float)
         self.geom = scenario.geometry
+        # Hot path: the sensing kernels are called directly on the geometry arrays converted once
+        # here (lidar_ring / segments_blocked would re-validate and re-convert them every call).
+        self._garr = geom_arrays(self.geom)
         n = len(positions)
         self.n = n
         self.source: DecisionSource = self._source_override or decision_source(p, RulePolicy(p.d_merge, p.t_cd), project)
@@ -181,8 +185,9 @@ class Hes:
         p = self.params
         if self.geom.is_empty:
             ring = np.full((len(x), p.n_rays), p.lidar_range)
-        else:
-            ring = lidar_ring(self.geom, x, p.n_rays, p.lidar_range)
+        else:  # = swarmnav.sensing.lidar_ring(geom, x, n_rays, R_L)
+            ring = np.empty((len(x), p.n_rays))
+            lidar_kernel(*self._garr, x, self._cos, self._sin, float(p.lidar_range), ring)
         self._ring = ring  # read by the corridor choice and the encircle slots of this step
         return ring
 
@@ -195,13 +200,10 @@ class Hes:
         a = sub.subleader
         ra, sx, sy = ring[a], x[a, 0], x[a, 1]
         gaps = detect_gaps(ra, sx, sy, self._cos, self._sin, p.lidar_range, p.h_open)
-        c = pack.centroid
-
-        def visible(q: np.ndarray) -> bool:  # the throat is reachable straight from the centroid
-            return segment_clear(ra, sx, sy, self._cos, self._sin, c[0], c[1], q[0], q[1], _RHO_VIS, p.lidar_range)
-
+        # candidates toward the goal whose throat is reachable straight from the centroid
         cors = corridors_toward(gaps, x[a], self.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
-                                visible=visible)
+                                ring=ra, sensor=x[a], origin=pack.centroid, rho_vis=_RHO_VIS, max_range=p.lidar_range,
+                                rays=(self._cos, self._sin))
         return Report(pack, tuple(cors), float(ring[members].min()))
 
     def decision_state(self, k: int, reports: dict[int, Report]) -> DecisionState:
@@ -457,12 +459,11 @@ class Hes:
                 speed[members] = p.v_s
                 continue
             tmpl = self._template(m, sub)
-            if k - sub.slot_step >= _SLOT_REFRESH or set(sub.slot_index) != set(members.tolist()):
-                r_i = assign_slots(x[members], sub.waypoint + tmpl)
-                sub.slot_index = dict(zip(members.tolist(), r_i.tolist()))
+            if k - sub.slot_step >= _SLOT_REFRESH or not np.array_equal(sub.slot_members, members):
+                sub.slot_members = members
+                sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl)
                 sub.slot_step = k
-            r_i = np.fromiter((sub.slot_index[i] for i in members.tolist()), dtype=np.int64, count=m)
-            slot[members] = sub.waypoint + tmpl[r_i]
+            slot[members] = sub.waypoint + tmpl[sub.slot_index]
             speed[members] = p.v_s
         return slot, speed
 
@@ -489,8 +490,7 @@ class Hes:
         ids = sorted(self.subs)
         col = np.searchsorted(np.asarray(ids), self.labels)
         sl_idx = np.array([self.subs[s].subleader for s in ids])[col]
-        cents = np.array([x[self.labels == s].mean(axis=0) for s in ids])
-        cent = cents[col]
+        cent = F.group_centroids(x, col, len(ids))[col]
         wp = np.array([self.subs[s].waypoint for s in ids])[col]
         nav = np.array([self.subs[s].mode == NAVIGATE for s in ids])[col]
         follower = sl_idx != np.arange(n)
@@ -514,5 +514,7 @@ class Hes:
         q_nn = x[np.where(nn >= 0, nn, np.arange(n))]
         P = np.concatenate([x, x, x, x])
         Q = np.concatenate([slot, q_nn, x[sl_idx], cent])
-        blocked = segments_blocked(self.geom, P, Q).reshape(4, n).T
+        blocked = np.empty(4 * n, dtype=np.bool_)
+        segments_blocked_kernel(*self._garr, P, Q, blocked)  # = swarmnav.sensing.segments_blocked
+        blocked = blocked.reshape(4, n).T
         return np.where(blocked, p.sigma, 1.0)

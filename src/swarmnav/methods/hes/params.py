@@ -55,7 +55,7 @@ class HesParams:
     n_move_max: int = 3  # N_move^max transfers per planner update, Section 4.4
 
     # ---------------------------------------------------------------- reference trajectory (ours)
-    v_s: float = 2.5  # ours [m/s] cruise speed v_s: 100 s horizon covers the ~110 m gate zig-zag with margin
+    v_s: float = 3.0  # ours [m/s] cruise speed v_s: crosses the 70 m scenes in ~40 s, leaving time to form the encircle ring
     eps_v: float = 0.5  # ours [m] eps_v of eq. (23): the slot velocity ramps down within ~0.5 m of the slot
     spacing: float = 1.4  # ours [m] spacing of the equilibrium formation (alpha_s = spacing (k_p + k_path) / k_p, see docs)
     aspect_max: float = 3.0  # ours [-] the template is squeezed across a narrow corridor (area kept) up to this aspect ratio
