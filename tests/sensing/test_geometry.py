@@ -7,29 +7,11 @@ import numpy as np
 import pytest
 
 from swarmnav.sensing import nearest_obstacle, points_inside, segments_blocked, signed_distance
-from swarmnav.world.obstacles import Box, Circle, Geometry, Polygon, polygon_is_simple
+from _helpers.scenes import random_scene
+from swarmnav.world.obstacles import Box, Circle, Geometry, Polygon
 
 # Distances are sums/products of a few scene-scale numbers: 1e-9 m is rounding, not modelling.
 ATOL = 1e-9
-
-
-def random_scene(rng: np.random.Generator, extent: float = 10.0) -> list:
-    """Boxes, circles and concave star polygons (random orientation), overlaps allowed."""
-    obs: list = []
-    for _ in range(3):
-        lo = rng.uniform(-extent, extent, 2)
-        obs.append(Box(tuple(lo), tuple(lo + rng.uniform(0.5, 4.0, 2))))
-    for _ in range(3):
-        obs.append(Circle(tuple(rng.uniform(-extent, extent, 2)), float(rng.uniform(0.3, 2.0))))
-    for _ in range(3):
-        k = int(rng.integers(5, 9))
-        # One vertex per angular sector: gaps stay < pi, so the radial polygon is simple.
-        ang = 2 * np.pi * (np.arange(k) + rng.uniform(0.0, 0.8, k)) / k
-        c = rng.uniform(-extent, extent, 2)
-        pts = c + rng.uniform(0.5, 3.0, k)[:, None] * np.c_[np.cos(ang), np.sin(ang)]
-        obs.append(Polygon(tuple(map(tuple, pts if rng.random() < 0.5 else pts[::-1]))))
-    assert all(polygon_is_simple(o.vertices()) for o in obs if isinstance(o, Polygon))
-    return obs
 
 
 def closest_on_segments(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -108,7 +90,7 @@ def ref_blocked(geom: Geometry, p: np.ndarray, q: np.ndarray) -> bool:
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 def test_signed_distance_and_direction_match_bruteforce(seed):
     rng = np.random.default_rng(seed)
-    geom = Geometry.from_obstacles(random_scene(rng))
+    geom = Geometry.from_obstacles(random_scene(rng, extent=10.0, n_boxes=3, with_l_shape=False))
     pts = rng.uniform(-13, 13, (300, 2))
     dist, direc = nearest_obstacle(geom, pts)
     np.testing.assert_array_equal(dist, signed_distance(geom, pts))
@@ -171,7 +153,7 @@ def test_empty_geometry():
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_segments_blocked_matches_bruteforce(seed):
     rng = np.random.default_rng(seed)
-    geom = Geometry.from_obstacles(random_scene(rng))
+    geom = Geometry.from_obstacles(random_scene(rng, extent=10.0, n_boxes=3, with_l_shape=False))
     p = rng.uniform(-13, 13, (400, 2))
     q = p + rng.normal(scale=4.0, size=(400, 2))
     got = segments_blocked(geom, p, q)

@@ -6,35 +6,12 @@ import numpy as np
 import pytest
 
 from swarmnav.sensing import lidar_ring
-from swarmnav.world.obstacles import Box, Circle, Geometry, Polygon, polygon_is_simple
+from _helpers.scenes import random_scene
+from swarmnav.world.obstacles import Box, Circle, Geometry, Polygon
 
 # Tolerance of the oracle comparison [m]: both sides are exact up to floating-point rounding
 # of a few intersections at scene scale (~50 m), far above 1e-9.
 ATOL = 1e-9
-
-
-def random_scene(rng: np.random.Generator, extent: float = 15.0) -> list:
-    """Boxes, circles and concave star polygons (both orientations), overlaps allowed."""
-    obs: list = []
-    for _ in range(4):
-        lo = rng.uniform(-extent, extent, 2)
-        obs.append(Box(tuple(lo), tuple(lo + rng.uniform(0.5, 5.0, 2))))
-    for _ in range(3):
-        obs.append(Circle(tuple(rng.uniform(-extent, extent, 2)), float(rng.uniform(0.3, 2.0))))
-    for _ in range(3):
-        k = int(rng.integers(5, 9))
-        # One vertex per angular sector: gaps stay < pi, so the radial polygon is simple.
-        ang = 2 * np.pi * (np.arange(k) + rng.uniform(0.0, 0.8, k)) / k
-        rad = rng.uniform(0.5, 3.0, k)
-        c = rng.uniform(-extent, extent, 2)
-        pts = c + np.c_[rad * np.cos(ang), rad * np.sin(ang)]
-        if rng.random() < 0.5:
-            pts = pts[::-1]  # clockwise
-        obs.append(Polygon(tuple(map(tuple, pts))))
-    # A fixed concave L, clockwise.
-    obs.append(Polygon(((20, 20), (20, 26), (22, 26), (22, 22), (26, 22), (26, 20))[::-1]))
-    assert all(polygon_is_simple(o.vertices()) for o in obs if isinstance(o, Polygon))
-    return obs
 
 
 def ref_edges(geom: Geometry) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
