@@ -29,6 +29,7 @@ def register(name: str, factory: Callable[..., Method], description: str, *, nav
 
 #: Modules whose import registers the built-in methods (one line per method family).
 _BUILTIN_MODULES = (
+    "swarmnav.methods.sph",
     "swarmnav.methods.apf",
     "swarmnav.methods.hes",
 )

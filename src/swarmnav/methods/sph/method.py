@@ -1,0 +1,202 @@
+"""``sph``: swarm navigation based on smoothed particle hydrodynamics (Li et al., RA-L 2025).
+
+Every control step (Algorithm 2):
+
+1. raycast visibility: the neighbours within R whose line of sight is free interact; the
+   connected components of that graph are the sub-swarms (labels, split/merge events);
+2. SPH coordination force over the visible neighbours (Algorithm 1): density/pressure,
+   1/r repulsion, viscosity, plus the ESDF environment force (eqs. 5-6);
+3. every T_p each robot replans its own uniform cubic B-spline (eqs. 7-12) from a grid-search
+   path on its own occupancy map, and the spline is sampled at the control rate;
+4. the command is the tracking law of eq. (13):
+   ``a_i = F_i / m + k_p (q* - q_i) + k_v (v* - v_i) + a*``, saturated by the dynamics (eq. 2).
+
+Planning is per robot (a Python loop over robots, by design of the paper: each UAV plans
+independently); the coordination force and visibility are array operations.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from swarmnav.dynamics import SaturatedDoubleIntegrator
+from swarmnav.errors import ConfigError
+from swarmnav.methods.base import Observation
+from swarmnav.methods.sph.bspline import SplineCosts, evaluate, optimize
+from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
+from swarmnav.methods.sph.kernel import environment_force, sph_forces
+from swarmnav.methods.sph.params import SphParams
+from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
+from swarmnav.params import build
+from swarmnav.world.esdf import Esdf
+from swarmnav.world.scenario import Scenario
+
+
+class Sph:
+    """The SPH navigation method (see module docstring)."""
+
+    name = "sph"
+
+    def __init__(self, **overrides: Any):
+        p = build(SphParams, overrides, context="sph")
+        for key in ("h", "m", "v_max", "a_max", "T_p", "dt", "rho0", "esdf_resolution", "grid_resolution",
+                    "ctrl_spacing", "R"):
+            if not getattr(p, key) > 0:
+                raise ConfigError(f"sph: {key} must be > 0, got {getattr(p, key)}")
+        if p.horizon_points < 0 or p.max_iter < 0:
+            raise ConfigError("sph: horizon_points and max_iter must be >= 0")
+        self.params = p
+        self.dt = p.dt
+        self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
+        self._costs = SplineCosts(p.lambda_s, p.lambda_c, p.lambda_f, p.d_thr, p.v_max, p.a_max)
+        self._dt_knot = p.ctrl_spacing / p.v_max  # knot span [s]: control points ctrl_spacing apart at v_max
+
+    # ------------------------------------------------------------------ contract
+
+    def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
+              rng: np.random.Generator) -> None:
+        p = self.params
+        self.scenario = scenario
+        self.geom = scenario.geometry
+        n = scenario.n
+        self.esdf = Esdf.build(self.geom, scenario.bounds, p.esdf_resolution)
+        self.maps = OccupancyMaps(scenario.obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.R,
+                                  margin=p.d_thr)
+        x = np.asarray(positions, dtype=float)
+        self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
+        self._replan_every = max(1, int(round(p.T_p / p.dt)))
+        self._ref_q = self._ref_v = self._ref_a = None  # (N, L, D) sampled references
+        self._ref_k = 0  # step at which the references were sampled
+        self._prev_labels: np.ndarray | None = None
+        self._prev_visible = np.zeros(0, dtype=np.int64)
+        self._plans = 0
+        self._search_failures = 0
+        self._iterations = 0
+        self._link_merges = 0
+        self._link_splits = 0
+        self._neighbours = 0.0
+        self._steps = 0
+        self._plan_ms: list[float] = []
+        self._coord_ms: list[float] = []
+
+    def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
+        p = self.params
+        x, v = obs.positions, obs.velocities
+        n = x.shape[0]
+        t0 = time.perf_counter()
+        # Algorithm 2: raycast visibility, sub-swarms, split / merge
+        i, j, vis = visible_pairs(self.geom, x, p.R)
+        vi, vj = i[vis], j[vis]
+        labels = components(n, vi, vj)
+        keys = i * n + j
+        events: list[dict] = []
+        if self._prev_labels is not None:
+            events = structural_events(self._prev_labels, labels)
+            merges, splits = link_changes(self._prev_visible, keys, vis)
+            self._link_merges += merges
+            self._link_splits += splits
+        self._prev_labels = labels
+        self._prev_visible = keys[vis]
+        # Algorithm 1 over the visible neighbours, plus the ESDF environment force
+        force, _, _ = sph_forces(x, v, vi, vj, h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep, k_vis=p.k_vis,
+                                 rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor)
+        d, grad = self.esdf.query(x)
+        force += environment_force(d, grad, p.k_env, p.d_thr)
+        self._coord_ms.append(1e3 * (time.perf_counter() - t0))
+        self._neighbours += 2.0 * len(vi) / max(n, 1)
+        self._steps += 1
+        # trajectory planning every T_p (or once, Fig. 3B protocol)
+        if self._ref_q is None or (not p.plan_once and obs.step - self._ref_k >= self._replan_every):
+            self._replan(obs.step, x, v)
+        q_ref, v_ref, a_ref = self._reference(obs.step)
+        # eq. (13)
+        a = force / p.m + p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref
+        return a, {"labels": labels, "events": events}
+
+    def summary(self) -> dict[str, float]:
+        """Deterministic method metrics (wall-clock times are in :meth:`timings`)."""
+        return {
+            "sph_plans": float(self._plans),
+            "sph_search_failures": float(self._search_failures),
+            "sph_opt_iterations_mean": self._iterations / max(self._plans, 1),
+            "sph_link_merges": float(self._link_merges),
+            "sph_link_splits": float(self._link_splits),
+            "sph_visible_neighbours_mean": self._neighbours / max(self._steps, 1),
+        }
+
+    def timings(self) -> dict[str, float]:
+        """Wall-clock figures of this run [ms]: planning time per robot per replan (median,
+        95th percentile, max) and the coordination (visibility + SPH + ESDF force) time per
+        control step for the whole swarm (median). Not reproducible, so not metrics."""
+        plan = np.array(self._plan_ms) if self._plan_ms else np.zeros(1)
+        coord = np.array(self._coord_ms) if self._coord_ms else np.zeros(1)
+        return {
+            "plan_ms_median": float(np.median(plan)),
+            "plan_ms_p95": float(np.percentile(plan, 95)),
+            "plan_ms_max": float(plan.max()),
+            "coord_ms_median": float(np.median(coord)),
+        }
+
+    # ------------------------------------------------------------------ planning
+
+    def _reference(self, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Reference samples ``tau_j = t_k + j dt`` (eq. 13) for the current step."""
+        k = min(step - self._ref_k, self._ref_q.shape[1] - 1)
+        return self._ref_q[:, k], self._ref_v[:, k], self._ref_a[:, k]
+
+    def _replan(self, step: int, x: np.ndarray, v: np.ndarray) -> None:
+        p = self.params
+        n, dim = x.shape
+        if self._ref_q is None:
+            start_q, start_v, start_a = x.copy(), v.copy(), np.zeros_like(x)
+        else:
+            start_q, start_v, start_a = (r.copy() for r in self._reference(step))
+            if p.replan_from == "state":
+                start_q, start_v = x.copy(), v.copy()
+            else:  # released behaviour: continue the reference unless the robot is far from it
+                off = np.linalg.norm(start_q - x, axis=1) > p.ref_reset
+                start_q[off], start_v[off] = x[off], v[off]
+        plans = []
+        for r in range(n):
+            t0 = time.perf_counter()
+            plans.append(self._plan_one(r, start_q[r], start_v[r], start_a[r]))
+            self._plan_ms.append(1e3 * (time.perf_counter() - t0))
+        if p.plan_once:
+            length = int(np.ceil(max(pl.duration for pl in plans) / p.dt)) + 1
+        else:
+            length = self._replan_every
+        tau = p.dt * np.arange(length)
+        self._ref_q = np.empty((n, length, dim))
+        self._ref_v = np.empty((n, length, dim))
+        self._ref_a = np.empty((n, length, dim))
+        for r, pl in enumerate(plans):
+            self._ref_q[r], self._ref_v[r], self._ref_a[r] = evaluate(pl.ctrl, pl.dt_knot, tau)
+        self._ref_k = step
+
+    def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray):
+        """One robot's replan: update its map, grid search to its goal, optimise the spline."""
+        p = self.params
+        self.maps.observe(r, q)
+        goal = self.goals[r]
+        path = self.maps.search(r, q, goal, p.max_expand)
+        if path is None:  # no path on the robot's map: head straight for the goal
+            self._search_failures += 1
+            path = np.vstack([q, goal])
+        pts = resample(path, p.ctrl_spacing)
+        if len(pts) < 2:
+            pts = np.vstack([q, path[-1]])
+        reaches_end = p.plan_once or p.horizon_points == 0 or len(pts) - 1 <= p.horizon_points
+        if not reaches_end:
+            pts = pts[: p.horizon_points + 1]
+        end_v = np.zeros_like(q)
+        if not reaches_end:
+            tangent = pts[-1] - pts[-2]
+            end_v = p.v_max * tangent / max(np.linalg.norm(tangent), 1e-9)
+        plan = optimize((q, v, a), (pts[-1], end_v, np.zeros_like(q)), pts[1:-1], self._dt_knot,
+                        self.esdf, self._costs, p.max_iter)
+        self._plans += 1
+        self._iterations += plan.iterations
+        return plan

@@ -1,0 +1,48 @@
+"""Parameters of the ``sph`` method: Table I of the SPH paper, plus the choices it leaves open."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+
+@dataclass(frozen=True, slots=True)
+class SphParams:
+    """SPH swarm navigation (Li et al., RA-L 2025). Table I values unless marked "our choice"."""
+
+    # --- swarm (Table I) ---
+    c: float = 54.97  # kernel normalisation constant [-], eq. (4)
+    R: float = 20.0  # connection range [m], eq. (1); also the perception range (Section IV)
+    h: float = 10.0  # kernel radius [m], eq. (4)
+    m: float = 1.0  # particle mass [kg]
+    k_den: float = 1.0  # aggregation (density) gain, Alg. 1 line 8
+    k_rep: float = 1.0  # dispersion (repulsion) gain [m^2/s^2], Alg. 1 line 9
+    k_vis: float = 1.5  # velocity damping [1/s], Alg. 1 line 10
+    k_env: float = 10.0  # obstacle gain [1/s^2], Alg. 1 line 11
+    v_max: float = 1.0  # [m/s], eq. (2)
+    a_max: float = 1.5  # [m/s^2], eq. (2)
+    rho0: float = 1e6  # reference density, Alg. 1 line 8
+    gamma: float = 7.0  # density sensitivity, Section III-A ("gamma = 7")
+    # --- planning (Table I) ---
+    T_p: float = 0.2  # replanning interval [s]
+    lambda_s: float = 5.0  # smoothness weight, eq. (8)
+    lambda_c: float = 1000.0  # collision weight, eq. (8)
+    lambda_f: float = 1.0  # feasibility weight, eq. (8)
+    k_p: float = 5.0  # position tracking gain [1/s^2], eq. (13)
+    k_v: float = 3.5  # velocity tracking gain [1/s], eq. (13)
+    d_thr: float = 0.5  # obstacle safety threshold [m], eqs. (5), (10)
+    # --- our choices (the paper does not give them; see docs/methods/sph.md) ---
+    dt: float = 0.02  # control step [s]: the released code's 50 Hz (updateInterval); the text says >= 100 Hz
+    kernel: Literal["paper", "released"] = "paper"  # eq. (4) as printed, or the released C++
+    r_floor: float = 0.05  # distance floor in the 1/r repulsion [m] (finite force)
+    esdf_resolution: float = 0.1  # ESDF grid [m], as the released sdf_map
+    grid_resolution: float = 0.1  # grid-search cell [m], as the released A*
+    inflation: float = 0.3  # grid-search body clearance [m]: body radius 0.2 m + one cell (fallback tier)
+    ctrl_spacing: float = 0.5  # control-point spacing along the initial path [m] (released dist_p)
+    horizon_points: int = 10  # path points per local plan (released: first 10); 0 = whole path
+    max_iter: int = 200  # L-BFGS-B iteration cap (released opt_maxeval)
+    max_expand: int = 2_000_000  # A* expansion cap per search
+    replan_from: Literal["state", "reference"] = "reference"  # start state of a replan (released)
+    ref_reset: float = 1.0  # "reference" mode: restart from the state beyond this error [m] (released)
+    goal_spread: float = 0.0  # per-robot goal = goal + goal_spread * (spawn_i - spawn centroid)
+    plan_once: bool = False  # plan the whole path once at t = 0 (Fig. 3B protocol)
