@@ -28,7 +28,8 @@ from swarmnav.experiments.spec import Experiment, Variant
 from swarmnav.experiments.store import Store, config_key
 
 #: Metrics where the worst case over seeds matters: summary.csv also gets ``<metric>_min``.
-MIN_METRICS = ("d_clr_min", "min_inter_agent_distance", "Y", "R_goal")
+MIN_METRICS = ("d_clr_min", "min_inter_agent_distance", "Y", "R_goal", "min_inter_robot_distance",
+               "min_robot_obstacle_distance", "success_rate")
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,7 +106,8 @@ def execute(job: Job, keep_trajectory: bool = True) -> dict[str, Any]:
             np.savez_compressed(buf, positions=res.positions.astype(np.float32), labels=res.labels,
                                 min_clearance=res.min_clearance.astype(np.float32))
             row["_npz"] = buf.getvalue()
-        row.update(status="done", metrics=res.metrics)
+        timings = {f"time.{k}": v for k, v in res.timings.items()}  # wall clock, stored beside the metrics
+        row.update(status="done", metrics={**res.metrics, **timings})
     except Exception as e:  # noqa: BLE001 - a failed run is recorded, never fatal to the sweep
         row.update(status="failed", error=f"{type(e).__name__}: {e}".splitlines()[0][:500])
     row["wall_time_s"] = time.perf_counter() - t0

@@ -23,8 +23,13 @@ experiment reproduces: ``reference = "hes.table3"`` (a table of the packaged
 ``variant_map = {variant = "reference_key"}`` when names differ.
 
 ``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
-``n`` (swarm size) or a method parameter. ``key=a|b|c`` sweeps: every variant is repeated for
-each value, and the value is appended to the variant name.
+``n`` (swarm size), a declared scenario variable, or a method parameter. ``key=a|b|c`` sweeps:
+every variant is repeated for each value, and the value is appended to the variant name.
+
+Scenario variables: ``scenario_vars = {density = 0.25}`` declares placeholders of the scenario
+string with their defaults, e.g. ``scenario = "random_forest:density={density},seed={seed}"``;
+``--set density=0.15|0.35`` then fills the scene instead of becoming a method parameter.
+``{seed}`` is always the run's seed (one seed, one generated scene).
 """
 
 from __future__ import annotations
@@ -39,7 +44,7 @@ from typing import Any
 from swarmnav.errors import ConfigError
 
 _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "seeds", "n", "params", "variants", "matrix",
-              "report"}
+              "report", "scenario_vars"}
 _REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "figures"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "n", "params"}
@@ -134,7 +139,12 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
             name=str(v.get("name", f"v{k}")), method=str(cfg["method"]), scenario=str(cfg["scenario"]),
             steps=int(cfg["steps"]), n=cfg.get("n"), params={**base_params, **v.get("params", {})},
         ))
-    variants = _apply_overrides(variants, overrides)
+    svars = data.get("scenario_vars", {})
+    if not isinstance(svars, dict) or set(svars) & (_RUN_KEYS | {"seed"}) or not all(
+            isinstance(x, (int, float, str)) and not isinstance(x, bool) for x in svars.values()):
+        raise ConfigError(f"{source}: scenario_vars must map new names (not {sorted(_RUN_KEYS | {'seed'})}) "
+                          f"to numbers or strings")
+    variants = _apply_overrides(variants, overrides, svars)
     seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
     names = [v.name for v in variants]
     if len(set(names)) != len(names):
@@ -143,9 +153,22 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
                       seeds=seed_list, report=dict(report))
 
 
-def _apply_overrides(variants: list[Variant], overrides: dict[str, str]) -> list[Variant]:
+def _fill_scenario(template: str, values: dict[str, Any]) -> str:
+    """Substitute ``{name}`` placeholders of a scenario string; only ``{seed}`` may remain."""
+    out = template
+    for k, val in values.items():
+        out = out.replace("{" + k + "}", str(val))
+    left = [part.split("}", 1)[0] for part in out.split("{")[1:]]
+    unknown = sorted(set(left) - {"seed"})
+    if unknown:
+        raise ConfigError(f"scenario {template!r}: placeholder(s) {unknown} have no value (declare them in scenario_vars)")
+    return out
+
+
+def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: dict[str, Any]) -> list[Variant]:
     if not overrides:
-        return variants
+        return [Variant(name=v.name, method=v.method, scenario=_fill_scenario(v.scenario, svars), steps=v.steps,
+                        n=v.n, params=v.params) for v in variants]
     keys = list(overrides)
     choices = [str(overrides[k]).split("|") for k in keys]
     swept = [k for k, c in zip(keys, choices) if len(c) > 1]
@@ -154,8 +177,11 @@ def _apply_overrides(variants: list[Variant], overrides: dict[str, str]) -> list
         for combo in itertools.product(*choices):
             cfg = {"method": v.method, "scenario": v.scenario, "steps": v.steps, "n": v.n}
             params = dict(v.params)
+            values = dict(svars)
             for k, val in zip(keys, combo):
-                if k in ("steps", "n"):
+                if k in svars:
+                    values[k] = val
+                elif k in ("steps", "n"):
                     try:
                         cfg[k] = int(val)
                     except ValueError:
@@ -164,6 +190,7 @@ def _apply_overrides(variants: list[Variant], overrides: dict[str, str]) -> list
                     cfg[k] = val
                 else:
                     params[k] = val
+            cfg["scenario"] = _fill_scenario(cfg["scenario"], values)
             suffix = ",".join(f"{k}={val}" for k, val in zip(keys, combo) if k in swept)
             name = f"{v.name}[{suffix}]" if suffix else v.name
             out.append(Variant(name=name, params=params, **cfg))

@@ -29,6 +29,8 @@ class RunResult:
         wall_time: seconds spent in the rollout loop [s].
         artifacts: extra files of the run, file name -> content, from the method's optional
             ``artifacts()`` hook (e.g. ``llm_transcript.jsonl``); written by ``save``.
+        timings: wall-clock figures from the method's optional ``timings()`` hook (e.g.
+            planning time per replan [ms]); not reproducible, so kept out of ``metrics``.
     """
 
     config: dict[str, Any]
@@ -40,6 +42,7 @@ class RunResult:
     metrics: dict[str, float] = field(default_factory=dict)
     wall_time: float = 0.0
     artifacts: dict[str, str | bytes] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
 
     @property
     def n_subswarms(self) -> np.ndarray:

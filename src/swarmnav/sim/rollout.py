@@ -10,6 +10,7 @@ import numpy as np
 from swarmnav._version import __version__
 from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
+from swarmnav.metrics.flight import flight_metrics
 from swarmnav.metrics.navigation import MetricParams, navigation_metrics
 from swarmnav.params import as_dict
 from swarmnav.sensing import signed_distance
@@ -94,8 +95,12 @@ def run(
         P, C, scn.goal_array, result.n_subswarms, n_struct, MetricParams(),
         periodic_box=period,
     )
+    metrics.update(flight_metrics(P, V, C, scn.goal_array, dt))
     metrics.update(m.summary())
     result.metrics = metrics
+    timings = getattr(m, "timings", None)  # optional hook: wall-clock figures, never metrics
+    if callable(timings):
+        result.timings = dict(timings())
     artifacts = getattr(m, "artifacts", None)  # optional hook: extra files of the run directory
     if callable(artifacts):
         result.artifacts = dict(artifacts())

@@ -1,0 +1,110 @@
+"""Flight metrics of the SPH paper's Table II and Fig. 3(E-G), for every method.
+
+Per robot ``i`` the flight ends at its arrival step ``a_i``: the first step at which it is
+within ``r_goal`` of the goal (the horizon K if it never is). Then
+
+- ``flight_distance``: mean over robots of the path length up to ``a_i`` [m];
+- ``flight_time``: mean over robots of ``a_i dt`` [s] (never arrived: the horizon, a censored
+  value);
+- ``avg_velocity``: total distance over total time, ``sum L_i / sum T_i`` [m/s] (Table II's
+  Vel column is Dist / Time: 23.1 / 26.8 = 0.86, ...);
+- ``jerk_energy``: mean over robots of ``int_0^T ||d^3 q / dt^3||^2 dt`` up to ``a_i``, with the
+  jerk as the third finite difference of the recorded positions at the method's step [m^2/s^5];
+- ``comm_mbps``: aggregate load of every robot broadcasting its position at ``broadcast_hz``
+  in ``msg_bytes`` messages [Mbit/s];
+- ``min_inter_robot_distance``, ``min_robot_obstacle_distance``: over the whole run [m]
+  (Fig. 3 F, G); the obstacle distance is the signed clearance (negative inside);
+- ``success_rate``: 1.0 if every robot is within ``r_goal`` of the goal at the last step and no
+  robot ever touched another (distance < 2 body radii) or an obstacle (clearance < 1 body
+  radius), else 0.0; its mean over trials is Table II's Rate;
+- ``coordination_time``: first time the swarm moves coherently, polarisation
+  ``|sum v_i| / sum |v_i| >= phi_coord`` with mean speed ``>= v_coord`` [s] (horizon if never).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from swarmnav.metrics.navigation import MetricParams
+
+
+@dataclass(frozen=True, slots=True)
+class FlightParams:
+    r_goal: float = 3.0  # goal radius [m] for arrival and success (our choice, see docs/methods/sph.md)
+    body_radius: float = MetricParams().body_radius  # [m], the same contact rule as navigation.py
+    broadcast_hz: float = 10.0  # position broadcast rate [Hz], SPH paper Section IV-A
+    msg_bytes: int = 64  # position message [B]: 3 x float64 position, float64 stamp, uint32 id,
+    #                      UDP (8) + IPv4 (20) headers, 4 B padding (our choice; the paper gives none)
+    phi_coord: float = 0.9  # polarisation threshold of a coordinated swarm [-] (our choice)
+    v_coord: float = 0.1  # minimum mean speed of a coordinated swarm [m/s] (our choice)
+
+
+def flight_metrics(
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    clearance: np.ndarray,
+    goal: np.ndarray,
+    dt: float,
+    params: FlightParams = FlightParams(),
+) -> dict[str, float]:
+    """Table II metrics of one run (see the module docstring).
+
+    Args:
+        positions, velocities: (K + 1, N, 2) [m], [m/s].
+        clearance: (K + 1, N) signed distance to the nearest obstacle [m] (+inf: none).
+        goal: (2,) goal [m]; dt: step of the recorded states [s].
+    """
+    K = positions.shape[0] - 1
+    n = positions.shape[1]
+    p = params
+    dist_goal = np.linalg.norm(positions - goal, axis=2)  # (K + 1, N)
+    inside = dist_goal <= p.r_goal
+    arrival = np.where(inside.any(axis=0), inside.argmax(axis=0), K)  # (N,) step index
+    steps = np.linalg.norm(np.diff(positions, axis=0), axis=2)  # (K, N)
+    cum = np.vstack([np.zeros((1, n)), np.cumsum(steps, axis=0)])
+    L = cum[arrival, np.arange(n)]
+    T = arrival * dt
+    jerk = np.diff(positions, n=3, axis=0) / dt**3 if K >= 3 else np.zeros((0, n, 2))
+    j2 = np.einsum("knd,knd->kn", jerk, jerk) * dt
+    cj = np.vstack([np.zeros((1, n)), np.cumsum(j2, axis=0)])
+    E = cj[np.clip(arrival - 2, 0, len(j2)), np.arange(n)]  # jerk samples 0 .. a_i - 3
+    min_ij = _min_pair_distance(positions)
+    min_obs = float(clearance.min()) if clearance.size else float("inf")
+    touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
+    success = bool(inside[-1].all()) and not touched
+    speed = np.linalg.norm(velocities, axis=2)
+    pol = np.linalg.norm(velocities.sum(axis=1), axis=1) / np.maximum(speed.sum(axis=1), 1e-12)
+    coord = (pol >= p.phi_coord) & (speed.mean(axis=1) >= p.v_coord)
+    t_coord = float(np.argmax(coord)) * dt if coord.any() else K * dt
+    return {
+        "flight_distance": float(L.mean()),
+        "flight_time": float(T.mean()),
+        "avg_velocity": float(L.sum() / T.sum()) if T.sum() > 0 else 0.0,
+        "jerk_energy": float(E.mean()),
+        "comm_mbps": n * p.broadcast_hz * p.msg_bytes * 8 / 1e6,
+        "min_inter_robot_distance": min_ij,
+        "min_robot_obstacle_distance": min_obs,
+        "arrived_fraction": float(inside[-1].mean()),
+        "success_rate": float(success),
+        "coordination_time": t_coord,
+    }
+
+
+def _min_pair_distance(positions: np.ndarray, chunk: int = 512) -> float:
+    """Smallest distance between two robots over all recorded steps [m] (inf for N < 2);
+    O(N^2) per step in time chunks for small swarms, a k-d tree per step for large ones."""
+    K1, n, _ = positions.shape
+    if n < 2:
+        return float("inf")
+    if n <= 64:
+        iu, ju = np.triu_indices(n, 1)
+        best = np.inf
+        for k0 in range(0, K1, chunk):
+            blk = positions[k0:k0 + chunk]
+            d = blk[:, iu] - blk[:, ju]
+            best = min(best, float(np.sqrt(np.einsum("kpd,kpd->kp", d, d).min())))
+        return best
+    return float(min(cKDTree(positions[k]).query(positions[k], k=2)[0][:, 1].min() for k in range(K1)))
