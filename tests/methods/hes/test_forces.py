@@ -1,0 +1,201 @@
+"""Each force term of HES Section 4 against a direct transcription of its equation, on tiny
+hand cases; occlusion attenuation (eq. 30), encircle switches (eq. 38), saturation (eq. 39)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.params import HesParams
+
+P = HesParams()
+G = F.gain_vector(P)
+R = 360
+TH = 2 * np.pi * np.arange(R) / R
+COS, SIN = np.cos(TH), np.sin(TH)
+
+
+def test_table_a1_gains_are_the_papers():
+    # Table A1, transcribed; these must never be tuned.
+    a1 = dict(lidar_range=20.0, r_trigger=14.0, n_rays=360, a_max=2.6, k_p=0.7, k_v=0.8, k_rep=9.0, k_e=48.0,
+              k_b=0.9, gamma=1.2, k_sep=1.1, k_intra=1.8, k_ir=1.6, k_path=0.75, k_l=1.6, k_vl=0.7, k_coh=0.9,
+              d_safe=1.5, sigma_occ=0.2, t_cd=10.0, r_in=8.0, r_out=11.0, r_merge=12.0, d_merge=8.0, w_sl=1.0,
+              w_c=0.5, delta_min=2.0, tau_ra=2.0, n_move_max=3, dt=0.1)
+    for k, v in a1.items():
+        assert getattr(P, k) == v, k
+    from swarmnav.methods.hes import Hes
+
+    dyn = Hes().dynamics
+    assert (dyn.mass, dyn.drag) == (5.0, 0.5)  # eq. (5)-(7)
+
+
+def test_slot_velocity_eq23():
+    x = np.array([[0.0, 0.0], [1.0, 1.0]])
+    slot = np.array([[3.0, 4.0], [1.0, 1.0]])
+    v = F.slot_velocity(x, slot, np.array([2.0, 2.0]), 0.5)
+    np.testing.assert_allclose(v[0], 2.0 * np.array([3.0, 4.0]) / (5.0 + 0.5))
+    np.testing.assert_allclose(v[1], 0.0)
+
+
+def test_attraction_eq24():
+    x, v = np.array([[1.0, 2.0]]), np.array([[0.5, -1.0]])
+    ps, vs = np.array([[4.0, -2.0]]), np.array([[1.0, 1.0]])
+    np.testing.assert_allclose(F.attraction(x, v, ps, vs, 0.7, 0.8), 0.7 * (ps - x) + 0.8 * (vs - v))
+
+
+def test_separation_eq25_and_intra_repulsion_eq31():
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.5], [5.0, 5.0]])
+    g = np.array([0, 0, 1, 1])
+
+    def direct(k, r, same):
+        out = np.zeros_like(x)
+        for i in range(4):
+            for j in range(4):
+                d = np.linalg.norm(x[i] - x[j])
+                if i != j and d < r and (not same or g[i] == g[j]):
+                    out[i] += k * (x[i] - x[j]) / d**2
+        return out
+
+    np.testing.assert_allclose(F.separation(x, g, 1.1, 1.6, 0.05, False), direct(1.1, 1.6, False))
+    np.testing.assert_allclose(F.separation(x, g, 1.6, 1.2, 0.05, True), direct(1.6, 1.2, True))
+    assert np.all(F.separation(x, g, 1.1, 1.6, 0.05, False)[3] == 0)  # nobody within r_sep
+
+
+def test_centering_eq32_and_springs_eq26_27_29():
+    x = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 0.0]])
+    c = np.array([[3.0, 4.0], [2.0, 1.0], [0.1, 0.0]])
+    np.testing.assert_allclose(F.centering(x, c, 0.75), 0.75 * (c - x))
+    mask = np.array([True, True, False])
+    s = F.spring(x, c, 1.8, 2.0, mask)
+    np.testing.assert_allclose(s[0], 1.8 * (5.0 - 2.0) * np.array([0.6, 0.8]))  # k (d - d0) e
+    np.testing.assert_allclose(s[1], 0.0)  # d = 1 <= d0: inactive
+    np.testing.assert_allclose(s[2], 0.0)  # masked out
+    vm = F.velocity_match(np.array([[1.0, 0.0], [0.0, 0.0]]), np.array([[0.0, 2.0], [5.0, 5.0]]), 0.7,
+                          np.array([True, False]))
+    np.testing.assert_allclose(vm, [[-0.7, 1.4], [0.0, 0.0]])
+
+
+def test_nearest_in_group():
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [0.2, 0.0], [10.0, 0.0]])
+    nn = F.nearest_in_group(x, np.array([0, 0, 1, 1]))
+    assert nn.tolist() == [1, 0, 3, 2]
+    assert F.nearest_in_group(x[:1], np.array([0])).tolist() == [-1]
+
+
+def omega(d):
+    """Eq. (36), transcribed."""
+    w = P.k_rep * max(0, 1 / d - 1 / P.r_trigger) / d**2 * (1 + P.k_b * (max(0, P.r_trigger - d) / P.r_trigger) ** P.gamma)
+    return w + (P.k_e * (P.d_safe - d + 1) ** 2 if d < P.d_safe else 0.0)
+
+
+@pytest.mark.parametrize("d", [0.8, 1.49, 1.51, 3.0, 13.0])
+def test_lidar_repulsion_eq35_37_single_minimum(d):
+    ring = np.full((1, R), 20.0)
+    ring[0, 85:96] = d + 0.01 * np.abs(np.arange(85, 96) - 90)  # a dip with its minimum on ray 90
+    f = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, P.d_safe, 0.05)
+    np.testing.assert_allclose(f[0], [-omega(d) * COS[90], -omega(d) * SIN[90]], atol=1e-12)
+
+
+def test_lidar_repulsion_active_set():
+    ring = np.full((1, R), 20.0)
+    assert np.all(F.lidar_repulsion(ring, COS, SIN, 9.0, 14.0, 0.9, 1.2, 48.0, 1.5, 0.05) == 0)  # L_i empty
+    ring[0, 10] = 15.0  # a local minimum beyond R_t = 14 m is not active
+    assert np.all(F.lidar_repulsion(ring, COS, SIN, 9.0, 14.0, 0.9, 1.2, 48.0, 1.5, 0.05) == 0)
+    ring[0, 180:182] = 3.0  # a two-ray flat minimum counts once, at its first ray
+    f = F.lidar_repulsion(ring, COS, SIN, 9.0, 14.0, 0.9, 1.2, 48.0, 1.5, 0.05)
+    np.testing.assert_allclose(f[0], [omega(3.0), -omega(3.0) * SIN[180]], atol=1e-12)
+    ring[0, 90:100] = 4.0 - 0.1 * np.arange(10)  # a monotone slope: minimum only at its end (ray 99)
+    assert F.is_local_min(ring[0], 99) and not F.is_local_min(ring[0], 95)
+
+
+def _case(n=4):
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-2, 2, (n, 2))
+    v = rng.normal(size=(n, 2))
+    group = np.array([0, 0, 1, 1])
+    sl = np.array([0, 0, 2, 2])
+    follower = sl != np.arange(n)
+    cent = np.array([x[group == g].mean(axis=0) for g in group])
+    wp = cent + 1.0
+    slot = x + rng.normal(size=(n, 2))
+    vslot = F.slot_velocity(x, slot, np.full(n, 3.0), 0.5)
+    nn = F.nearest_in_group(x, group)
+    ring = np.full((n, R), 20.0)
+    ring[:, 40] = 1.0  # an obstacle 1 m away on ray 40 for everyone
+    return x, v, group, x[sl], v[sl], follower, cent, wp, slot, vslot, nn, ring
+
+
+def test_force_terms_match_the_terms_and_sum():
+    x, v, group, slp, slv, follower, cent, wp, slot, vslot, nn, ring = _case()
+    nav = np.ones(4, dtype=bool)
+    sig = np.ones((4, 4))
+    t = F.force_terms(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G)
+    np.testing.assert_allclose(t[0], F.attraction(x, v, slot, vslot, P.k_p, P.k_v))
+    np.testing.assert_allclose(t[1], F.separation(x, group, P.k_sep, P.r_sep, P.d_floor, False))
+    np.testing.assert_allclose(t[2], F.centering(x, wp, P.k_path))
+    np.testing.assert_allclose(t[3], F.spring(x, x[nn], P.k_intra, P.d_thr, nn >= 0))
+    np.testing.assert_allclose(t[4], F.separation(x, group, P.k_ir, P.d_ir, P.d_floor, True))
+    np.testing.assert_allclose(t[5], F.spring(x, slp, P.k_l, P.d_0, follower) + F.velocity_match(v, slv, P.k_vl, follower))
+    np.testing.assert_allclose(t[6], F.spring(x, cent, P.k_coh, P.d_c, np.ones(4, dtype=bool)))
+    np.testing.assert_allclose(t[7], F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e,
+                                                       P.d_safe, P.d_floor))
+    assert np.all(t[5][~follower] == 0)  # subleaders have no coupling term
+    a = F.synthesize(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G)
+    np.testing.assert_allclose(a, t.sum(axis=0))
+
+
+@pytest.mark.parametrize("column, term", [(F.SIG_SLOT, 0), (F.SIG_NN, 3), (F.SIG_SL, 5), (F.SIG_CENT, 6)])
+def test_occlusion_scales_exactly_its_attraction_term(column, term):
+    x, v, group, slp, slv, follower, cent, wp, slot, vslot, nn, ring = _case()
+    nav = np.ones(4, dtype=bool)
+    args = (x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn)
+    free = F.force_terms(*args, np.ones((4, 4)), ring, COS, SIN, G)
+    sig = np.ones((4, 4))
+    sig[1, column] = P.sigma_occ  # agent 1's segment to this target is blocked
+    occ = F.force_terms(*args, sig, ring, COS, SIN, G)
+    expect = free.copy()
+    expect[term, 1] *= P.sigma_occ
+    np.testing.assert_array_equal(occ, expect)
+
+
+def test_all_four_attraction_terms_and_only_them_are_attenuated():
+    x, v, group, slp, slv, follower, cent, wp, slot, vslot, nn, ring = _case()
+    nav = np.ones(4, dtype=bool)
+    args = (x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn)
+    free = F.force_terms(*args, np.ones((4, 4)), ring, COS, SIN, G)
+    occ = F.force_terms(*args, np.full((4, 4), 0.2), ring, COS, SIN, G)
+    for t in range(8):
+        scale = 0.2 if F.TERMS[t] in ("att", "intra", "fol", "coh") else 1.0
+        np.testing.assert_allclose(occ[t], scale * free[t], err_msg=F.TERMS[t])
+
+
+def test_encircle_switches_off_path_and_intra_repulsion():
+    x, v, group, slp, slv, follower, cent, wp, slot, vslot, nn, ring = _case()
+    x[1] = x[0] + [0.5, 0.0]  # make the intra repulsion non-zero
+    nav = np.array([False, False, True, True])
+    t = F.force_terms(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, np.ones((4, 4)), ring,
+                      COS, SIN, G)
+    assert np.all(t[2][:2] == 0) and np.all(t[4][:2] == 0)
+    assert np.any(t[2][2:] != 0)
+    assert np.all(t[[0, 1, 3, 5, 6, 7]][:, :2].any(axis=2).sum(axis=0) >= 1)  # other terms still act
+
+
+def test_saturation_eq39():
+    a = np.array([[3.0, 4.0], [0.1, -0.2], [0.0, 0.0]])
+    s = F.saturate(a, 2.6)
+    np.testing.assert_allclose(np.linalg.norm(s[0]), 2.6)
+    np.testing.assert_allclose(s[0] / 2.6, a[0] / 5.0)  # direction kept
+    np.testing.assert_array_equal(s[1:], a[1:])
+
+
+def test_safety_filter_bounds_speed_and_closing_speed():
+    ring = np.full((1, R), 20.0)
+    ring[0, 0] = 1.0  # a wall 1 m ahead on +x
+    v = np.array([[3.0, 0.0]])
+    a = F.safety_filter(np.zeros((1, 2)), v, ring, COS, SIN, 0.1, 10.0, 1.5, 0.5, 20.0)
+    v_next = v + 0.1 * a
+    assert v_next[0, 0] <= math.sqrt(2 * 1.5 * 0.5) + 1e-12  # stoppable within d - margin
+    a2 = F.safety_filter(np.array([[0.0, 50.0]]), np.array([[0.0, 0.0]]), np.full((1, R), 20.0), COS, SIN, 0.1,
+                         3.9, 1.5, 0.5, 20.0)
+    assert np.linalg.norm(0.1 * a2) == pytest.approx(3.9)  # speed cap
