@@ -1,0 +1,59 @@
+"""Table II metrics (swarmnav.metrics.flight) on trajectories with known answers."""
+
+import numpy as np
+import pytest
+
+from swarmnav.metrics.flight import FlightParams, flight_metrics
+
+DT = 0.1
+GOAL = np.array([10.0, 0.0])
+
+
+def _line(n=2, speed=1.0, steps=150, y_gap=2.0):
+    t = DT * np.arange(steps + 1)
+    x = np.minimum(speed * t, 10.0)
+    P = np.stack([np.column_stack([x, np.full_like(x, y_gap * a)]) for a in range(n)], axis=1)
+    V = np.gradient(P, DT, axis=0)
+    return P, V, np.full(P.shape[:2], np.inf)
+
+
+def test_straight_flight_time_distance_velocity():
+    P, V, C = _line(n=1)
+    m = flight_metrics(P, V, C, GOAL, DT, FlightParams(r_goal=3.0))
+    assert m["flight_time"] == pytest.approx(7.0)  # within 3 m of the goal at x = 7 m
+    assert m["flight_distance"] == pytest.approx(7.0)
+    assert m["avg_velocity"] == pytest.approx(1.0)
+    assert m["success_rate"] == 1.0 and m["min_robot_obstacle_distance"] == np.inf
+
+
+def test_jerk_energy_of_constant_jerk():
+    c = 0.6  # q = c t^3 / 6: jerk c, energy c^2 T
+    t = DT * np.arange(101)
+    P = np.column_stack([c * t**3 / 6, np.zeros_like(t)])[:, None, :]
+    m = flight_metrics(P, np.zeros_like(P), np.full((101, 1), np.inf), np.array([1e3, 0.0]), DT)
+    assert m["jerk_energy"] == pytest.approx(c**2 * DT * 98)  # 98 third differences in 100 steps
+    P0, V0, C0 = _line(n=1)
+    assert flight_metrics(P0[:60], V0[:60], C0[:60], GOAL, DT)["jerk_energy"] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_bandwidth_is_ten_hz_position_broadcasts():
+    P, V, C = _line(n=15, y_gap=0.5)
+    assert flight_metrics(P, V, C, GOAL, DT)["comm_mbps"] == pytest.approx(15 * 10 * 64 * 8 / 1e6)  # 0.0768
+
+
+def test_contact_or_missed_goal_is_failure():
+    P, V, C = _line(n=2, y_gap=0.35)  # two bodies of 0.2 m radius 0.35 m apart: contact
+    m = flight_metrics(P, V, C, GOAL, DT)
+    assert m["min_inter_robot_distance"] == pytest.approx(0.35) and m["success_rate"] == 0.0
+    P, V, C = _line(n=2, y_gap=1.0, steps=40)  # stopped short of the goal region
+    m = flight_metrics(P, V, C, GOAL, DT)
+    assert m["success_rate"] == 0.0 and m["flight_time"] == pytest.approx(4.0)  # censored at the horizon
+    P, V, C = _line(n=1)
+    C[50] = 0.1  # grazed an obstacle
+    assert flight_metrics(P, V, C, GOAL, DT)["success_rate"] == 0.0
+
+
+def test_coordination_time_is_first_coherent_motion():
+    P, V, C = _line(n=3, y_gap=1.0)
+    V[:5] = 0.0  # at rest for 0.5 s
+    assert flight_metrics(P, V, C, GOAL, DT)["coordination_time"] == pytest.approx(0.5)

@@ -1,0 +1,69 @@
+"""Grid search on each robot's own map, and Algorithm 2's visibility structure."""
+
+import math
+
+import numpy as np
+import pytest
+
+from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
+from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
+from swarmnav.world import Box, Circle, Geometry
+
+BOUNDS = (-5.0, -5.0, 15.0, 5.0)
+
+
+def test_astar_is_optimal_in_free_space_and_goes_round_a_wall():
+    maps = OccupancyMaps((Box((4.0, -3.0), (5.0, 5.0)),), BOUNDS, 1, 0.1, 0.3, 100.0, margin=0.5)
+    free = maps.search(0, np.array([0.0, 0.0]), np.array([3.0, 2.0]), 10**6)
+    length = np.linalg.norm(np.diff(free, axis=0), axis=1).sum()
+    assert length == pytest.approx(1.0 + 2.0 * math.sqrt(2), abs=0.05)  # octile optimum
+    assert maps.observe(0, np.zeros(2)) == 1
+    path = maps.search(0, np.array([0.0, 0.0]), np.array([9.0, 0.0]), 10**6)
+    assert path is not None
+    g = Geometry.from_obstacles([Box((4.0, -3.0), (5.0, 5.0))])
+    from swarmnav.sensing import signed_distance
+
+    assert signed_distance(g, path).min() >= 0.5 - 0.08  # keeps the d_thr tier where it can
+    assert path[:, 1].min() < -3.0  # went round the bottom end of the wall
+
+
+def test_map_only_holds_obstacles_within_sensing_range():
+    maps = OccupancyMaps((Circle((2.0, 0.0), 0.5), Circle((14.0, 0.0), 0.5)), BOUNDS, 2, 0.1, 0.3, 5.0)
+    assert maps.observe(0, np.array([0.0, 0.0])) == 1
+    assert maps.known[0].tolist() == [True, False] and not maps.known[1].any()
+    assert maps.grids[1].max() == 0  # robot 1 has seen nothing
+
+
+def test_resample_spacing():
+    path = np.array([[0.0, 0.0], [2.2, 0.0], [2.2, 1.0]])
+    pts = resample(path, 0.5)
+    np.testing.assert_allclose(pts[0], path[0])
+    np.testing.assert_allclose(pts[-1], path[-1])
+    steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    assert np.all(steps[:-1] <= 0.5 + 1e-9)  # chords of 0.5 m arcs
+    assert steps[-1] <= 0.75 + 1e-9  # a short remainder stretches the last interval
+
+
+def test_wall_splits_the_swarm_and_labels_partition_it():
+    geom = Geometry.from_obstacles([Box((-0.1, -10.0), (0.1, 10.0))])
+    x = np.array([[-2.0, 0.0], [-1.0, 1.0], [1.0, 0.0], [2.0, 1.0], [30.0, 0.0]])
+    i, j, vis = visible_pairs(geom, x, 20.0)
+    lab = components(len(x), i[vis], j[vis])
+    assert lab.tolist() == [0, 0, 2, 2, 4]  # the agent beyond R is its own sub-swarm
+    # every agent in exactly one sub-swarm, labelled by its smallest member
+    for lab_id in np.unique(lab):
+        assert lab_id == np.flatnonzero(lab == lab_id).min()
+
+
+def test_split_and_merge_events_and_pair_transitions():
+    one = np.array([0, 0, 0, 0])
+    two = np.array([0, 0, 2, 2])
+    ev = structural_events(one, two)
+    assert [e["action"] for e in ev] == ["split"] and all(e["source"] == "visibility" for e in ev)
+    assert [e["action"] for e in structural_events(two, one)] == ["merge"]
+    assert structural_events(two, two) == []
+    n = 4
+    prev = np.array([0 * n + 1, 0 * n + 2])  # 0-1 and 0-2 were visible
+    in_range = np.array([0 * n + 1, 0 * n + 2, 2 * n + 3])
+    vis = np.array([True, False, True])  # 0-2 now occluded, 2-3 newly visible
+    assert link_changes(prev, in_range, vis) == (1, 1)

@@ -1,0 +1,57 @@
+"""The ``sph`` method end to end: parameters, a short open-space flight, the released kernel."""
+
+import numpy as np
+import pytest
+
+import swarmnav
+from swarmnav.methods import registry
+from swarmnav.world import from_dict
+
+OPEN = {"name": "open", "swarm": {"n": 6, "spawn": [-2.0, -2.0, 2.0, 2.0]}, "goal": {"position": [8.0, 0.0]},
+        "world": {"bounds": [-6.0, -8.0, 14.0, 8.0]},
+        "obstacles": [{"type": "circle", "center": [4.0, 5.0], "radius": 1.0}]}
+
+
+def test_table_i_defaults_and_strict_parameters():
+    m = registry.make("sph")
+    p = m.params
+    assert (p.c, p.R, p.h, p.m, p.k_den, p.k_rep, p.k_vis, p.k_env) == (54.97, 20.0, 10.0, 1.0, 1.0, 1.0, 1.5, 10.0)
+    assert (p.v_max, p.a_max, p.rho0, p.T_p, p.gamma) == (1.0, 1.5, 1e6, 0.2, 7.0)
+    assert (p.lambda_s, p.lambda_c, p.lambda_f, p.k_p, p.k_v, p.d_thr) == (5.0, 1000.0, 1.0, 5.0, 3.5, 0.5)
+    assert p.kernel == "paper"
+    with pytest.raises(swarmnav.ConfigError, match="unknown parameter 'k_dne'"):
+        registry.make("sph", k_dne=1.0)
+    with pytest.raises(swarmnav.ConfigError, match="T_p must be > 0"):
+        registry.make("sph", T_p=0.0)
+    with pytest.raises(swarmnav.ConfigError, match="kernel"):
+        registry.make("sph", kernel="cpp")
+
+
+def test_open_flight_reaches_the_goal_without_contact():
+    res = swarmnav.run("sph", from_dict(OPEN), seed=2, steps=900)  # 18 s at 50 Hz
+    m = res.metrics
+    assert m["success_rate"] == 1.0 and m["collisions"] == 0.0
+    assert m["min_inter_robot_distance"] >= 0.4
+    assert 0.3 < m["avg_velocity"] <= 1.0 + 1e-9  # never above v_max (eq. 2)
+    assert np.all(np.linalg.norm(np.diff(res.positions, axis=0), axis=2) <= 1.0 * 0.02 + 1e-12)
+    assert np.all(res.labels == 0) and m["N_event"] == 0.0  # one visible swarm throughout
+    assert m["sph_plans"] == 6 * 90  # every robot replans every T_p = 10 steps
+    t = res.timings if hasattr(res, "timings") else {}
+    assert set(t) >= {"plan_ms_median", "plan_ms_p95", "coord_ms_median"}
+
+
+def test_wall_between_robots_splits_and_logs_visibility_events():
+    scn = from_dict({**OPEN, "swarm": {"n": 4, "spawn": [-2.0, -3.0, 0.0, 3.0]},
+                     "obstacles": [{"type": "box", "min": [-1.05, -0.05], "max": [1.5, 0.05]}]})
+    res = swarmnav.run("sph", scn, seed=5, steps=200)
+    assert len(np.unique(res.labels[0])) >= 1
+    for k in range(res.labels.shape[0]):  # every agent carries the label of its smallest member
+        for lab in np.unique(res.labels[k]):
+            assert lab == np.flatnonzero(res.labels[k] == lab).min()
+    assert all(e["source"] == "visibility" and e["action"] in ("split", "merge") for e in res.events)
+
+
+def test_released_kernel_option_runs_and_differs():
+    a = swarmnav.run("sph", from_dict(OPEN), seed=1, steps=60)
+    b = swarmnav.run("sph", from_dict(OPEN), seed=1, steps=60, kernel="released")
+    assert np.all(np.isfinite(b.positions)) and not np.array_equal(a.positions, b.positions)
