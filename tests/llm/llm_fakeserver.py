@@ -147,11 +147,14 @@ class FakeLlmServer:
 
             def _send(self, status: int, obj=None, raw: bytes | None = None, ctype="application/json"):
                 data = raw if raw is not None else json.dumps(obj).encode()
-                self.send_response(status)
-                self.send_header("Content-Type", ctype)
-                self.send_header("Content-Length", str(len(data)))
-                self.end_headers()
-                self.wfile.write(data)
+                try:
+                    self.send_response(status)
+                    self.send_header("Content-Type", ctype)
+                    self.send_header("Content-Length", str(len(data)))
+                    self.end_headers()
+                    self.wfile.write(data)
+                except (BrokenPipeError, ConnectionResetError):  # the client gave up (timeout): expected
+                    self.close_connection = True
 
             def do_GET(self):
                 if self.path == "/api/tags":
