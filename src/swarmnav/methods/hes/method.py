@@ -317,16 +317,19 @@ class Hes:
         else:  # `through` metres past the throat, or past the centroid once that is beyond the throat
             along = max(float(np.dot(cent - route.mid, route.normal)), 0.0)
             target = route.mid + (along + p.through) * route.normal
-        # virtual leader: advance toward the target at the (adaptive) cruise speed ...
-        step = self._cruise(rep) * p.dt
-        d = target - sub.waypoint
-        dn = math.hypot(d[0], d[1])
-        sub.waypoint = target.copy() if dn <= step else sub.waypoint + d * (step / dn)
-        # ... on a leash of length `lead` around the sub-swarm centroid
-        off = sub.waypoint - cent
-        on = math.hypot(off[0], off[1])
-        if on > p.lead:
-            sub.waypoint = cent + off * (p.lead / on)
+        if p.adaptive:
+            # virtual leader: advance toward the target at the (adaptive) cruise speed ...
+            step = self._cruise(rep) * p.dt
+            d = target - sub.waypoint
+            dn = math.hypot(d[0], d[1])
+            sub.waypoint = target.copy() if dn <= step else sub.waypoint + d * (step / dn)
+            # ... on a leash of length `lead` around the sub-swarm centroid
+            off = sub.waypoint - cent
+            on = math.hypot(off[0], off[1])
+            if on > p.lead:
+                sub.waypoint = cent + off * (p.lead / on)
+        else:  # safety stack off: no regulation of the reference, c_s is the corridor target itself
+            sub.waypoint = np.asarray(target, dtype=float).copy()
         w = route.width if route is not None else math.inf
         if p.adaptive:  # keep the waypoint off the walls the subleader sees
             a = sub.subleader
