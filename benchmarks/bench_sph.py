@@ -1,0 +1,52 @@
+"""SPH real-time check: planning time per robot per replan and coordination time per control
+step, against swarm size (issue 6: median planning time well under T_p = 0.2 s).
+
+    PYTHONPATH=src python benchmarks/bench_sph.py [--sizes 15,30,60] [--density 0.35] [--steps 500]
+
+Planning = map update + grid search + L-BFGS spline optimisation + sampling of one robot's
+trajectory; coordination = visibility raycasts + SPH forces + ESDF force for the whole swarm.
+Wall-clock figures depend on the machine and its load; the numbers in docs/methods/sph.md were
+measured on the shared 2-core development machine while other jobs ran.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+
+import numpy as np
+
+from swarmnav.methods.sph import Sph
+from swarmnav.sim import run
+from swarmnav.world import load_scenario
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="15,30,60")
+    ap.add_argument("--density", type=float, default=0.35)
+    ap.add_argument("--steps", type=int, default=500)
+    ap.add_argument("--seed", type=int, default=1)
+    a = ap.parse_args()
+    print(f"# {platform.processor() or platform.machine()}, numpy {np.__version__}")
+    print(f"{'N':>4} {'plans':>6} {'plan med ms':>12} {'plan p95 ms':>12} {'plan max ms':>12} "
+          f"{'coord med ms':>13} {'wall s':>8} {'sim s':>6}")
+    warm = Sph()
+    run(warm, load_scenario(f"random_forest:density={a.density},seed={a.seed},length=12,r_min=1.0,r_max=2.0"),
+        seed=a.seed, steps=20)  # compile the numba kernels outside the measurement
+    for n in (int(s) for s in a.sizes.split(",")):
+        scn = load_scenario(f"random_forest:density={a.density},seed={a.seed},length=12,r_min=1.0,r_max=2.0", n=n)
+        m = Sph()
+        t0 = time.perf_counter()
+        run(m, scn, seed=a.seed, steps=a.steps)
+        wall = time.perf_counter() - t0
+        t = m.timings()
+        plans = int(m.summary()["sph_plans"])
+        print(f"{n:>4} {plans:>6} {t['plan_ms_median']:>12.2f} {t['plan_ms_p95']:>12.2f} {t['plan_ms_max']:>12.2f} "
+              f"{t['coord_ms_median']:>13.3f} {wall:>8.1f} {a.steps * m.dt:>6.1f}")
+    print(f"T_p = {Sph().params.T_p * 1e3:.0f} ms: a replan of one robot must take well under this.")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,62 @@
+"""Reproduce SPH Table II: print the measured row per density next to the paper's.
+
+    # 1. run the trials (20 forests per density; resumable)
+    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --workers 2 --out out/sph-forest
+    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=apf --set steps=900 --out out/sph-forest-apf
+    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=hes --set steps=900 --out out/sph-forest-hes
+    # 2. tabulate
+    PYTHONPATH=src python benchmarks/sph_table2.py out/sph-forest out/sph-forest-apf out/sph-forest-hes
+
+Columns as Table II (mean +- population std over the finished trials; Rate = success rate),
+plus the worst inter-robot and robot-obstacle distances over all trials.
+"""
+
+from __future__ import annotations
+
+import csv
+import sys
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+COLS = [("flight_distance", "Dist (m)", "dist_m"), ("flight_time", "Time (s)", "time_s"),
+        ("success_rate", "Rate (%)", "success_rate"), ("jerk_energy", "Eng m2/s5", "jerk_energy"),
+        ("comm_mbps", "Comm Mbps", "comm_mbps"), ("avg_velocity", "Vel (m/s)", "velocity")]
+
+
+def _paper() -> dict:
+    text = resources.files("swarmnav.experiments").joinpath("reference", "paper_results.toml").read_text("utf-8")
+    return tomllib.loads(text)["sph"]["table2"]["proposed"]
+
+
+def _fmt_ref(v) -> str:
+    return f"{v[0]:g}+-{v[1]:g}" if isinstance(v, list) else f"{v:g}"
+
+
+def table(out_dir: Path) -> None:
+    rows = [r for r in csv.DictReader(open(out_dir / "runs.csv")) if r["status"] == "done"]
+    paper = _paper()
+    dens = sorted({float(r["scenario"].split("density=")[1].split(",")[0]) for r in rows})
+    method = rows[0]["method"] if rows else "?"
+    print(f"\n{out_dir} ({method})")
+    print(f"{'d_obs':>6} {'runs':>4} " + " ".join(f"{h:>18}" for _, h, _ in COLS) + f" {'min r-r':>8} {'min r-o':>8}")
+    for d in dens:
+        mine = [r for r in rows if f"density={d:g}," in r["scenario"]]
+        cells = []
+        for key, _, _ in COLS:
+            v = np.array([float(r[key]) for r in mine])
+            cells.append(f"{100 * v.mean():.0f}" if key == "success_rate" else f"{v.mean():.3g}+-{v.std():.2g}")
+        rr = min(float(r["min_inter_robot_distance"]) for r in mine)
+        ro = min(float(r["min_robot_obstacle_distance"]) for r in mine)
+        print(f"{d:>6g} {len(mine):>4} " + " ".join(f"{c:>18}" for c in cells) + f" {rr:>8.3f} {ro:>8.3f}")
+        if d in paper["d_obs"]:
+            k = paper["d_obs"].index(d)
+            ref = [_fmt_ref(paper[p][k]) for _, _, p in COLS]
+            print(f"{'paper':>6} {'20':>4} " + " ".join(f"{c:>18}" for c in ref))
+
+
+if __name__ == "__main__":
+    for arg in sys.argv[1:] or ["out/sph-forest"]:
+        table(Path(arg))
