@@ -89,3 +89,24 @@ def test_report_html_renders_in_headless_chromium(tmp_path):
     img = Image.open(shot).convert("RGB")
     colours = img.getcolors(maxcolors=1 << 20)
     assert img.size == (1400, 1800) and colours is not None and len(colours) > 50  # text, table and plots drawn
+
+
+def test_every_shipped_spec_loads_and_plans():
+    """Like the method registry: a shipped experiment that cannot even be planned is a bug."""
+    from swarmnav.experiments import builtin_names, plan
+
+    names = builtin_names()
+    assert {"apf-scenes", "hes-sim1", "hes-sim2", "hes-sim3", "sph-forest", "sph-narrow", "cross-method"} <= set(names)
+    for name in names:
+        exp = load_experiment(name, seeds="1")
+        jobs = plan(exp)
+        assert jobs and len({j.key for j in jobs}) == len(jobs), name
+
+
+def test_horizon_gives_equal_simulated_time_across_methods():
+    from swarmnav.methods import registry
+
+    exp = load_experiment("cross-method", seeds="1")
+    for v in exp.variants:
+        dt = registry.make(v.method, **v.params).dt
+        assert v.steps * dt == pytest.approx(100.0, rel=1e-9), v.name

@@ -43,12 +43,13 @@ from typing import Any
 
 from swarmnav.errors import ConfigError
 
-_SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "seeds", "n", "params", "variants", "matrix",
+_SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "seeds", "n", "params", "variants",
+              "matrix",
               "report", "scenario_vars"}
 _REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "figures"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
-_VARIANT_KEYS = {"name", "method", "scenario", "steps", "n", "params"}
-_RUN_KEYS = {"method", "scenario", "steps", "n"}
+_VARIANT_KEYS = {"name", "method", "scenario", "steps", "horizon", "n", "params"}
+_RUN_KEYS = {"method", "scenario", "steps", "horizon", "n"}
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,6 +62,7 @@ class Variant:
     steps: int
     n: int | None = None
     params: dict[str, Any] = field(default_factory=dict)
+    horizon: float | None = None  # [s] if set, steps = horizon / the method's dt (equal time across methods)
 
     def columns(self) -> dict[str, Any]:
         """Config columns of runs.csv for this variant."""
@@ -132,12 +134,18 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         if bad:
             raise ConfigError(f"{source}: variants[{k}] unknown key(s) {sorted(bad)} (allowed: {sorted(_VARIANT_KEYS)})")
         cfg = {**base, **{kk: v[kk] for kk in _RUN_KEYS if kk in v}}
-        for req in ("method", "scenario", "steps"):
+        for req in ("method", "scenario"):
             if req not in cfg:
                 raise ConfigError(f"{source}: variants[{k}] has no '{req}' (set it in the variant or at top level)")
+        if "steps" not in cfg and "horizon" not in cfg:
+            raise ConfigError(f"{source}: variants[{k}] has no 'steps' or 'horizon' (set one in the variant or at top level)")
+        params = {**base_params, **v.get("params", {})}
+        horizon = float(cfg["horizon"]) if "horizon" in cfg and "steps" not in v else None
+        if horizon is not None:
+            cfg["steps"] = steps_for(str(cfg["method"]), params, horizon)
         variants.append(Variant(
             name=str(v.get("name", f"v{k}")), method=str(cfg["method"]), scenario=str(cfg["scenario"]),
-            steps=int(cfg["steps"]), n=cfg.get("n"), params={**base_params, **v.get("params", {})},
+            steps=int(cfg["steps"]), n=cfg.get("n"), params=params, horizon=horizon,
         ))
     svars = data.get("scenario_vars", {})
     if not isinstance(svars, dict) or set(svars) & (_RUN_KEYS | {"seed"}) or not all(
@@ -168,7 +176,7 @@ def _fill_scenario(template: str, values: dict[str, Any]) -> str:
 def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: dict[str, Any]) -> list[Variant]:
     if not overrides:
         return [Variant(name=v.name, method=v.method, scenario=_fill_scenario(v.scenario, svars), steps=v.steps,
-                        n=v.n, params=v.params) for v in variants]
+                        n=v.n, params=v.params, horizon=v.horizon) for v in variants]
     keys = list(overrides)
     choices = [str(overrides[k]).split("|") for k in keys]
     swept = [k for k, c in zip(keys, choices) if len(c) > 1]
@@ -191,10 +199,23 @@ def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: 
                 else:
                     params[k] = val
             cfg["scenario"] = _fill_scenario(cfg["scenario"], values)
+            horizon = v.horizon if "steps" not in keys else None
+            if horizon is not None:  # the method may have changed: its dt sets the step count
+                cfg["steps"] = steps_for(cfg["method"], params, horizon)
             suffix = ",".join(f"{k}={val}" for k, val in zip(keys, combo) if k in swept)
             name = f"{v.name}[{suffix}]" if suffix else v.name
-            out.append(Variant(name=name, params=params, **cfg))
+            out.append(Variant(name=name, params=params, horizon=horizon, **cfg))
     return out
+
+
+def steps_for(method: str, params: dict[str, Any], horizon: float) -> int:
+    """Steps that cover ``horizon`` seconds with the method's own integration step."""
+    from swarmnav.methods import registry
+
+    if not horizon > 0:
+        raise ConfigError(f"horizon must be > 0 s, got {horizon}")
+    dt = float(registry.make(method, **params).dt)
+    return max(1, int(round(horizon / dt)))
 
 
 def parse_seeds(text: str) -> tuple[int, ...]:
