@@ -118,8 +118,12 @@ GENERATORS: dict[str, Callable[..., Scenario]] = {
 }
 
 
-def from_spec(spec: str) -> Scenario:
-    """Build a generated scene from ``NAME:key=value,...`` (values parsed as int, float or bool)."""
+def from_spec(spec: str, n: int | None = None) -> Scenario:
+    """Build a generated scene from ``NAME:key=value,...`` (values parsed as int, float or bool).
+
+    ``n`` (if given) overrides the generator's swarm size, so a generator that sizes its world
+    by ``n`` (``periodic_box``: side ``sqrt(n / rho)``) keeps its density when resized.
+    """
     name, _, rest = spec.partition(":")
     if name not in GENERATORS:
         raise ScenarioError(f"{spec}: unknown generator '{name}' (known: {', '.join(GENERATORS)})")
@@ -134,6 +138,8 @@ def from_spec(spec: str) -> Scenario:
     unknown = set(kwargs) - allowed
     if unknown:
         raise ScenarioError(f"{spec}: unknown parameter(s) {sorted(unknown)} for {name} (allowed: {sorted(allowed)})")
+    if n is not None and "n" in allowed:
+        kwargs["n"] = n
     try:
         return fn(**kwargs)
     except TypeError as e:

@@ -28,12 +28,27 @@ DEFAULT_MIN_SPACING = 0.6
 
 @dataclass(frozen=True, slots=True)
 class Swarm:
-    """Swarm size and its uniform random spawn rectangle ``[xmin, ymin, xmax, ymax]`` [m]."""
+    """Swarm size and its uniform random spawn rectangle ``[xmin, ymin, xmax, ymax]`` [m].
+
+    With ``density`` [1/m^2] set, agents spawn instead in the square of side
+    ``sqrt(n / density)`` centred on the spawn rectangle, so resizing the swarm keeps its
+    initial density (HWVEM Section 3.2 starts every swarm at rho = 3.265 /m^2).
+    """
 
     n: int
     spawn: tuple[float, float, float, float]
     min_spacing: float = DEFAULT_MIN_SPACING
     clearance: float = DEFAULT_SPAWN_CLEARANCE
+    density: float | None = None
+
+    @property
+    def region(self) -> tuple[float, float, float, float]:
+        """The rectangle agents are drawn from [m]."""
+        if self.density is None:
+            return self.spawn
+        x0, y0, x1, y1 = self.spawn
+        cx, cy, h = (x0 + x1) / 2, (y0 + y1) / 2, math.sqrt(self.n / self.density) / 2
+        return (cx - h, cy - h, cx + h, cy + h)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -100,6 +115,7 @@ class Scenario:
                 "spawn": list(self.swarm.spawn),
                 "min_spacing": self.swarm.min_spacing,
                 "clearance": self.swarm.clearance,
+                **({"density": self.swarm.density} if self.swarm.density is not None else {}),
             },
             "goal": {"position": list(self.goal)},
             "obstacles": [o.to_dict() for o in self.obstacles],
@@ -115,7 +131,7 @@ class Scenario:
 
 _TOP_KEYS = {"name", "description", "world", "swarm", "goal", "obstacles"}
 _WORLD_KEYS = {"bounds", "periodic"}
-_SWARM_KEYS = {"n", "spawn", "min_spacing", "clearance"}
+_SWARM_KEYS = {"n", "spawn", "min_spacing", "clearance", "density"}
 _GOAL_KEYS = {"position", "path"}
 _OBSTACLE_KEYS = {"box": {"type", "min", "max"}, "circle": {"type", "center", "radius"},
                   "polygon": {"type", "points"}}
@@ -154,6 +170,11 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     spawn = ctx.rect(swarm_t["spawn"], "swarm.spawn", allow_degenerate=True)
     min_spacing = ctx.nonneg(swarm_t.get("min_spacing", DEFAULT_MIN_SPACING), "swarm.min_spacing")
     clearance = ctx.nonneg(swarm_t.get("clearance", DEFAULT_SPAWN_CLEARANCE), "swarm.clearance")
+    density = None
+    if "density" in swarm_t:
+        density = ctx.number(swarm_t["density"], "swarm.density")
+        if density <= 0:
+            raise ctx.err("swarm.density", f"must be > 0, got {density}")
 
     goal_t = ctx.table(data, "goal", required=True)
     ctx.keys(goal_t, _GOAL_KEYS, "goal")
@@ -180,7 +201,7 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     scn = Scenario(
         name=name,
         bounds=bounds,
-        swarm=Swarm(n=n, spawn=spawn, min_spacing=min_spacing, clearance=clearance),
+        swarm=Swarm(n=n, spawn=spawn, min_spacing=min_spacing, clearance=clearance, density=density),
         goal=goal,
         obstacles=obstacles,
         periodic=periodic,
@@ -218,7 +239,7 @@ def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60)
     """Rejection sampling in batches (vectorised); None if the region cannot hold the swarm."""
     from swarmnav.sensing import signed_distance
 
-    x0, y0, x1, y1 = scn.swarm.spawn
+    x0, y0, x1, y1 = scn.swarm.region
     n, spacing, clear = scn.n, scn.swarm.min_spacing, scn.swarm.clearance
     geom = scn.geometry
     kept = np.zeros((0, 2))
@@ -374,7 +395,7 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> Scenario:
     if isinstance(name_or_path, Path) or s.endswith(".toml") or "/" in s:
         scn = load_file(s)
     elif ":" in s or s in generators.GENERATORS:
-        scn = generators.from_spec(s)
+        scn = generators.from_spec(s, n=overrides.get("n"))
     elif s in builtin_names():
         text = resources.files("swarmnav.world").joinpath("scenes", f"{s}.toml").read_text("utf-8")
         scn = loads(text, source=f"{s}.toml")
