@@ -357,7 +357,9 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
 @njit(cache=True)
 def push_clear(px, py, ring, sx, sy, cos_t, sin_t, clear, max_range, iters):
     """Move point ``(px, py)`` away from the returns of the ring sensed at ``(sx, sy)`` until it is
-    ``clear`` [m] from the nearest one (at most ``iters`` pushes); used to keep a waypoint off walls."""
+    ``clear`` [m] from the nearest one, or midway across a passage narrower than ``2 clear``
+    (the nearest return on the opposite side, within 60 deg of the push direction, bounds the
+    push); at most ``iters`` pushes. Keeps a waypoint off walls without closing narrow gaps."""
     n = ring.shape[0]
     for _ in range(iters):
         best = np.inf
@@ -372,9 +374,24 @@ def push_clear(px, py, ring, sx, sy, cos_t, sin_t, clear, max_range, iters):
             if e2 < best:
                 best = e2
                 qx, qy = hx, hy
-        dist = math.sqrt(best)
-        if not dist < clear or dist == 0.0:
+        d1 = math.sqrt(best)
+        if not d1 < clear or d1 == 0.0:
             break
-        px = qx + (px - qx) * clear / dist
-        py = qy + (py - qy) * clear / dist
+        ux = (px - qx) / d1
+        uy = (py - qy) / d1
+        d2 = np.inf  # nearest return across, in the push direction
+        for r in range(n):
+            d = ring[r]
+            if d >= max_range:
+                continue
+            hx = sx + d * cos_t[r] - px
+            hy = sy + d * sin_t[r] - py
+            e = math.sqrt(hx * hx + hy * hy)
+            if e < d2 and hx * ux + hy * uy > 0.5 * e:
+                d2 = e
+        c = min(clear, 0.5 * (d1 + d2))
+        if d1 >= c - 1e-9:
+            break
+        px += (c - d1) * ux
+        py += (c - d1) * uy
     return px, py

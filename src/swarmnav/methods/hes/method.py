@@ -68,6 +68,8 @@ _RING_ANGLES = np.linspace(0.0, 2 * math.pi, 72, endpoint=False)  # encircle slo
 _SLOT_REFRESH = 10  # steps between re-solving the slot assignment (ours: 1 s)
 _RHO_VIS = 0.4  # [m] half-width of the straight line from the centroid to a throat that must be free (ours)
 _COMMIT_S = 20.0  # [s] a split's corridor assignment lapses after this long if the throat is not passed (ours)
+_HOLD_S = 15.0  # [s] longest a sub-swarm waits at a throat for its last members (ours)
+_STRAY = 4.0  # [m] a subleader farther than this from its sub-swarm's centroid hands over its role (ours)
 
 
 @dataclass(slots=True)
@@ -81,6 +83,7 @@ class SubSwarm:
     route: Corridor | None = None  # corridor currently followed
     committed: bool = False  # assigned by a split: follow it until its throat is passed
     commit_step: int = 0  # step of the split that assigned the corridor
+    hold_step: int | None = None  # step since which the route is held for members still in front of its throat
     squeeze: float = 1.0  # lateral factor of the template in a narrow corridor (longitudinal: 1 / squeeze)
     heading: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))  # formation axis (unit)
     slot_members: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # agents (sorted) ...
@@ -154,6 +157,7 @@ class Hes:
         self._k = k
         events: list[dict] = []
 
+        self._reelect(x)
         # 2. reports from subleaders, 3. decision through Pi_feas
         reports = {s: self._report(s, x, v, ring) for s in sorted(self.subs)}
         z = self.decision_state(k, reports)
@@ -190,6 +194,24 @@ class Hes:
             lidar_kernel(*self._garr, x, self._cos, self._sin, float(p.lidar_range), ring)
         self._ring = ring  # read by the corridor choice and the encircle slots of this step
         return ring
+
+    def _reelect(self, x: np.ndarray) -> None:
+        """Hand a sub-swarm's subleader role to the member nearest its centroid when the current
+        subleader has strayed (farther than ``_STRAY`` from the centroid, or cut off from it by an
+        obstacle): the subleader's ring is the sub-swarm's view of the corridors (ours; the
+        paper fixes no rule for who leads a sub-swarm)."""
+        ids = sorted(self.subs)
+        col = np.searchsorted(np.asarray(ids), self.labels)
+        cents = F.group_centroids(x, col, len(ids))
+        sl = np.array([self.subs[s].subleader for s in ids])
+        far = np.hypot(*(x[sl] - cents).T) > _STRAY
+        if not self.geom.is_empty:
+            cut = np.empty(len(ids), dtype=np.bool_)
+            segments_blocked_kernel(*self._garr, np.ascontiguousarray(x[sl]), cents, cut)
+            far |= cut
+        for j in np.flatnonzero(far):
+            members = np.flatnonzero(col == j)
+            self.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
 
     def _report(self, s: int, x: np.ndarray, v: np.ndarray, ring: np.ndarray) -> Report:
         """Subleader s's report: its Pack and the corridors toward the goal its ring shows."""
@@ -368,9 +390,21 @@ class Hes:
                 sub.committed = False
             else:
                 return prev
+        m = len(rep.pack.members)
+        if prev is not None and not prev.direct:
+            # Hold a throat until the whole sub-swarm is through (at most _HOLD_S after the first
+            # member passed): the next corridor's target would pull the members still in front
+            # of this gap away from it, along the wall.
+            ahead = int(np.count_nonzero((rep.pack.positions - prev.mid) @ prev.normal > 0.0))
+            if 0 < ahead < m:
+                if sub.hold_step is None:
+                    sub.hold_step = k
+                if (k - sub.hold_step) * p.dt <= _HOLD_S:
+                    return prev
+            else:
+                sub.hold_step = None
         if not cands:
             return prev
-        m = len(rep.pack.members)
         cost = [c.cost + self._width_penalty(c.width, m) for c in cands]
         best = int(np.argmin(cost))
         if prev is None:
