@@ -30,6 +30,10 @@ from swarmnav.experiments.store import Store, config_key
 #: Metrics where the worst case over seeds matters: summary.csv also gets ``<metric>_min``.
 MIN_METRICS = ("d_clr_min", "min_inter_agent_distance", "Y", "R_goal", "min_inter_robot_distance",
                "min_robot_obstacle_distance", "success_rate")
+#: Metrics whose spread over seeds is reported as quartiles: ``<m>_p25``, ``<m>_p50``, ``<m>_p75``.
+QUANTILE_METRICS = ("k_con", "P_s")
+#: Per-run 0/1 outcomes: summary.csv also gets ``<m>_fraction``, the share of runs where it is 1.
+FRACTION_METRICS = ("converged",)
 
 
 @dataclass(frozen=True, slots=True)
@@ -219,7 +223,8 @@ def _csv_row(r: dict) -> dict[str, Any]:
 
 def summarize(rows: list[dict], variants: list[dict]) -> list[dict]:
     """One row per variant: mean and population std of each metric (``<m>_mean``, ``<m>_std``),
-    ``<m>_min`` for :data:`MIN_METRICS`, and run counts."""
+    ``<m>_min`` for :data:`MIN_METRICS`, quartiles for :data:`QUANTILE_METRICS`,
+    ``<m>_fraction`` for :data:`FRACTION_METRICS`, and run counts."""
     out = []
     skip = {"seed", "status", "error", "wall_time_s", "trajectory", "key", "version", "steps", "n"}
     for v in variants:
@@ -236,6 +241,11 @@ def summarize(rows: list[dict], variants: list[dict]) -> list[dict]:
             s[f"{k}_std"] = float(np.std(vals))  # population form, as the HES paper
             if k in MIN_METRICS:
                 s[f"{k}_min"] = float(np.min(vals))
+            if k in QUANTILE_METRICS:
+                for q in (25, 50, 75):
+                    s[f"{k}_p{q}"] = float(np.percentile(vals, q))
+            if k in FRACTION_METRICS:
+                s[f"{k}_fraction"] = float(np.mean(vals == 1.0))
         out.append(s)
     return out
 

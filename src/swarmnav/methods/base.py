@@ -6,6 +6,7 @@ dynamics model and an ``info`` dict. Metrics-only data goes in ``info``:
 
 - ``labels``: (N,) int sub-swarm id of every agent (omitted: one swarm);
 - ``events``: list of ``{"action", "source", "reason"}`` structural events this step;
+- ``done``: True ends the run after this step (the recorded arrays stop there);
 - anything else is ignored by the loop.
 
 ``summary()`` returns method-specific run metrics (floats) merged into ``RunResult.metrics``.

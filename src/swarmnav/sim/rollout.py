@@ -33,7 +33,8 @@ def run(
         method: a registered method name or a Method instance.
         scenario: a Scenario, a built-in scene name, generator spec or scene-file path.
         seed: seed of the run's ``numpy.random.Generator`` (spawn positions, method noise).
-        steps: number of integration steps K (K + 1 states are recorded).
+        steps: number of integration steps K (K + 1 states are recorded); at most K if the
+            method ends the run early with ``info["done"] = True``.
         progress: True for a tqdm bar, or a callable ``f(done_steps)``.
         **params: method parameters (unknown names raise ConfigError).
 
@@ -76,6 +77,11 @@ def run(
             events.append({"step": k, **ev})
         if bar is not None and (k % 10 == 9 or k == steps - 1):
             bar(k + 1)
+        if info.get("done"):  # the method's task is complete: record this state and stop
+            P, V, C, lab = P[: k + 2].copy(), V[: k + 2].copy(), C[: k + 2].copy(), lab[: k + 2].copy()
+            if bar is not None:
+                bar(steps)
+            break
     wall = time.perf_counter() - t0
     lab[0] = lab[1]  # the structure in force at k = 0 is the one decided at the first step
     result = RunResult(
