@@ -32,6 +32,7 @@ _BUILTIN_MODULES = (
     "swarmnav.methods.sph",
     "swarmnav.methods.apf",
     "swarmnav.methods.hes",
+    "swarmnav.methods.vicsek",
 )
 
 

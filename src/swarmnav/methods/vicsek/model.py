@@ -1,0 +1,292 @@
+"""The Vicsek family of HWVEM (Aerospace 2021): VEM, VEM-A, IVEM, IVEM-A, WVEM and HWVEM.
+
+One class runs all six models; they differ only in the heading rule (``kernels.genuine_heading``).
+Every step of :meth:`VicsekFamily.act` follows Algorithm 1 of the paper:
+
+1. neighbour list of the current positions (cell list, sparse CSR);
+2. reference heading theta_d of the information UAV (fixed, or from its path);
+3. genuine desired heading theta^g (eq. 18 = eq. 9 without the avoiding neighbours) plus noise;
+4. obstacle avoidance: the agents meeting eq. (20)-(21) take the tangent heading (eq. 22);
+5. velocity: alignment v0 (cos theta, sin theta) (eq. 7) plus repulsion and attraction
+   (eq. 23-25), capped at v_max (eq. 26);
+6. layers for the next step from the current neighbours and layers (eq. 5).
+
+The kinematics x(k+1) = x(k) + v(k+1) (eq. 8) are ``swarmnav.dynamics.Kinematic`` with dt = 1.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from swarmnav.dynamics import Kinematic
+from swarmnav.errors import ConfigError
+from swarmnav.methods.base import Observation
+from swarmnav.methods.vicsek import kernels as K
+from swarmnav.methods.vicsek.geometry import Polyline, avoidance, pursue, wrap
+from swarmnav.methods.vicsek.measures import circular_mean, deg_con
+from swarmnav.params import build
+from swarmnav.sensing import signed_distance
+from swarmnav.world.scenario import Scenario
+
+#: Registered names and their heading rules.
+MODELS = {"vem": K.VEM, "vem-a": K.VEM_A, "ivem": K.IVEM, "ivem-a": K.IVEM_A, "wvem": K.WVEM, "hwvem": K.HWVEM}
+#: Models with an information UAV.
+WITH_INFO_UAV = ("vem-a", "ivem-a", "wvem", "hwvem")
+
+
+@dataclass(frozen=True, slots=True)
+class VicsekParams:
+    """Parameters of the Vicsek family. Defaults are the mission settings of HWVEM Section 3.2;
+    the alignment study of Section 3.1 sets v0 = 0.03, eta = 0, c_rep = c_att = 0."""
+
+    dt: float = 1.0  # [step] eq. (8) advances one time step with x(k+1) = x(k) + v(k+1)
+    v0: float = 0.1  # [m/step] constant speed, eq. (7); Sec. 3.2 (Sec. 3.1: 0.03)
+    r: float = 1.0  # [m] interaction radius r (= r_align), Sec. 3.1-3.2
+    eta: float = 0.1  # [rad] noise intensity, d_theta ~ U[-eta/2, eta/2], eq. (6); Sec. 3.2 (Sec. 3.1: 0)
+    c_align: float = 1.0  # [-] alignment coefficient, eq. (25), Sec. 3.2
+    c_rep: float = 0.1  # [-] repulsion coefficient, eq. (25), Sec. 3.2 (Sec. 3.1 ignores the term: 0)
+    r_rep: float = 0.7  # [m] repulsion range, eq. (24), Sec. 3.2
+    c_att: float = 0.003  # [-] attraction coefficient, eq. (25), Sec. 3.2 (Sec. 3.1: 0)
+    r_att: float = 1.0  # [m] attraction range, eq. (23), Sec. 3.2
+    v_max: float = 0.1  # [m/step] speed cap, eq. (26)
+    reference: float = math.pi / 4  # [rad] theta_d of the information UAV in a periodic world, Sec. 3.1
+    # HWVEM, eq. (14)-(17). HWVEM-I: p1 = 0.1, p2 = 5; HWVEM-II: p1 = 0, p2 = 100 (Sec. 3.2).
+    p1: float = 0.1  # [-] absolute layer weight offset, eq. (14), p1 >= 0
+    p2: float = 5.0  # [-] relative layer weight base, eq. (15), p2 >= 1
+    nei_weight: bool = True  # neighbourhood-layer-status weight eq. (17) on (False: ablation, Fig. 6)
+    # WVEM weights of the information UAV, its direct neighbours and the rest (Sec. 3.1.2).
+    k_alpha: float = 30.0  # [-]
+    k_beta: float = 18.0  # [-]
+    k_gamma: float = 1.0  # [-]
+    info_weight: float = 100.0  # [-] IVEM-A weight of the information UAV (Sec. 3.1.2)
+    # Layers before the first step (our choice, see docs/methods/vicsek.md): "bfs" = the
+    # hierarchy of the initial neighbour graph exists at k = 0; "unknown" = only the
+    # information UAV has a layer and eq. (5) spreads the others one hop per step.
+    initial_layers: Literal["bfs", "unknown"] = "bfs"
+    # Periodic worlds: neighbours across the seam of the box (minimum image). False: agents
+    # interact only by the plain distance of their wrapped positions (our choice to expose,
+    # see docs/methods/vicsek.md).
+    wrap_neighbours: bool = True
+    avoidance: bool = True  # obstacle-avoidance mechanism of Section 2.3
+    r_avoid: float = 0.5  # [m] trigger distance, eq. (20), Sec. 2.3
+    theta_obstruct: float = 11 * math.pi / 20  # [rad] trigger half-angle, eq. (21), Sec. 2.3
+    lookahead: float = 1.0  # [m] carrot distance of the information UAV's path following (our choice: = r)
+    deg_con_d: float = 0.9984  # [-] desired consistency degree, Sec. 3.1
+    deg_con_norm: Literal["l1", "l2"] = "l1"  # norm of eq. (28) (our choice, see measures.deg_con)
+    stop_at_convergence: bool = False  # end the run once Deg_con >= deg_con_d held converge_hold steps
+    converge_hold: int = 20  # [step] how long Deg_con must hold before stopping (our choice)
+    # Mission success, eq. (32) (our choice of test, see docs/methods/vicsek.md): an agent
+    # succeeds if it stays with the information UAV at every step, allowing at most
+    # follow_gap consecutive steps apart. "component": in the information UAV's connected
+    # component of the interaction graph; "distance": within follow_radius of it.
+    follow_test: Literal["component", "distance"] = "component"
+    follow_radius: float = 3.0  # [m] for follow_test = "distance"
+    follow_gap: int = 0  # [step]
+
+
+class VicsekFamily:
+    """One of the six models, chosen by ``model`` (a key of :data:`MODELS`)."""
+
+    def __init__(self, model: str, **overrides: Any):
+        if model not in MODELS:
+            raise ConfigError(f"unknown Vicsek model {model!r} (known: {', '.join(MODELS)})")
+        self.name = model
+        self.code = MODELS[model]
+        self.params = p = build(VicsekParams, overrides, context=model)
+        for key, ok in (("v0", p.v0 >= 0), ("r", p.r > 0), ("eta", p.eta >= 0), ("v_max", p.v_max > 0),
+                        ("p1", p.p1 >= 0), ("p2", p.p2 >= 1), ("r_rep", p.r_rep > 0),
+                        ("r_att", p.r_att >= p.r_rep), ("r_avoid", p.r_avoid >= 0), ("dt", p.dt > 0),
+                        ("converge_hold", p.converge_hold >= 1), ("follow_gap", p.follow_gap >= 0),
+                        ("lookahead", p.lookahead > 0)):
+            if not ok:
+                raise ConfigError(f"{model}: invalid value {key}={getattr(p, key)!r}")
+        self.dt = p.dt
+        self.dynamics = Kinematic(v_max=p.v_max)
+        self.has_info = model in WITH_INFO_UAV
+
+    # ------------------------------------------------------------------ reset
+
+    def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
+              rng: np.random.Generator) -> None:
+        p = self.params
+        x = np.asarray(positions, dtype=np.float64)
+        n = len(x)
+        self.n = n
+        self.box = float(scenario.bounds[2] - scenario.bounds[0]) if scenario.periodic else 0.0
+        self.dynamics = Kinematic(v_max=p.v_max, box=self.box if scenario.periodic else None)
+        self.obstacles = None if scenario.geometry.is_empty else scenario.geometry
+        self.geom = self.obstacles if p.avoidance else None  # geometry the avoidance rule sees
+        # Neighbour radius: the largest of the alignment, repulsion and attraction ranges in use.
+        self.radius = max(p.r, p.r_rep if p.c_rep else 0.0, p.r_att if p.c_att else 0.0)
+        self._idx = np.empty(max(64, 32 * n), dtype=np.int64)
+        self._d2 = np.empty(max(64, 32 * n), dtype=np.float64)
+
+        self.iu = info_uav_index(scenario, x) if self.has_info else -1
+        self.path = None
+        if self.has_info and not scenario.periodic:
+            pts = scenario.path if scenario.path else (tuple(x[self.iu]), scenario.goal)
+            self.path = Polyline.of(pts)
+        self.s_path = 0.0
+        self.theta = wrap(rng.uniform(0.0, 2 * np.pi, n))  # Sec. 2.2: uniform on [0, 2 pi)
+        if self.has_info:
+            self.theta[self.iu] = self._theta_d(x)
+        self.theta_g = self.theta.copy()
+        self.avoiding = np.zeros(n, dtype=np.bool_)
+
+        indptr = self._neighbours(x)
+        self.layers = np.full(n, K.NO_LAYER, dtype=np.int64)
+        if self.has_info:
+            if p.initial_layers == "bfs":
+                K.bfs_layers(indptr, self._idx, self._d2, p.r * p.r, self.iu, self.layers)
+            else:
+                self.layers[self.iu] = 1
+
+        # run bookkeeping
+        self.deg_series: list[float] = [self._deg_con()]
+        self._streak = 1 if self.deg_series[-1] >= p.deg_con_d else 0
+        self.mission = self.has_info and not scenario.periodic
+        self._apart = np.zeros(n, dtype=np.int64)  # current run of steps away from the IU
+        self._failed = np.zeros(n, dtype=np.bool_)
+        self.D_obs = np.inf
+        self.D_ind = np.inf
+        if self.mission:
+            self._track_mission(x, indptr, None)
+
+    # ------------------------------------------------------------------ step
+
+    def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
+        p = self.params
+        x = np.asarray(obs.positions, dtype=np.float64)
+        n = self.n
+        indptr = self._neighbours(x)
+        r2 = p.r * p.r
+        iu = self.iu
+        theta_d = self._theta_d(x) if self.has_info else 0.0
+        iu_nb = np.zeros(n, dtype=np.bool_)
+        if iu >= 0:
+            row = slice(indptr[iu], indptr[iu + 1])
+            iu_nb[self._idx[row][self._d2[row] <= r2]] = True
+
+        theta_g = np.empty(n)
+        K.genuine_heading(self.code, indptr, self._idx, self._d2, r2, self.theta, self.theta_g, self.layers,
+                          self.avoiding, iu, iu_nb, theta_d, p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta,
+                          p.k_gamma, p.info_weight, theta_g)
+        if p.eta > 0:
+            noise = rng.uniform(-p.eta / 2, p.eta / 2, n)
+            if iu >= 0:
+                noise[iu] = 0.0  # the information UAV flies its reference heading
+            theta_g = wrap(theta_g + noise)
+
+        theta = theta_g
+        avoiding = np.zeros(n, dtype=np.bool_)
+        dist = None
+        if self.geom is not None:
+            avoiding, theta_obs, dist = avoidance(self.geom, x, theta_g, self.theta, p.r_avoid, p.theta_obstruct)
+            theta = np.where(avoiding, theta_obs, theta_g)
+
+        v = p.c_align * p.v0 * np.column_stack([np.cos(theta), np.sin(theta)])
+        if p.c_rep or p.c_att:
+            att = np.empty((n, 2))
+            rep = np.empty((n, 2))
+            K.attraction_repulsion(indptr, self._idx, self._d2, x, self.box, p.wrap_neighbours,
+                                   p.r_rep, p.r_att, iu, att, rep)
+            v = v + p.c_rep * rep + p.c_att * att
+        speed = np.sqrt(np.einsum("ij,ij->i", v, v))
+        v *= (np.minimum(speed, p.v_max) / np.maximum(speed, 1e-300))[:, None]  # eq. (26)
+
+        if self.mission:
+            self._track_mission(x, indptr, dist)
+        if iu >= 0:
+            nxt = np.empty_like(self.layers)
+            K.next_layers(indptr, self._idx, self._d2, r2, self.layers, iu, nxt)
+            self.layers = nxt
+        self.theta, self.theta_g, self.avoiding = theta, theta_g, avoiding
+
+        self.deg_series.append(self._deg_con())
+        self._streak = self._streak + 1 if self.deg_series[-1] >= p.deg_con_d else 0
+        info: dict[str, Any] = {}
+        if p.stop_at_convergence and self._streak >= p.converge_hold:
+            info["done"] = True
+        return v, info
+
+    # ------------------------------------------------------------------ results
+
+    def summary(self) -> dict[str, float]:
+        """k_con (eq. 27; +inf if not reached within the run), converged (Deg_con against the reference >=
+        Deg_con^d at the end, 0/1), deg_con_final; in open worlds with an information UAV
+        also P_s [%] (eq. 32), D_obs and D_ind [m] (Sec. 3.2)."""
+        p = self.params
+        series = np.asarray(self.deg_series)
+        k = len(series) - self._streak if self._streak else float("inf")  # inf: not within the run
+        ref = self.theta[self.iu] if self.has_info else p.reference
+        out = {
+            "k_con": float(k),
+            "converged": float(deg_con(self.theta, ref, p.deg_con_norm) >= p.deg_con_d),
+            "deg_con_final": float(series[-1]),
+        }
+        if self.has_info:
+            out["info_uav"] = float(self.iu)
+        if self.mission:
+            out["P_s"] = 100.0 * float(np.mean(~self._failed))
+            out["D_obs"] = float(self.D_obs)
+            out["D_ind"] = float(self.D_ind)
+        return out
+
+    # ------------------------------------------------------------------ helpers
+
+    def _neighbours(self, x: np.ndarray) -> np.ndarray:
+        """CSR neighbour list of ``x`` into the reusable buffers; returns indptr."""
+        wrap_nb = self.params.wrap_neighbours
+        indptr, total = K.neighbour_csr(x, self.radius, self.box, wrap_nb, self._idx, self._d2)
+        if total > len(self._idx):
+            self._idx = np.empty(int(total * 1.25) + 64, dtype=np.int64)
+            self._d2 = np.empty(len(self._idx), dtype=np.float64)
+            indptr, total = K.neighbour_csr(x, self.radius, self.box, wrap_nb, self._idx, self._d2)
+        return indptr
+
+    def _theta_d(self, x: np.ndarray) -> float:
+        """Reference heading for the next step: fixed in a periodic world, else the path's."""
+        if self.path is None:
+            return float(wrap(self.params.reference))
+        th, self.s_path = pursue(self.path, x[self.iu], self.s_path, self.params.lookahead)
+        return th
+
+    def _deg_con(self) -> float:
+        ref = self.theta[self.iu] if self.has_info else circular_mean(self.theta)
+        return deg_con(self.theta, ref, self.params.deg_con_norm)
+
+    def _track_mission(self, x: np.ndarray, indptr: np.ndarray, dist: np.ndarray | None) -> None:
+        """Per-step bookkeeping of the success test and the safety distances."""
+        p = self.params
+        if p.follow_test == "component":
+            comp = np.empty(self.n, dtype=np.int64)
+            K.bfs_layers(indptr, self._idx, self._d2, p.r * p.r, self.iu, comp)
+            near = comp < K.NO_LAYER
+        else:
+            near = np.sum((x - x[self.iu]) ** 2, axis=1) <= p.follow_radius**2
+        self._apart = np.where(near, 0, self._apart + 1)
+        self._failed |= self._apart > p.follow_gap
+        if indptr[-1]:
+            self.D_ind = min(self.D_ind, float(np.sqrt(self._d2[: indptr[-1]].min())))
+        if self.obstacles is not None:
+            if dist is None:
+                dist = signed_distance(self.obstacles, x)
+            self.D_obs = min(self.D_obs, float(dist.min()))
+
+
+def info_uav_index(scenario: Scenario, positions: np.ndarray) -> int:
+    """The information UAV: the agent nearest to the lower-left corner of a periodic world
+    (Sec. 3.1), else nearest to the start of the scene's path (or to the spawn centre)."""
+    x = np.asarray(positions, dtype=np.float64)
+    if scenario.periodic:
+        target = np.array(scenario.bounds[:2])
+    elif scenario.path:
+        target = np.array(scenario.path[0])
+    else:
+        s = scenario.swarm.spawn
+        target = np.array([(s[0] + s[2]) / 2, (s[1] + s[3]) / 2])
+    return int(np.argmin(np.sum((x - target) ** 2, axis=1)))
