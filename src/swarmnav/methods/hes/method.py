@@ -395,8 +395,14 @@ class Hes:
             # Hold a throat until the whole sub-swarm is through (at most _HOLD_S after the first
             # member passed): the next corridor's target would pull the members still in front
             # of this gap away from it, along the wall.
-            ahead = int(np.count_nonzero((rep.pack.positions - prev.mid) @ prev.normal > 0.0))
-            if 0 < ahead < m:
+            rel = rep.pack.positions - prev.mid
+            along = rel @ prev.normal
+            across = np.abs(rel @ np.array([-prev.normal[1], prev.normal[0]]))
+            through = int(np.count_nonzero((along > 0.0) & (across < 0.5 * prev.width + 2.0)))  # passed the gap
+            before = int(np.count_nonzero(along <= 0.0))
+            seen = segment_clear(ring_a, sl[0], sl[1], self._cos, self._sin, cent[0], cent[1], prev.mid[0],
+                                 prev.mid[1], _RHO_VIS, p.lidar_range)
+            if through > 0 and before > 0 and seen:
                 if sub.hold_step is None:
                     sub.hold_step = k
                 if (k - sub.hold_step) * p.dt <= _HOLD_S:
