@@ -91,7 +91,7 @@ class HesParams:
     wp_clear: float = 2.0  # ours [m] the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if narrower)
 
     # ---------------------------------------------------------------- ablations (Simulation 2)
-    safety_stack_off: bool = False  # True: adaptive cruise, safety filter and waypoint clearance off, a_max -> a_max_relaxed
+    safety_stack_off: bool = False  # True: waypoint regulation (rate limit, leash, clearance), adaptive cruise and safety filter off; a_max -> a_max_relaxed
     occlusion_attenuation: bool = True  # False: sigma_occ = 1 (Table 4 "w/o occ. attenuation")
     acceleration_bound: bool = True  # False: a_max -> a_max_relaxed (Table 4 "w/o acc. bound")
     a_max_relaxed: float = 26.0  # ours [m/s^2] the "very loose" bound of the ablations: 10 x a_max
@@ -137,5 +137,5 @@ class HesParams:
 
     @property
     def adaptive(self) -> bool:
-        """The adaptive motion-regulation layers (adaptive cruise, safety filter, waypoint clearance) are on."""
+        """The adaptive motion-regulation layers (waypoint regulation, adaptive cruise, safety filter) are on."""
         return not self.safety_stack_off
