@@ -133,3 +133,11 @@ def test_openai_backend_against_llama_cpp_server(llama_server):
                        llm_model="gemma3-270m", llm_interval=50, llm_timeout=TIMEOUT)
     recs = _check_transcript(res, 2)
     assert recs[0]["backend"] == "openai"
+
+
+def test_llm_check_with_llamacpp(gguf, capsys):
+    from swarmnav.cli import main
+
+    assert main(["llm", "check", "--decision", "llamacpp", "--llm-gguf", gguf, "--llm-timeout", str(TIMEOUT)]) == 0
+    out = capsys.readouterr().out
+    assert "back end llamacpp" in out and "OK: decision" in out

@@ -310,9 +310,17 @@ _BUSY: list[threading.Thread] = []  # generations that outlived their timeout
 
 @atexit.register
 def _finish_generations() -> None:
-    """Let timed-out generations end before the interpreter (and llama.cpp) shuts down."""
+    """Let timed-out generations end, then free the models, while the interpreter is intact
+    (llama-cpp-python's own finaliser fails once module globals are gone)."""
     for t in _BUSY:
         t.join(30.0)
+    with _LOAD_LOCK:
+        for llm, _ in _LOADED.values():
+            try:
+                llm.close()
+            except Exception:  # noqa: BLE001 - best effort at exit
+                pass
+        _LOADED.clear()
 
 
 # ---------------------------------------------------------------------------------------------
