@@ -256,6 +256,8 @@ def genuine_heading(code, indptr, indices, dist2, r2, theta, theta_g, layers, av
     lay_val = np.empty(max_deg + 1, dtype=np.int64)
     lay_cnt = np.empty(max_deg + 1, dtype=np.int64)
     log_p2 = math.log(p2)
+    sin_t = np.sin(theta)  # once per agent, not once per neighbour entry
+    cos_t = np.cos(theta)
     for i in range(n):
         if i == iu:
             out[i] = theta_d
@@ -315,8 +317,8 @@ def genuine_heading(code, indptr, indices, dist2, r2, theta, theta_g, layers, av
             j = indices[e]
             if avoiding[j]:
                 continue
-            sj = math.sin(theta[j])
-            cj = math.cos(theta[j])
+            sj = sin_t[j]
+            cj = cos_t[j]
             n_contrib += 1
             su += sj
             cu += cj

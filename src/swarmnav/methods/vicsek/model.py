@@ -72,6 +72,10 @@ class VicsekParams:
     # see docs/methods/vicsek.md).
     wrap_neighbours: bool = True
     avoidance: bool = True  # obstacle-avoidance mechanism of Section 2.3
+    # How an avoiding agent "moves along the tangent direction" (our choice, see
+    # docs/methods/vicsek.md): "tangent" = its velocity points along theta_obs with the speed of
+    # eq. (26); "heading" = theta_obs only replaces the heading in the alignment term of eq. (25).
+    avoid_velocity: Literal["tangent", "heading"] = "tangent"
     r_avoid: float = 0.5  # [m] trigger distance, eq. (20), Sec. 2.3
     theta_obstruct: float = 11 * math.pi / 20  # [rad] trigger half-angle, eq. (21), Sec. 2.3
     lookahead: float = 1.0  # [m] carrot distance of the information UAV's path following (our choice: = r)
@@ -80,12 +84,13 @@ class VicsekParams:
     stop_at_convergence: bool = False  # end the run once Deg_con >= deg_con_d held converge_hold steps
     converge_hold: int = 20  # [step] how long Deg_con must hold before stopping (our choice)
     # Mission success, eq. (32) (our choice of test, see docs/methods/vicsek.md): an agent
-    # succeeds if it stays with the information UAV at every step, allowing at most
-    # follow_gap consecutive steps apart. "component": in the information UAV's connected
-    # component of the interaction graph; "distance": within follow_radius of it.
+    # succeeds if it is with the information UAV at the first and the last step and never
+    # apart from it for more than follow_gap consecutive steps. "component": in the
+    # information UAV's connected component of the interaction graph (radius r);
+    # "distance": within follow_radius of it.
     follow_test: Literal["component", "distance"] = "component"
-    follow_radius: float = 3.0  # [m] for follow_test = "distance"
-    follow_gap: int = 0  # [step]
+    follow_radius: float = 3.0  # [m] for follow_test = "distance" (our choice)
+    follow_gap: int = 10  # [step] (our choice: r / v0 = 10 steps, the time to fly one interaction radius)
 
 
 class VicsekFamily:
@@ -155,6 +160,7 @@ class VicsekFamily:
         self.D_ind = np.inf
         if self.mission:
             self._track_mission(x, indptr, None)
+            self._failed |= self._apart > 0  # "from the beginning": with the IU at k = 0
 
     # ------------------------------------------------------------------ step
 
@@ -197,6 +203,9 @@ class VicsekFamily:
             v = v + p.c_rep * rep + p.c_att * att
         speed = np.sqrt(np.einsum("ij,ij->i", v, v))
         v *= (np.minimum(speed, p.v_max) / np.maximum(speed, 1e-300))[:, None]  # eq. (26)
+        if p.avoid_velocity == "tangent" and avoiding.any():
+            s_av = np.minimum(speed[avoiding], p.v_max)
+            v[avoiding] = s_av[:, None] * np.column_stack([np.cos(theta[avoiding]), np.sin(theta[avoiding])])
 
         if self.mission:
             self._track_mission(x, indptr, dist)
@@ -231,7 +240,8 @@ class VicsekFamily:
         if self.has_info:
             out["info_uav"] = float(self.iu)
         if self.mission:
-            out["P_s"] = 100.0 * float(np.mean(~self._failed))
+            # "to the end": with the IU at the last step seen
+            out["P_s"] = 100.0 * float(np.mean(~(self._failed | (self._apart > 0))))
             out["D_obs"] = float(self.D_obs)
             out["D_ind"] = float(self.D_ind)
         return out

@@ -1,0 +1,315 @@
+"""The Vicsek family as a method: invariants of layers, headings and speed; the avoidance trigger
+on circles, boxes and polygons; path following; mission bookkeeping; small-N behaviour."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import swarmnav
+from swarmnav.methods.base import Observation
+from swarmnav.methods.vicsek import VicsekFamily
+from swarmnav.methods.vicsek import kernels as K
+from swarmnav.methods.vicsek.geometry import Polyline, avoidance, pursue, wrap
+from swarmnav.methods.vicsek.measures import circular_mean, deg_con, k_con
+from swarmnav.world import from_dict
+from swarmnav.world.generators import periodic_box
+
+from . import dense_reference as R
+
+ALIGN = dict(v0=0.03, eta=0.0, c_rep=0.0, c_att=0.0)  # HWVEM Section 3.1
+
+
+def stepper(model, scn, seed=0, **kw):
+    """A method reset on ``scn`` and a function advancing it one step (positions as the rollout)."""
+    rng = np.random.default_rng(seed)
+    m = VicsekFamily(model, **kw)
+    x = scn.spawn_positions(rng)
+    v = np.zeros_like(x)
+    m.reset(scn, x.copy(), v.copy(), rng)
+    state = {"x": x, "v": v, "k": 0}
+
+    def step():
+        cmd, info = m.act(Observation(state["k"], float(state["k"]), state["x"], state["v"]), rng)
+        state["x"], state["v"] = m.dynamics.step(state["x"], state["v"], cmd, m.dt)
+        state["k"] += 1
+        return cmd, info
+
+    return m, state, step
+
+
+# ----------------------------------------------------------------------------- invariants
+
+
+@pytest.mark.parametrize("initial", ["unknown", "bfs"])
+def test_layers_follow_eq5_from_the_previous_step(initial):
+    scn = periodic_box(80, 4.102)
+    m, st, step = stepper("hwvem", scn, seed=3, initial_layers=initial, **ALIGN)
+    box = scn.bounds[2]
+    A0 = R.adjacency(st["x"], 1.0, box)
+    if initial == "bfs":  # the fixed point of eq. (5) on the initial graph
+        fixed = np.full(80, np.inf)
+        fixed[m.iu] = 1
+        for _ in range(80):
+            fixed = R.next_layers(A0, fixed, m.iu)
+        np.testing.assert_array_equal(np.where(m.layers == K.NO_LAYER, np.inf, m.layers), fixed)
+    else:
+        assert m.layers[m.iu] == 1 and np.all(np.delete(m.layers, m.iu) == K.NO_LAYER)
+    for _ in range(12):
+        prev = np.where(m.layers == K.NO_LAYER, np.inf, m.layers.astype(float))
+        A = R.adjacency(st["x"], 1.0, box)  # N_i(k-1): the neighbours when the step is taken
+        step()
+        now = np.where(m.layers == K.NO_LAYER, np.inf, m.layers.astype(float))
+        assert now[m.iu] == 1  # the information UAV is layer 1
+        np.testing.assert_array_equal(now, R.next_layers(A, prev, m.iu))
+
+
+@pytest.mark.parametrize("model", ["vem", "vem-a", "ivem", "ivem-a", "wvem", "hwvem"])
+def test_headings_stay_in_range_and_speed_is_v0(model):
+    """Eq. (7): without attraction and repulsion every agent flies at exactly v0."""
+    res = swarmnav.run(model, "periodic_box:n=60,rho=4.102", seed=4, steps=25, eta=0.3,
+                       **{k: v for k, v in ALIGN.items() if k != "eta"})
+    speed = np.linalg.norm(res.velocities[1:], axis=2)
+    np.testing.assert_allclose(speed, 0.03, rtol=1e-12)
+    m, _, step = stepper(model, periodic_box(60, 4.102), eta=0.3, **{k: v for k, v in ALIGN.items() if k != "eta"})
+    for _ in range(10):
+        step()
+        assert np.all((m.theta >= -np.pi) & (m.theta < np.pi))
+
+
+def test_info_uav_flies_the_reference_and_sits_at_the_lower_left_corner():
+    scn = periodic_box(100, 4.102)
+    m, st, step = stepper("vem-a", scn, seed=2, **ALIGN)
+    d = np.linalg.norm(st["x"], axis=1)
+    assert m.iu == int(np.argmin(d))
+    for _ in range(5):
+        cmd, _ = step()
+        np.testing.assert_allclose(cmd[m.iu], 0.03 * np.array([math.cos(math.pi / 4), math.sin(math.pi / 4)]))
+
+
+def test_attraction_repulsion_and_the_speed_cap():
+    """Eq. (25)-(26): two close agents repel, the velocity is capped at v_max, the IU is deaf."""
+    scn = from_dict({"swarm": {"n": 3, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+                     "goal": {"position": [50.0, 0.0]}})
+    m = VicsekFamily("vem-a", eta=0.0, c_rep=1.0, c_att=0.0)
+    x = np.array([[0.0, 0.0], [0.0, 0.2], [0.0, -0.2]])  # agent 0 is the IU (nearest the spawn centre)
+    m.reset(scn, x, np.zeros_like(x), np.random.default_rng(0))
+    assert m.iu == 0
+    v, _ = m.act(Observation(0, 0.0, x, np.zeros_like(x)), np.random.default_rng(0))
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 0.1)  # capped at v_max = v0
+    assert v[1, 1] > 0 and v[2, 1] < 0  # pushed apart, away from the other agents
+    np.testing.assert_allclose(v[0], [0.1, 0.0], atol=1e-12)  # the IU flies its path, untouched
+
+
+# ----------------------------------------------------------------------------- avoidance
+
+def scene_with(obstacle):
+    return from_dict({"swarm": {"n": 1, "spawn": [-9, -9, -9, -9], "min_spacing": 0.0, "clearance": 0.0},
+                      "goal": {"position": [20.0, 0.0]}, "obstacles": [obstacle]})
+
+
+CIRCLE = {"type": "circle", "center": [0.0, 0.0], "radius": 1.0}
+BOX = {"type": "box", "min": [0.0, -2.0], "max": [2.0, 2.0]}
+DIAMOND = {"type": "polygon", "points": [[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]]}
+TRIANGLE = {"type": "polygon", "points": [[0.0, -1.0], [2.0, 0.0], [0.0, 1.0]]}
+
+
+@pytest.mark.parametrize("obstacle,x,normal", [
+    (CIRCLE, [-1.3, 0.0], 0.0),  # head-on at a circle
+    (BOX, [-0.3, 0.5], 0.0),  # at a box face
+    (DIAMOND, [-0.8, -0.8], math.pi / 4),  # facing the lower-left edge
+    (TRIANGLE, [-0.4, 0.3], 0.0),  # facing the vertical edge x = 0
+], ids=["circle", "box", "diamond", "triangle"])
+def test_avoidance_takes_the_tangent_at_an_acute_angle(obstacle, x, normal):
+    geom = scene_with(obstacle).geometry
+    pts = np.array([x, x])
+    tangent = (normal + math.pi / 2, normal - math.pi / 2)
+    theta_g = np.array([normal, normal])  # wants to fly straight into the obstacle
+    prev = np.array([normal + 0.3, normal - 0.3])  # before: slightly left / slightly right of it
+    avoiding, theta_obs, dist = avoidance(geom, pts, theta_g, prev, 0.5, 11 * math.pi / 20)
+    assert avoiding.all() and np.all(dist <= 0.5)
+    for k in range(2):
+        assert min(abs(wrap(theta_obs[k] - t)) for t in tangent) < 1e-9  # a tangent direction
+        assert math.cos(theta_obs[k] - prev[k]) > 0  # the acute one w.r.t. the previous heading
+    assert theta_obs[0] != pytest.approx(theta_obs[1])
+
+
+def test_avoidance_trigger_distance_and_angle():
+    geom = scene_with(CIRCLE).geometry
+    # eq. (20): farther than r_avoid -> no action
+    av, _, _ = avoidance(geom, np.array([[-1.51, 0.0]]), np.array([0.0]), np.array([0.0]), 0.5, 11 * math.pi / 20)
+    assert not av[0]
+    # eq. (21): obstacle at 99 deg -/+ 1e-6 from the genuine direction
+    x = np.array([[-1.3, 0.0]])  # obstacle direction 0 rad
+    for th, expect in ((11 * math.pi / 20 - 1e-6, True), (11 * math.pi / 20 + 1e-6, False), (math.pi, False)):
+        av, _, _ = avoidance(geom, x, np.array([th]), np.array([th]), 0.5, 11 * math.pi / 20)
+        assert av[0] == expect, th
+
+
+def test_avoidance_at_a_box_corner_uses_the_supporting_line():
+    geom = scene_with(BOX).geometry
+    x = np.array([[-0.3, -2.3]])  # nearest point: the corner (0, -2), direction (1, 1)/sqrt 2
+    av, th, _ = avoidance(geom, x, np.array([math.pi / 4]), np.array([0.5]), 0.5, 11 * math.pi / 20)
+    assert av[0] and abs(wrap(th[0] + math.pi / 4)) < 1e-9  # perpendicular to the approach
+
+
+def test_no_tangent_on_the_boundary_itself():
+    geom = scene_with(BOX).geometry
+    av, _, dist = avoidance(geom, np.array([[0.0, 0.5]]), np.array([0.0]), np.array([0.0]), 0.5, 11 * math.pi / 20)
+    assert dist[0] == 0.0 and not av[0]  # "moves in the original direction"
+
+
+def test_avoiding_agents_are_left_out_of_the_genuine_direction():
+    """Eq. (18)-(19): a neighbour that avoids an obstacle does not pull the others."""
+    pos = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]])
+    theta = np.array([0.0, 2.0, 0.4])
+    idx = np.empty(64, np.int64)
+    d2 = np.empty(64)
+    indptr, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
+    out = np.empty(3)
+    avoiding = np.array([False, True, False])
+    K.genuine_heading(K.VEM, indptr, idx, d2, 1.0, theta, theta.copy(), np.ones(3, np.int64), avoiding, -1,
+                      np.zeros(3, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, out)
+    assert out[0] == pytest.approx(0.4)  # only agent 2 counts
+
+
+def test_ivem_rule_by_hand():
+    """Eq. (30)-(31): below all neighbours -> up by half their spread; inside -> unchanged."""
+    pos = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5], [3.0, 3.0], [3.3, 3.0], [3.0, 3.3]])
+    theta = np.array([-1.0, 0.0, 0.5, 0.2, 0.0, 0.5])
+    idx = np.empty(64, np.int64)
+    d2 = np.empty(64)
+    indptr, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
+    out = np.empty(6)
+    K.genuine_heading(K.IVEM, indptr, idx, d2, 1.0, theta, theta.copy(), np.ones(6, np.int64),
+                      np.zeros(6, np.bool_), -1, np.zeros(6, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, out)
+    assert out[0] == pytest.approx(-0.75) and out[3] == pytest.approx(0.2)
+    assert out[2] == pytest.approx(0.5 - 0.5)  # above both neighbours (-1, 0): down by (0 + 1) / 2
+
+
+# ----------------------------------------------------------------------------- measures
+
+
+def test_deg_con_and_k_con():
+    th = np.full(10, 0.5)
+    assert deg_con(th, 0.5) == 1.0
+    th[0] = 0.5 + 0.1 * np.pi
+    assert deg_con(th, 0.5) == pytest.approx(1 - 0.01)
+    assert deg_con(np.array([np.pi - 0.01, -np.pi + 0.01]), np.pi) == pytest.approx(1 - 0.01 / np.pi)  # wrapped
+    assert circular_mean(np.array([np.pi - 0.1, -np.pi + 0.1])) == pytest.approx(np.pi)
+    assert k_con([0.1, 0.99, 0.5, 0.99, 0.995], 0.99) == 3.0  # eq. (27): for every later k
+    assert k_con([0.1, 0.5], 0.99) == math.inf
+
+
+# ----------------------------------------------------------------------------- behaviour
+
+
+def test_vem_a_aligns_to_the_reference_and_vem_does_not_lock_to_it():
+    kw = dict(ALIGN, stop_at_convergence=True)
+    for seed in (1, 2, 3):
+        a = swarmnav.run("vem-a", "periodic_box:n=30,rho=4.102", seed=seed, steps=6000, **kw)
+        v = swarmnav.run("vem", "periodic_box:n=30,rho=4.102", seed=seed, steps=6000, **kw)
+        assert a.metrics["converged"] == 1.0 and np.isfinite(a.metrics["k_con"])
+        assert np.isfinite(v.metrics["k_con"])  # VEM reaches a consensus ...
+        assert v.metrics["converged"] == 0.0  # ... but not the reference pi/4
+        heading = np.arctan2(v.velocities[-1, :, 1], v.velocities[-1, :, 0])
+        assert abs(wrap(circular_mean(heading) - math.pi / 4)) > 0.01
+
+
+def test_hwvem_aligns_much_faster_than_vem_a_and_stops_early():
+    kw = dict(ALIGN, stop_at_convergence=True, wrap_neighbours=False)
+    for seed in (1, 2):
+        h = swarmnav.run("hwvem", "periodic_box:n=100,rho=4.102", seed=seed, steps=6000, **kw)
+        a = swarmnav.run("vem-a", "periodic_box:n=100,rho=4.102", seed=seed, steps=6000, **kw)
+        assert h.metrics["k_con"] * 5 < a.metrics["k_con"]
+        # stopped once Deg_con >= Deg_con^d held for converge_hold = 20 states: k_con .. k_con + 19
+        assert h.positions.shape[0] == h.metrics["k_con"] + 20
+
+
+@pytest.mark.parametrize("model", ["vem", "ivem"])
+def test_alignment_only_models_are_deterministic(model):
+    a = swarmnav.run(model, "periodic_box:n=50,rho=4.102", seed=5, steps=30)
+    b = swarmnav.run(model, "periodic_box:n=50,rho=4.102", seed=5, steps=30)
+    c = swarmnav.run(model, "periodic_box:n=50,rho=4.102", seed=6, steps=30)
+    np.testing.assert_array_equal(a.positions, b.positions)
+    assert a.metrics == b.metrics
+    assert not np.array_equal(a.positions, c.positions)
+
+
+def test_bad_parameters_are_errors():
+    with pytest.raises(swarmnav.ConfigError, match="unknown parameter 'p3'"):
+        swarmnav.methods.registry.make("hwvem", p3=1.0)
+    with pytest.raises(swarmnav.ConfigError, match="p2"):
+        swarmnav.methods.registry.make("hwvem", p2=0.5)
+
+
+# ----------------------------------------------------------------------------- path and mission
+
+
+def test_polyline_projection_and_pursuit():
+    path = Polyline.of([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]])
+    assert path.length == 20.0
+    np.testing.assert_allclose(path.at([5.0, 15.0, 25.0]), [[5, 0], [10, 5], [10, 15]])  # extended past the end
+    th, s = pursue(path, np.array([9.5, 0.2]), 9.0, 1.0)
+    assert s == pytest.approx(9.5) and 0 < th < math.pi / 2  # cutting the corner toward (10, 0.5)
+    # the window keeps the progress from jumping to the second leg when the point is near it
+    assert pursue(path, np.array([9.0, 8.0]), 2.0, 1.0)[1] <= 4.0
+
+
+def test_information_uav_follows_the_path():
+    scn = from_dict({"swarm": {"n": 1, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+                     "goal": {"position": [6.0, 6.0], "path": [[0.0, 0.0], [6.0, 0.0], [6.0, 6.0]]}})
+    res = swarmnav.run("hwvem", scn, seed=0, steps=130)
+    p = res.positions[:, 0]
+    path = Polyline.of(scn.path)
+    dist = [np.min(np.linalg.norm(path.at(np.linspace(0, 12, 1201)) - q, axis=1)) for q in p[:115]]
+    assert max(dist) < 0.5  # within half the look-ahead of the polyline
+    assert np.linalg.norm(p[115] - [6.0, 6.0]) < 0.6  # reached the end ...
+    assert p[-1, 1] > 6.5  # ... and kept flying along the last leg
+
+
+def test_mission_success_counts_agents_that_never_join():
+    scn = from_dict({"swarm": {"n": 6, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+                     "goal": {"position": [30.0, 0.0], "path": [[0.0, 0.0], [30.0, 0.0]]},
+                     "obstacles": [{"type": "circle", "center": [15.0, 8.0], "radius": 1.0}]})
+    m = VicsekFamily("hwvem", eta=0.0)
+    x = np.array([[0.0, 0.0], [-0.5, 0.0], [-0.5, 0.4], [-0.5, -0.4], [-1.0, 0.0], [0.0, 5.0]])
+    rng = np.random.default_rng(0)
+    m.reset(scn, x, np.zeros_like(x), rng)
+    v = np.zeros_like(x)
+    for k in range(50):
+        cmd, _ = m.act(Observation(k, float(k), x, v), rng)
+        x, v = m.dynamics.step(x, v, cmd, 1.0)
+    s = m.summary()
+    assert s["P_s"] == pytest.approx(100 * 5 / 6)  # agent 5 starts 5 m away: never with the IU
+    assert s["D_ind"] == pytest.approx(0.4, abs=0.1) and s["D_obs"] > 1.0
+
+
+def test_mission_scene_has_the_paper_ingredients():
+    from swarmnav.sensing import signed_distance
+    from swarmnav.world.scenario import load_scenario
+
+    for n, side in ((5, 1.2375), (20, 2.4749), (50, 3.9132)):  # HWVEM Sec. 3.2 initial squares
+        s = load_scenario("hwvem_mission", n=n)
+        x0, y0, x1, y1 = s.swarm.region
+        assert x1 - x0 == pytest.approx(side, abs=1e-3) and y1 - y0 == pytest.approx(side, abs=1e-3)
+    kinds = [type(o).__name__ for o in s.obstacles]
+    assert {"Circle", "Polygon"} <= set(kinds) and ("Box" in kinds)
+    sizes = sorted(len(o.points) for o in s.obstacles if type(o).__name__ == "Polygon")
+    assert 3 in sizes and 4 in sizes  # triangles and diamonds
+    path = Polyline.of(s.path)
+    assert signed_distance(s.geometry, path.at(np.linspace(0, path.length, 4000))).min() >= 1.2 - 1e-9
+
+
+def test_experiment_specs_resize_the_periodic_box():
+    from swarmnav.experiments import load_experiment
+    from swarmnav.world.scenario import load_scenario
+
+    e = load_experiment("hwvem-alignment", overrides={"n": "100|500"})
+    assert [v.name for v in e.variants][:2] == ["VEM[n=100]", "VEM[n=500]"]
+    s = load_scenario(e.variants[1].scenario, n=e.variants[1].n)
+    assert s.n == 500 and s.bounds[2] == pytest.approx(math.sqrt(500 / 4.102))
+    for name in ("hwvem-mission", "hwvem-weights", "hwvem-ablation"):
+        assert load_experiment(name).variants
