@@ -1,0 +1,126 @@
+"""Reproduce HWVEM Tables 1 and 2 (and the data of Figures 5 and 6) and print them beside the paper's.
+
+Runs the shipped experiments ``hwvem-alignment`` (Table 1), ``hwvem-mission`` (Table 2) and
+optionally ``hwvem-weights`` / ``hwvem-ablation`` (Figures 5 and 6) into resumable result stores
+under ``--out`` (a rerun only runs what is missing), then prints markdown tables with the
+published values from the packaged ``paper_results.toml`` and the wall time of each sweep.
+
+    PYTHONPATH=src python benchmarks/hwvem_tables.py --out out/hwvem --workers 2
+    PYTHONPATH=src python benchmarks/hwvem_tables.py --out out/hwvem --only table1 --seeds 1-20
+    PYTHONPATH=src python benchmarks/hwvem_tables.py --out out/hwvem --print-only
+
+Equivalent CLI runs: ``swarmnav experiment hwvem-alignment --set n=100|200|500 --out DIR``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+import time
+from pathlib import Path
+
+from swarmnav.experiments import load_experiment, run_experiment
+from swarmnav.experiments.report import paper_results
+
+TABLES = {
+    "table1": ("hwvem-alignment", "100|200|500"),
+    "table2": ("hwvem-mission", "5|20|50"),
+    "fig5": ("hwvem-weights", "100|200|500"),
+    "fig6": ("hwvem-ablation", "100|200|500"),
+}
+
+
+def run(name: str, sizes: str, out: Path, workers: int, seeds: str | None, extra: dict[str, str]) -> float:
+    exp = load_experiment(name, overrides={"n": sizes, **extra}, seeds=seeds)
+    t0 = time.perf_counter()
+    run_experiment(exp, out, workers=workers, save_trajectories=False, progress=sys.stderr.isatty())
+    return time.perf_counter() - t0
+
+
+def summary(out: Path) -> dict[str, dict[str, str]]:
+    with open(out / "summary.csv", newline="") as f:
+        return {r["variant"]: r for r in csv.DictReader(f)}
+
+
+def num(x: str | float, fmt: str = ".2f") -> str:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return "–"
+    return format(v, fmt) if math.isfinite(v) else str(v)
+
+
+def table1(out: Path, sizes=(100, 200, 500)) -> str:
+    ref = paper_results()["hwvem"]["table1"]
+    s = summary(out)
+    lines = ["| N | model | k_con mean | p25 | p50 | p75 | converged | paper mean | p25 | p50 | p75 | paper converges | runs |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for n in sizes:
+        for model in ("VEM", "VEM-A", "IVEM", "IVEM-A", "WVEM", "HWVEM"):
+            r = s.get(f"{model}[n={n}]")
+            p = ref[f"N{n}"][model]
+            if r is None:
+                continue
+            lines.append(f"| {n} | {model} | {num(r['k_con_mean'])} | {num(r['k_con_p25'], '.1f')} | "
+                         f"{num(r['k_con_p50'], '.1f')} | {num(r['k_con_p75'], '.1f')} | "
+                         f"{num(r['converged_fraction'])} | {p['k_con'][0]:.2f} | {p['k_con'][1]:.1f} | "
+                         f"{p['k_con'][2]:.1f} | {p['k_con'][3]:.1f} | {'yes' if p['converges'] else 'no'} | "
+                         f"{r['done']}/{r['runs']} |")
+    return "\n".join(lines)
+
+
+def table2(out: Path, sizes=(5, 20, 50)) -> str:
+    ref = paper_results()["hwvem"]["table2"]
+    s = summary(out)
+    lines = ["| N | model | P_s mean | p25 | p50 | p75 | D_obs | D_ind | paper P_s | p25 | p50 | p75 | paper D_obs | paper D_ind | runs |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for n in sizes:
+        for model in ("VEM-A", "IVEM-A", "WVEM", "HWVEM-I", "HWVEM-II"):
+            r = s.get(f"{model}[n={n}]")
+            p = ref[f"N{n}"][model]
+            if r is None:
+                continue
+            lines.append(f"| {n} | {model} | {num(r['P_s_mean'])} | {num(r['P_s_p25'], '.1f')} | "
+                         f"{num(r['P_s_p50'], '.1f')} | {num(r['P_s_p75'], '.1f')} | {num(r['D_obs_mean'], '.4f')} | "
+                         f"{num(r['D_ind_mean'], '.4f')} | {p['P_s'][0]:.2f} | {p['P_s'][1]:.1f} | {p['P_s'][2]:.1f} | "
+                         f"{p['P_s'][3]:.1f} | {p['D_obs']:.4f} | {p['D_ind']:.4f} | {r['done']}/{r['runs']} |")
+    return "\n".join(lines)
+
+
+def figure_table(out: Path) -> str:
+    s = summary(out)
+    lines = ["| variant | k_con mean | p25 | p50 | p75 | converged | runs |", "|---|---|---|---|---|---|---|"]
+    for name, r in s.items():
+        lines.append(f"| {name} | {num(r['k_con_mean'])} | {num(r['k_con_p25'], '.1f')} | {num(r['k_con_p50'], '.1f')} | "
+                     f"{num(r['k_con_p75'], '.1f')} | {num(r['converged_fraction'])} | {r['done']}/{r['runs']} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("out/hwvem"))
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--seeds", default=None, help="default: the specs' (1-100)")
+    ap.add_argument("--only", action="append", choices=sorted(TABLES), help="default: table1 and table2")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="extra override for every run")
+    ap.add_argument("--print-only", action="store_true", help="do not run, print what the stores hold")
+    args = ap.parse_args(argv)
+    extra = dict(kv.split("=", 1) for kv in args.set)
+    for key in args.only or ["table1", "table2"]:
+        name, sizes = TABLES[key]
+        out = args.out / key
+        if not args.print_only:
+            wall = run(name, sizes, out, args.workers, args.seeds, extra)
+            print(f"\n{key} ({name}, n = {sizes}): {wall / 60:.1f} min wall on {args.workers} worker(s)")
+        if not (out / "summary.csv").exists():
+            print(f"{key}: no results in {out}")
+            continue
+        print(f"\n### {key}: `{name}`\n")
+        print(table1(out) if key == "table1" else table2(out) if key == "table2" else figure_table(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
