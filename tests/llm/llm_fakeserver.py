@@ -105,7 +105,9 @@ class FakeLlmServer:
 
     def _check_common(self, body: dict) -> str:
         msgs = body.get("messages")
-        if not (isinstance(msgs, list) and msgs and all(isinstance(m, dict) and {"role", "content"} <= set(m) for m in msgs)):
+        ok = isinstance(msgs, list) and msgs and all(isinstance(m, dict) and {"role", "content"} <= set(m)
+                                                     for m in msgs)
+        if not ok:
             self._violate(f"messages malformed: {msgs!r}")
             return ""
         return "\n".join(str(m["content"]) for m in msgs)
@@ -160,7 +162,8 @@ class FakeLlmServer:
                 if self.path == "/api/tags":
                     return self._send(200, {"models": [{"name": m, "model": m} for m in server.models]})
                 if self.path == "/v1/models":
-                    return self._send(200, {"object": "list", "data": [{"id": m, "object": "model"} for m in server.models]})
+                    data = [{"id": m, "object": "model"} for m in server.models]
+                    return self._send(200, {"object": "list", "data": data})
                 return self._send(404, raw=b"404 page not found", ctype="text/plain")
 
             def do_POST(self):
@@ -229,7 +232,8 @@ class FakeLlmServer:
                 return self._send(200, {
                     "id": f"chatcmpl-{len(server.requests)}", "object": "chat.completion", "created": int(time.time()),
                     "model": model,
-                    "choices": [{"index": 0, "message": {"role": "assistant", "content": text}, "finish_reason": "stop"}],
+                    "choices": [{"index": 0, "message": {"role": "assistant", "content": text},
+                                 "finish_reason": "stop"}],
                     "usage": {"prompt_tokens": len(prompt) // 4, "completion_tokens": len(text) // 4,
                               "total_tokens": (len(prompt) + len(text)) // 4},
                 })

@@ -194,7 +194,8 @@ class OpenAIBackend:
         self.url = _endpoint(url, OPENAI_URL, "/chat/completions")
         self.model, self.timeout = model, timeout
         if response_format not in ("json_object", "json_schema", "none"):
-            raise ConfigError(f"llm_response_format: expected json_object, json_schema or none, got {response_format!r}")
+            raise ConfigError("llm_response_format: expected json_object, json_schema or none, "
+                              f"got {response_format!r}")
         self.response_format = response_format
 
     def request(self, prompt: str) -> dict:

@@ -80,7 +80,8 @@ def validate(p: Any) -> None:
         raise ConfigError(f"llm_interval: must be >= 1 step, got {p.llm_interval!r}")
     LatencyMode.parse(p.llm_latency)
     if getattr(p, "llm_response_format", "json_object") not in ("json_object", "json_schema", "none"):
-        raise ConfigError(f"llm_response_format: expected json_object, json_schema or none, got {p.llm_response_format!r}")
+        raise ConfigError("llm_response_format: expected json_object, json_schema or none, "
+                          f"got {p.llm_response_format!r}")
     # what a back end needs, checked here so that a sweep fails before its first run
     if p.decision == "llamacpp":
         if not p.llm_gguf:
