@@ -25,7 +25,7 @@ def main(n_variants: int = 10, n_seeds: int = 1000) -> None:
     rng = np.random.default_rng(0)
     with tempfile.TemporaryDirectory() as d:
         store = Store(d)
-        keys, variants, rows = [], [], []
+        keys, jobs, variants, rows = [], [], [], []
         t0 = time.perf_counter()
         for v in range(n_variants):
             name = f"variant{v}"
@@ -34,6 +34,7 @@ def main(n_variants: int = 10, n_seeds: int = 1000) -> None:
                 cfg = {"variant": name, "seed": s}
                 k = config_key(cfg)
                 keys.append(k)
+                jobs.append([k, name, s])
                 rows.append({"key": k, "experiment": "big", "variant": name, "scenario": "default_corridor",
                              "method": "hes", "seed": s, "n": 20, "steps": 1000, "params": {}, "config": cfg,
                              "status": "done", "error": "", "version": "bench", "trajectory": "",
@@ -41,7 +42,7 @@ def main(n_variants: int = 10, n_seeds: int = 1000) -> None:
         store.put_many(rows)
         store.set_meta("experiment:big", {"name": "big", "description": "synthetic 10,000-run store",
                                           "seeds": list(range(1, n_seeds + 1)), "variants": variants,
-                                          "keys": keys, "report": {"reference": "hes.table2"}})
+                                          "keys": keys, "jobs": jobs, "report": {"reference": "hes.table2"}})
         store.set_meta("last_experiment", "big")
         t_build = time.perf_counter() - t0
         size = (Path(d) / "results.sqlite").stat().st_size

@@ -100,7 +100,7 @@ def test_every_shipped_spec_loads_and_plans():
     for name in names:
         exp = load_experiment(name, seeds="1")
         jobs = plan(exp)
-        assert jobs and len({j.key for j in jobs}) == len(jobs), name
+        assert jobs and len({(j.variant.name, j.seed) for j in jobs}) == len(jobs), name
 
 
 def test_horizon_gives_equal_simulated_time_across_methods():
@@ -110,3 +110,15 @@ def test_horizon_gives_equal_simulated_time_across_methods():
     for v in exp.variants:
         dt = registry.make(v.method, **v.params).dt
         assert v.steps * dt == pytest.approx(100.0, rel=1e-9), v.name
+
+
+def test_identical_configuration_in_two_variants_runs_once_reports_twice(tmp_path):
+    spec = tmp_path / "dup.toml"
+    spec.write_text('name = "dup"\nmethod = "apf"\nscenario = "default_corridor"\nsteps = 20\nseeds = "1-2"\n'
+                    '[[variants]]\nname = "a"\nparams = { k_att = 2.0 }\n[[variants]]\nname = "b"\n')
+    seen = []
+    runs, summary = run_experiment(load_experiment(str(spec)), tmp_path / "o", progress=False, on_row=seen.append)
+    assert len(seen) == 2  # k_att = 2.0 is the default: both variants are the same two runs
+    assert [(r["variant"], r["seed"]) for r in runs] == [("a", 1), ("a", 2), ("b", 1), ("b", 2)]
+    assert [s["done"] for s in summary] == [2, 2]
+    assert runs[0]["E_mean"] == runs[2]["E_mean"]

@@ -90,7 +90,9 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
     meta = store.meta(f"experiment:{experiment}")
     if meta is None:
         raise SwarmnavError(f"{store.root}: no experiment '{experiment}' in the store")
-    rows = store.rows(keys=meta["keys"])
+    from swarmnav.experiments.runner import job_rows
+
+    rows = job_rows(store, meta)
     spec = meta.get("report") or {}
     metric_names = list(spec.get("metrics") or [])
     if not metric_names:

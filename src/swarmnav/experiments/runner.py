@@ -170,7 +170,8 @@ def run_experiment(
     store.set_meta(f"experiment:{exp.name}", _spec_meta(exp, jobs))
     store.set_meta("last_experiment", exp.name)
     done = store.done_keys()
-    todo = [j for j in jobs if j.key not in done]
+    # Two variants may declare the identical configuration: it is run once and reported under both.
+    todo = list({j.key: j for j in jobs if j.key not in done}.values())
     bar = _Progress(len(jobs), len(jobs) - len(todo), progress)
 
     def finished(row: dict) -> None:
@@ -194,8 +195,7 @@ def export(store: Store, experiment: str) -> tuple[list[dict], list[dict]]:
     meta = store.meta(f"experiment:{experiment}")
     if meta is None:
         raise SwarmnavError(f"{store.root}: no experiment '{experiment}' in the store")
-    stored = store.rows(keys=meta["keys"])
-    runs = [_csv_row(r) for r in stored]
+    runs = [_csv_row(r) for r in job_rows(store, meta)]
     variants = meta["variants"]
     summary = summarize(runs, variants)
     write_csv(store.root / "runs.csv", runs)
@@ -207,8 +207,19 @@ def _spec_meta(exp: Experiment, jobs: list[Job]) -> dict:
     return {
         "name": exp.name, "description": exp.description, "seeds": list(exp.seeds),
         "variants": [{"name": v.name, "columns": v.columns()} for v in exp.variants],
-        "keys": [j.key for j in jobs], "report": exp.report,
+        "keys": [j.key for j in jobs], "jobs": [[j.key, j.variant.name, j.seed] for j in jobs], "report": exp.report,
     }
+
+
+def job_rows(store: Store, meta: dict) -> list[dict]:
+    """The stored rows of an experiment's jobs, in job order, one per (variant, seed): a run
+    shared by two variants appears under each variant's name."""
+    by_key = {r["key"]: r for r in store.rows(keys=meta["keys"])}
+    out = []
+    for key, variant, seed in meta["jobs"]:
+        if key in by_key:
+            out.append({**by_key[key], "variant": variant, "seed": seed})
+    return out
 
 
 def _csv_row(r: dict) -> dict[str, Any]:
