@@ -11,6 +11,7 @@ from swarmnav.methods.hes.params import HesParams
 
 P = HesParams()
 G = F.gain_vector(P)
+DS = np.full(4, P.d_safe)  # the paper's d_safe for every agent of the 4-agent cases
 R = 360
 TH = 2 * np.pi * np.arange(R) / R
 COS, SIN = np.cos(TH), np.sin(TH)
@@ -130,7 +131,7 @@ def test_force_terms_match_the_terms_and_sum():
     x, v, group, slp, slv, follower, cent, wp, slot, vslot, nn, ring = _case()
     nav = np.ones(4, dtype=bool)
     sig = np.ones((4, 4))
-    t = F.force_terms(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G)
+    t = F.force_terms(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G, DS)
     np.testing.assert_allclose(t[0], F.attraction(x, v, slot, vslot, P.k_p, P.k_v))
     np.testing.assert_allclose(t[1], F.separation(x, group, P.k_sep, P.r_sep, P.d_floor, False))
     np.testing.assert_allclose(t[2], F.centering(x, wp, P.k_path))
@@ -141,7 +142,7 @@ def test_force_terms_match_the_terms_and_sum():
     np.testing.assert_allclose(t[7], F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e,
                                                        P.d_safe, P.d_floor))
     assert np.all(t[5][~follower] == 0)  # subleaders have no coupling term
-    a = F.synthesize(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G)
+    a = F.synthesize(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G, DS)
     np.testing.assert_allclose(a, t.sum(axis=0))
 
 
@@ -150,10 +151,10 @@ def test_occlusion_scales_exactly_its_attraction_term(column, term):
     x, v, group, slp, slv, follower, cent, wp, slot, vslot, nn, ring = _case()
     nav = np.ones(4, dtype=bool)
     args = (x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn)
-    free = F.force_terms(*args, np.ones((4, 4)), ring, COS, SIN, G)
+    free = F.force_terms(*args, np.ones((4, 4)), ring, COS, SIN, G, DS)
     sig = np.ones((4, 4))
     sig[1, column] = P.sigma_occ  # agent 1's segment to this target is blocked
-    occ = F.force_terms(*args, sig, ring, COS, SIN, G)
+    occ = F.force_terms(*args, sig, ring, COS, SIN, G, DS)
     expect = free.copy()
     expect[term, 1] *= P.sigma_occ
     np.testing.assert_array_equal(occ, expect)
@@ -163,8 +164,8 @@ def test_all_four_attraction_terms_and_only_them_are_attenuated():
     x, v, group, slp, slv, follower, cent, wp, slot, vslot, nn, ring = _case()
     nav = np.ones(4, dtype=bool)
     args = (x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn)
-    free = F.force_terms(*args, np.ones((4, 4)), ring, COS, SIN, G)
-    occ = F.force_terms(*args, np.full((4, 4), 0.2), ring, COS, SIN, G)
+    free = F.force_terms(*args, np.ones((4, 4)), ring, COS, SIN, G, DS)
+    occ = F.force_terms(*args, np.full((4, 4), 0.2), ring, COS, SIN, G, DS)
     for t in range(8):
         scale = 0.2 if F.TERMS[t] in ("att", "intra", "fol", "coh") else 1.0
         np.testing.assert_allclose(occ[t], scale * free[t], err_msg=F.TERMS[t])
@@ -175,7 +176,7 @@ def test_encircle_switches_off_path_and_intra_repulsion():
     x[1] = x[0] + [0.5, 0.0]  # make the intra repulsion non-zero
     nav = np.array([False, False, True, True])
     t = F.force_terms(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, np.ones((4, 4)), ring,
-                      COS, SIN, G)
+                      COS, SIN, G, DS)
     assert np.all(t[2][:2] == 0) and np.all(t[4][:2] == 0)
     assert np.any(t[2][2:] != 0)
     assert np.all(t[[0, 1, 3, 5, 6, 7]][:, :2].any(axis=2).sum(axis=0) >= 1)  # other terms still act

@@ -219,12 +219,15 @@ def repulsion_magnitude(d, k_rep, r_t, k_b, gamma, k_e, d_safe):
 
 
 @njit(cache=True)
-def lidar_repulsion(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_floor):
+def lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_floor):
     """Eq. (37): ``f_obs,i = sum_{r in L_i} omega_{i,r} e_away,r``, ``e_away = -(cos, sin) theta_r``,
     over the active local-minimum set L_i of eq. (35) (local minima of the ring closer than R_t).
 
     Args:
         ring: (N, R) fused LiDAR ranges [m] (eq. 9).
+        d_safe: (N,) safety distance of eq. (36) per agent [m]: d_safe everywhere, except for the
+            members of a sub-swarm in passage mode inside their throat's tube (ours, see
+            ``passage.passage_dsafe``).
     """
     n, nr = ring.shape
     out = np.zeros((n, 2))
@@ -234,17 +237,24 @@ def lidar_repulsion(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_f
             d = row[r]
             if d >= r_t or not is_local_min(row, r):
                 continue
-            w = repulsion_magnitude(max(d, d_floor), k_rep, r_t, k_b, gamma, k_e, d_safe)
+            w = repulsion_magnitude(max(d, d_floor), k_rep, r_t, k_b, gamma, k_e, d_safe[i])
             out[i, 0] -= w * cos_t[r]
             out[i, 1] -= w * sin_t[r]
     return out
+
+
+@njit(cache=True)
+def lidar_repulsion(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_floor):
+    """Eq. (37) with one scalar d_safe [m] for every agent (the paper's law)."""
+    return lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e,
+                                np.full(ring.shape[0], d_safe), d_floor)
 
 
 # --------------------------------------------------------------------------- synthesis, eq. (38)
 
 @njit(cache=True)
 def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
-                ring, cos_t, sin_t, g):
+                ring, cos_t, sin_t, g, dsafe):
     """All eight terms of eq. (38), an (8, N, 2) stack in the order of ``TERMS``.
 
     Args:
@@ -258,6 +268,7 @@ def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot
         nn: (N,) nearest same-sub-swarm neighbour (-1: none).
         sig: (N, 4) occlusion factors of eq. (30) for slot, nn, subleader, centroid.
         ring: (N, R) LiDAR ranges; cos_t, sin_t: (R,) ray directions; g: gain vector.
+        dsafe: (N,) safety distance of eq. (36) per agent [m] (``g[G_DSAFE]`` outside passage mode).
     """
     n = x.shape[0]
     out = np.zeros((8, n, 2))
@@ -275,8 +286,8 @@ def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot
     out[5] = spring(x, sl_pos, g[G_KL], g[G_D0], follower) + velocity_match(v, sl_vel, g[G_KVL], follower)
     all_true = np.ones(n, dtype=np.bool_)
     out[6] = spring(x, cent, g[G_KCOH], g[G_DC], all_true)
-    out[7] = lidar_repulsion(ring, cos_t, sin_t, g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE],
-                             g[G_DSAFE], g[G_DFLOOR])
+    out[7] = lidar_repulsion_each(ring, cos_t, sin_t, g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE],
+                                  dsafe, g[G_DFLOOR])
     for i in range(n):
         for c in range(2):
             out[0, i, c] *= sig[i, SIG_SLOT]
@@ -291,10 +302,10 @@ def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot
 
 @njit(cache=True)
 def synthesize(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
-               ring, cos_t, sin_t, g):
+               ring, cos_t, sin_t, g, dsafe):
     """Eq. (38): ``a_cmd = sum of the eight terms`` (before saturation), (N, 2)."""
     t = force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
-                    ring, cos_t, sin_t, g)
+                    ring, cos_t, sin_t, g, dsafe)
     return t.sum(axis=0)
 
 

@@ -58,6 +58,7 @@ from swarmnav.methods.hes.hierarchy import (
     split_members,
 )
 from swarmnav.methods.hes.params import HesParams
+from swarmnav.methods.hes.passage import passage_dsafe
 from swarmnav.params import build
 from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, segments_blocked_kernel
 from swarmnav.sensing.lidar import _ray_table
@@ -69,7 +70,17 @@ _SLOT_REFRESH = 10  # steps between re-solving the slot assignment (ours: 1 s)
 _RHO_VIS = 0.4  # [m] half-width of the straight line from the centroid to a throat that must be free (ours)
 _COMMIT_S = 20.0  # [s] a split's corridor assignment lapses after this long if the throat is not passed (ours)
 _HOLD_S = 15.0  # [s] longest a sub-swarm waits at a throat for its last members (ours)
+_PASSAGES = 3  # passage mode: throats remembered per sub-swarm (ours; the current one and the two before)
 _STRAY = 4.0  # [m] a subleader farther than this from its sub-swarm's centroid hands over its role (ours)
+
+
+@dataclass(slots=True)
+class Passage:
+    """Passage mode (ours): a narrow throat a sub-swarm was routed through."""
+
+    throat: Corridor  # the last detection of the throat while it was the route
+    step: int  # last step it was the route
+    crossed: np.ndarray  # (N,) bool: the agent has been beyond the throat (along its normal)
 
 
 @dataclass(slots=True)
@@ -90,6 +101,7 @@ class SubSwarm:
     slot_index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # ... and their r_i
     slot_step: int = _NEVER  # step of the last slot assignment
     ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
+    passages: list = field(default_factory=list)  # passage mode: list[Passage], oldest first
 
 
 class Hes:
@@ -135,6 +147,8 @@ class Hes:
         self.stats = {"splits": 0, "merges": 0, "reassigned": 0, "projected_to_keep": 0}
         self.last_z: DecisionState | None = None
         self.last_reports: dict[int, Report] = {}
+        self._qidx = np.full(n, -1, dtype=np.int64)  # passage mode: queued members (see _queue)
+        self._qtgt = np.zeros((n, 2))
 
     def summary(self) -> dict[str, float]:
         out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}
@@ -175,9 +189,11 @@ class Hes:
         self.last_z, self.last_reports = z, reports
 
         # 4. modes, waypoints, reassignment, references
+        self._qidx, _ = self._queue(x)
         for s, sub in self.subs.items():
             self._navigate(sub, reports[s], x, k)
         self._reassign(x, k)
+        self._qidx, self._qtgt = self._queue(x)
         slot, speed = self._references(x, k)
 
         # 5. control
@@ -320,6 +336,9 @@ class Hes:
         """Task mode (eq. 12), corridor choice and waypoint c_s(k) of one sub-swarm."""
         p = self.params
         cent = rep.pack.centroid
+        head = rep.pack.members[self._qidx[rep.pack.members] < 0]
+        if 0 < len(head) < len(rep.pack.members):  # passage mode: the waypoint leads the members past the queue
+            cent = x[head].mean(axis=0)
         sl = x[sub.subleader]
         delta = target_proximity(float(np.hypot(*(cent - self.goal))), float(np.hypot(*(sl - self.goal))))
         mode = task_mode(sub.mode, delta, p.r_in, p.r_out)
@@ -332,6 +351,8 @@ class Hes:
             return
         route = self._choose_route(sub, rep, x, k)
         sub.route = route
+        if p.passage_mode:
+            self._remember_passage(sub, route, x, k)
         if route is None:
             target = self.goal
         elif route.direct:
@@ -485,9 +506,14 @@ class Hes:
         p = self.params
         slot = np.empty_like(x)
         speed = np.empty(self.n)
+        queued = self._qidx >= 0
+        slot[queued] = self._qtgt[queued]  # passage mode: queued members head for their throat
+        speed[queued] = p.v_s
         for s, sub in self.subs.items():
-            members = np.flatnonzero(self.labels == s)
+            members = np.flatnonzero((self.labels == s) & ~queued)
             m = len(members)
+            if m == 0:
+                continue
             if sub.mode == ENCIRCLE:
                 if sub.ring_offsets is None or len(sub.ring_offsets) != m or k - sub.slot_step >= _SLOT_REFRESH:
                     a = sub.subleader
@@ -533,19 +559,88 @@ class Hes:
         ids = sorted(self.subs)
         col = np.searchsorted(np.asarray(ids), self.labels)
         sl_idx = np.array([self.subs[s].subleader for s in ids])[col]
-        cent = F.group_centroids(x, col, len(ids))[col]
         wp = np.array([self.subs[s].waypoint for s in ids])[col]
         nav = np.array([self.subs[s].mode == NAVIGATE for s in ids])[col]
         follower = sl_idx != np.arange(n)
-        nn = F.nearest_in_group(x, self.labels)
+        # passage mode: the members queued at one throat are their own cohesion group (centroid,
+        # nearest neighbour), head for the throat (c_s = its target) and are not coupled to a
+        # subleader on the far side of the wall
+        queued = self._qidx >= 0
+        cgrp = col * (_PASSAGES + 1) + self._qidx + 1
+        uniq, cgrp = np.unique(cgrp, return_inverse=True)
+        cent = F.group_centroids(x, cgrp, len(uniq))[cgrp]
+        wp[queued] = self._qtgt[queued]
+        follower &= ~queued
+        nn = F.nearest_in_group(x, cgrp)
         sig = self._occlusion(x, slot, nn, sl_idx, cent)
         vslot = F.slot_velocity(x, slot, speed, p.eps_v)
+        dsafe = self._dsafe(x)
         a = F.synthesize(x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig,
-                         ring, self._cos, self._sin, self._gains)
+                         ring, self._cos, self._sin, self._gains, dsafe)
         if p.adaptive:
             a = F.safety_filter(a, v, ring, self._cos, self._sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake,
                                 p.brake_margin, p.lidar_range)
         return F.saturate(a, p.a_bound)
+
+    def _remember_passage(self, sub: SubSwarm, route: Corridor | None, x: np.ndarray, k: int) -> None:
+        """Passage mode: keep the narrow throats (w < 2 (d_safe + passage_margin)) this sub-swarm
+        was routed through for ``passage_memory`` seconds after they stopped being its route, and
+        mark which agents have crossed each, so that members still in front of a throat keep its
+        passage (and queue for it) when the subleader's route has moved on to the next corridor."""
+        p = self.params
+        keep = [q for q in sub.passages if (k - q.step) * p.dt <= p.passage_memory]
+        if route is not None and not route.direct and route.width < 2.0 * (p.d_safe + p.passage_margin):
+            same = [q for q in keep if math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
+            keep = [q for q in keep if not any(q is r for r in same)]
+            crossed = same[-1].crossed if same else np.zeros(self.n, dtype=bool)
+            keep.append(Passage(route, k, crossed))
+        for q in keep:
+            q.crossed |= (x - q.throat.mid) @ q.throat.normal > 0.0
+        sub.passages = keep[-_PASSAGES:]
+
+    def _queue(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Passage mode: the members still in front of an earlier throat of their sub-swarm than its
+        current route (within ``passage_queue`` of it) and the target 'through' m past that throat
+        (the oldest such throat first). Returns (N,) int, the index of the agent's throat in its
+        sub-swarm's passages (-1: not queued) and (N, 2) targets."""
+        p = self.params
+        q_idx = np.full(self.n, -1, dtype=np.int64)
+        q_tgt = np.zeros((self.n, 2))
+        if not p.passage_mode:
+            return q_idx, q_tgt
+        for s, sub in self.subs.items():  # few sub-swarms x at most _PASSAGES throats
+            if sub.mode != NAVIGATE:
+                continue
+            members = self.labels == s
+            for j, q in enumerate(sub.passages):
+                c = q.throat
+                if sub.route is not None and math.hypot(*(c.mid - sub.route.mid)) <= 0.5 * c.width:
+                    continue  # the current route: its members follow the sub-swarm's waypoint
+                near = np.hypot(*(x - c.mid).T) <= p.passage_queue
+                pend = members & ~q.crossed & near & (q_idx < 0)
+                q_idx[pend] = j
+                q_tgt[pend] = c.mid + p.through * c.normal
+        return q_idx, q_tgt
+
+    def _dsafe(self, x: np.ndarray) -> np.ndarray:
+        """Safety distance of eq. (36) per agent [m]: d_safe, except in passage mode for the members
+        of a navigating sub-swarm inside the tube of a throat it is (or was recently) routed
+        through (:func:`passage.passage_dsafe`; the smallest value where tubes overlap)."""
+        p = self.params
+        out = np.full(self.n, p.d_safe)
+        if not p.passage_mode:
+            return out
+        for s, sub in self.subs.items():  # a loop over (at most a few) sub-swarms and throats, not agents
+            if sub.mode != NAVIGATE or not sub.passages:
+                continue
+            members = np.flatnonzero(self.labels == s)
+            for q in sub.passages:
+                c = q.throat
+                out[members] = np.minimum(out[members], passage_dsafe(
+                    x[members], c.mid, c.normal, c.width, p.d_safe, p.passage_margin, p.passage_len,
+                    p.passage_reach))
+        self.last_dsafe = out
+        return out
 
     def _occlusion(self, x, slot, nn, sl_idx, cent) -> np.ndarray:
         """Eq. (30): sigma_occ where the segment to the slot / nearest neighbour / subleader /

@@ -90,6 +90,14 @@ class HesParams:
     a_brake: float = 1.5  # ours [m/s^2] braking barrier: deceleration budget (< a_max, leaves room for the other terms)
     wp_clear: float = 2.0  # ours [m] the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if narrower)
 
+    # ---------------------------------------------------------------- passage mode (ours, beyond the paper; docs "Passage mode")
+    passage_mode: bool = True  # ours: members inside the tube of their route's throat use d_safe_eff = min(d_safe, w/2 - passage_margin) in eq. (36); False = the paper's law everywhere
+    passage_margin: float = 0.3  # ours [m] clearance kept between the throat's centre line and d_safe_eff: the near-obstacle term engages beyond 0.3 m off centre
+    passage_len: float = 2.5  # ours [m] tube half-length along the throat normal: d_safe (corner reach) + 1 m (wall thickness either side of the detected throat)
+    passage_memory: float = 20.0  # ours [s] a throat keeps its passage this long after the sub-swarm's route moved on (members still in front of it)
+    passage_queue: float = 20.0  # ours [m] a member in front of an earlier throat queues for it when within this distance (R_L: it can see the throat)
+    passage_reach: float = 1.5  # ours [m] tube half-width beyond w/2: an agent approaching within d_safe of the throat's corners is inside
+
     # ---------------------------------------------------------------- ablations (Simulation 2)
     safety_stack_off: bool = False  # True: waypoint regulation (rate limit, leash, clearance), adaptive cruise and safety filter off; a_max -> a_max_relaxed
     occlusion_attenuation: bool = True  # False: sigma_occ = 1 (Table 4 "w/o occ. attenuation")
