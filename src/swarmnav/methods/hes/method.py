@@ -33,6 +33,7 @@ from swarmnav.methods.hes.corridors import (
     direct_corridor,
     free_points,
     segment_clear,
+    seen_passages,
 )
 from swarmnav.methods.hes.decision import (
     ENCIRCLE,
@@ -228,6 +229,16 @@ class Hes:
         for j in np.flatnonzero(far):
             members = np.flatnonzero(col == j)
             self.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
+        if self.params.passage_mode:
+            # a subleader queued behind a throat cannot see the head's next corridor: hand the role
+            # to the head member nearest the head's centroid
+            for j, s in enumerate(ids):
+                sub = self.subs[s]
+                members = np.flatnonzero(col == j)
+                head = members[self._qidx[members] < 0]
+                if self._qidx[sub.subleader] >= 0 and len(head):
+                    hc = x[head].mean(axis=0)
+                    sub.subleader = int(head[np.argmin(np.sum((x[head] - hc) ** 2, axis=1))])
 
     def _report(self, s: int, x: np.ndarray, v: np.ndarray, ring: np.ndarray) -> Report:
         """Subleader s's report: its Pack and the corridors toward the goal its ring shows."""
@@ -238,10 +249,13 @@ class Hes:
         a = sub.subleader
         ra, sx, sy = ring[a], x[a, 0], x[a, 1]
         gaps = detect_gaps(ra, sx, sy, self._cos, self._sin, p.lidar_range, p.h_open)
+        if p.passage_mode:
+            gaps = gaps[seen_passages(gaps, ra, sx, sy, self._cos, self._sin, p.lidar_range, p.gap_range_guard,
+                                      p.gap_depth)]
         # candidates toward the goal whose throat is reachable straight from the centroid
         cors = corridors_toward(gaps, x[a], self.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
                                 ring=ra, sensor=x[a], origin=pack.centroid, rho_vis=_RHO_VIS, max_range=p.lidar_range,
-                                rays=(self._cos, self._sin))
+                                rays=(self._cos, self._sin), approach=p.passage_len if p.passage_mode else 0.0)
         return Report(pack, tuple(cors), float(ring[members].min()))
 
     def decision_state(self, k: int, reports: dict[int, Report]) -> DecisionState:
@@ -412,7 +426,8 @@ class Hes:
             else:
                 return prev
         m = len(rep.pack.members)
-        if prev is not None and not prev.direct:
+        narrow = prev is not None and not prev.direct and prev.width < 2.0 * (p.d_safe + p.passage_margin)
+        if prev is not None and not prev.direct and not (p.passage_mode and narrow):
             # Hold a throat until the whole sub-swarm is through (at most _HOLD_S after the first
             # member passed): the next corridor's target would pull the members still in front
             # of this gap away from it, along the wall.
@@ -430,6 +445,15 @@ class Hes:
                     return prev
             else:
                 sub.hold_step = None
+        if p.passage_mode:
+            # A route leads forward: a throat the centroid is already `through` m beyond, or a
+            # passage a member has crossed, is behind the head of the sub-swarm, not a candidate
+            # (the members still in front of it queue for it, see _queue). Replaces the hold above
+            # for narrow throats: the head moves on while the queue streams through.
+            behind = [q.throat for q in sub.passages if q.crossed[rep.pack.members].any()]
+            cands = [c for c in cands if c.direct or (
+                float(np.dot(cent - c.mid, c.normal)) <= p.through
+                and not any(math.hypot(*(c.mid - b.mid)) <= 0.5 * b.width for b in behind))]
         if not cands:
             return prev
         cost = [c.cost + self._width_penalty(c.width, m) for c in cands]

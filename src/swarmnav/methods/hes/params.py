@@ -78,6 +78,8 @@ class HesParams:
     w_split: float = 6.0  # ours [m] a gap counts as a split path (n_c) if a >=5-agent sub-swarm (~3 m across) passes it with d_safe = 1.5 m each side
     h_open: float = 0.5  # ours [m] the ring must rise this much between two minima to form an opening
     toward_deg: float = 80.0  # ours [deg] a corridor leads toward the goal if its exit direction is within this of the goal bearing (< 90: never back)
+    gap_range_guard: float = 1.0  # ours [m] (passage mode) an opening whose throat end lies within this of R_L is the range limit, not a seen passage
+    gap_depth: float = 0.6  # ours [m] (passage mode) the peak return must lie this far from the throat: a concave corner seen at a grazing angle (<= one ray spacing, 0.35 m at R_L) is no passage
     switch_margin: float = 3.0  # ours [m] route-cost margin before a sub-swarm switches corridor (hysteresis)
     max_subswarms: int = 3  # ours [-] a split creates at most this many sub-swarms
     min_size: int = 4  # ours [-] smallest sub-swarm a split may create
