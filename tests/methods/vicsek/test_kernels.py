@@ -12,6 +12,8 @@ from swarmnav.methods.vicsek import kernels as K
 
 from . import dense_reference as R
 
+NO_NOISE = np.zeros(0)
+
 MODELS = {"vem": K.VEM, "vem-a": K.VEM_A, "ivem": K.IVEM, "ivem-a": K.IVEM_A, "wvem": K.WVEM, "hwvem": K.HWVEM}
 
 
@@ -19,10 +21,17 @@ def csr(pos, radius, box=0.0, wrap=True, cap=None):
     cap = cap if cap is not None else 64 * len(pos)
     idx = np.empty(cap, dtype=np.int64)
     d2 = np.empty(cap)
-    indptr, total = K.neighbour_csr(pos, radius, box, wrap, idx, d2)
+    order, start, end, total = K.neighbour_csr(pos, radius, box, wrap, idx, d2)
     if total > cap and cap > 1:
         return csr(pos, radius, box, wrap, total)
-    return indptr, idx[:total], d2[:total], total
+    assert sorted(order.tolist()) == list(range(len(pos)))  # a permutation of the agents
+    return (order, start, end, idx[:total], d2[:total]), total
+
+
+def row(nb, i):
+    """Neighbour indices and squared distances of agent ``i``."""
+    _, start, end, idx, d2 = nb
+    return idx[start[i]:end[i]], d2[start[i]:end[i]]
 
 
 def dense_box(box, wrap):
@@ -36,22 +45,24 @@ WORLDS = [(0.0, True), (6.0, True), (6.0, False), (2.5, True)]  # open, periodic
 def test_neighbour_lists_match_bruteforce(box, wrap):
     rng = np.random.default_rng(3)
     pos = rng.uniform(0, box if box else 6.0, (150, 2))
-    indptr, idx, d2, _ = csr(pos, 1.0, box, wrap)
+    nb, total = csr(pos, 1.0, box, wrap)
     A = R.adjacency(pos, 1.0, dense_box(box, wrap))
     _, dist = R.offsets(pos, dense_box(box, wrap))
+    assert total == A.sum() and np.sum(nb[2] - nb[1]) == total  # rows tile the entries
+    np.testing.assert_array_equal(nb[1][nb[0]], np.r_[0, nb[2][nb[0]][:-1]])  # stored in `order`
     for i in range(len(pos)):
-        row = idx[indptr[i]:indptr[i + 1]]
-        assert len(set(row.tolist())) == len(row)  # no agent listed twice
-        assert set(row.tolist()) == set(np.nonzero(A[i])[0].tolist())
-        np.testing.assert_allclose(d2[indptr[i]:indptr[i + 1]], dist[i, row] ** 2, rtol=1e-12)
+        js, d2 = row(nb, i)
+        assert len(set(js.tolist())) == len(js)  # no agent listed twice
+        assert set(js.tolist()) == set(np.nonzero(A[i])[0].tolist())
+        np.testing.assert_allclose(d2, dist[i, js] ** 2, rtol=1e-12)
 
 
 def test_neighbour_lists_exclude_coincident_agents_and_report_overflow():
     pos = np.array([[0.0, 0.0], [0.0, 0.0], [0.5, 0.0], [3.0, 3.0]])
-    indptr, idx, _, total = csr(pos, 1.0)
-    assert idx[indptr[0]:indptr[1]].tolist() == [2]  # 0 < |x_i - x_j|: the twin is not a neighbour
+    nb, total = csr(pos, 1.0)
+    assert row(nb, 0)[0].tolist() == [2]  # 0 < |x_i - x_j|: the twin is not a neighbour
     assert total == 4
-    _, _, _, total_small = csr(pos, 1.0, cap=1)
+    _, total_small = csr(pos, 1.0, cap=1)
     assert total_small == 4  # the true size, so the caller can grow its buffer
 
 
@@ -89,14 +100,14 @@ def test_heading_kernel_matches_dense_paper_equations(model, kw, box, wrap):
         with_iu = model not in ("vem", "ivem")
         pos, theta, theta_g, layers, avoiding, iu = random_state(rng, 90, side, with_iu)
         theta_d = 0.7
-        indptr, idx, d2, _ = csr(pos, 1.0, box, wrap)
+        nb, _ = csr(pos, 1.0, box, wrap)
         r2 = 1.0
         iu_nb = np.zeros(len(pos), dtype=np.bool_)
         if iu >= 0:
-            iu_nb[idx[indptr[iu]:indptr[iu + 1]]] = True
+            iu_nb[row(nb, iu)[0]] = True
         out = np.empty(len(pos))
-        K.genuine_heading(MODELS[model], indptr, idx, d2, r2, theta, theta_g, layers, avoiding, iu, iu_nb, theta_d,
-                          kw["p1"], kw["p2"], kw["use_nei"], 30.0, 18.0, 1.0, 100.0, out)
+        K.genuine_heading(MODELS[model], *nb, r2, theta, theta_g, layers, avoiding, iu, iu_nb, theta_d,
+                          kw["p1"], kw["p2"], kw["use_nei"], 30.0, 18.0, 1.0, 100.0, NO_NOISE, out)
         A = R.adjacency(pos, 1.0, dense_box(box, wrap))
         ref = R.genuine_heading(model, A, theta, theta_g, dense_layers(layers), avoiding, iu if iu >= 0 else None,
                                 theta_d, **kw)
@@ -110,13 +121,13 @@ def test_heading_kernel_ignores_entries_beyond_the_alignment_radius():
     for code in MODELS.values():
         outs = []
         for radius in (0.8, 1.3):
-            indptr, idx, d2, _ = csr(pos, radius)
+            nb, _ = csr(pos, radius)
             iu_nb = np.zeros(80, dtype=np.bool_)
-            m = d2[indptr[iu]:indptr[iu + 1]] <= 0.64
-            iu_nb[idx[indptr[iu]:indptr[iu + 1]][m]] = True
+            js, d2 = row(nb, iu)
+            iu_nb[js[d2 <= 0.64]] = True
             out = np.empty(80)
-            K.genuine_heading(code, indptr, idx, d2, 0.64, theta, theta_g, layers, avoiding, iu, iu_nb, 0.3,
-                              0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, out)
+            K.genuine_heading(code, *nb, 0.64, theta, theta_g, layers, avoiding, iu, iu_nb, 0.3,
+                              0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out)
             outs.append(out)
         np.testing.assert_allclose(outs[0], outs[1], atol=1e-12)
 
@@ -126,10 +137,10 @@ def test_hwvem_deep_layers_do_not_underflow():
     pos = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5], [5.0, 5.0]])
     theta = np.array([0.0, 1.0, 2.0, 0.0])
     layers = np.array([400, 399, 401, 1], dtype=np.int64)
-    indptr, idx, d2, _ = csr(pos, 1.0)
+    nb, _ = csr(pos, 1.0)
     out = np.empty(4)
-    K.genuine_heading(K.HWVEM, indptr, idx, d2, 1.0, theta, theta.copy(), layers, np.zeros(4, np.bool_), 3,
-                      np.zeros(4, np.bool_), 0.0, 0.0, 100.0, False, 30.0, 18.0, 1.0, 100.0, out)
+    K.genuine_heading(K.HWVEM, *nb, 1.0, theta, theta.copy(), layers, np.zeros(4, np.bool_), 3,
+                      np.zeros(4, np.bool_), 0.0, 0.0, 100.0, False, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out)
     # agent 0 hears layer 399 (weight 1/399 * 1) and layer 401 (1/401 * 1e-4): essentially agent 1
     w1, w2 = 1 / 399, 1 / 401 * 100.0**-2
     assert out[0] == pytest.approx(math.atan2(w1 * math.sin(1) + w2 * math.sin(2), w1 * math.cos(1) + w2 * math.cos(2)))
@@ -140,13 +151,13 @@ def test_layers_match_dense_eq5_and_bfs_is_its_fixed_point(box, wrap):
     rng = np.random.default_rng(8)
     side = box if box else 5.0
     pos, _, _, layers, _, iu = random_state(rng, 100, side)
-    indptr, idx, d2, _ = csr(pos, 1.0, box, wrap)
+    nb, _ = csr(pos, 1.0, box, wrap)
     out = np.empty_like(layers)
-    K.next_layers(indptr, idx, d2, 1.0, layers, iu, out)
+    K.next_layers(*nb, 1.0, layers, iu, out)
     A = R.adjacency(pos, 1.0, dense_box(box, wrap))
     np.testing.assert_array_equal(dense_layers(out), R.next_layers(A, dense_layers(layers), iu))
     bfs = np.empty_like(layers)
-    K.bfs_layers(indptr, idx, d2, 1.0, iu, bfs)
+    K.bfs_layers(*nb, 1.0, iu, bfs)
     fixed = np.full(len(pos), np.inf)
     fixed[iu] = 1
     for _ in range(len(pos)):
@@ -160,10 +171,10 @@ def test_attraction_repulsion_match_dense(box, wrap):
     rng = np.random.default_rng(2)
     side = box if box else 4.0
     pos = rng.uniform(0, side, (70, 2))
-    indptr, idx, d2, _ = csr(pos, 1.0, box, wrap)
+    nb, _ = csr(pos, 1.0, box, wrap)
     att = np.empty((70, 2))
     rep = np.empty((70, 2))
-    K.attraction_repulsion(indptr, idx, d2, pos, box, wrap, 0.7, 1.0, 4, att, rep)
+    K.attraction_repulsion(*nb, pos, box, wrap, 0.7, 1.0, 4, att, rep)
     da, dr = R.att_rep(pos, dense_box(box, wrap), 0.7, 1.0)
     da[4] = dr[4] = 0.0  # the information UAV feels neither term
     np.testing.assert_allclose(att, da, atol=1e-12)
@@ -176,3 +187,54 @@ def test_wrap_angle_range():
     got = np.array([K.wrap_angle(x) for x in xs])
     assert np.all((got >= -np.pi) & (got < np.pi))
     np.testing.assert_allclose(np.cos(got), np.cos(xs), atol=1e-12)
+
+
+def test_noise_is_added_and_wrapped_except_for_the_information_uav():
+    rng = np.random.default_rng(6)
+    pos, theta, theta_g, layers, avoiding, iu = random_state(rng, 60, 4.0)
+    nb, _ = csr(pos, 1.0)
+    iu_nb = np.zeros(60, np.bool_)
+    outs = []
+    noise = rng.uniform(-2.0, 2.0, 60)
+    for nz in (NO_NOISE, noise):
+        out = np.empty(60)
+        K.genuine_heading(K.IVEM_A, *nb, 1.0, theta, theta_g, layers, avoiding, iu, iu_nb, 0.4, 0.1, 5.0, True,
+                          30.0, 18.0, 1.0, 100.0, nz, out)
+        outs.append(out)
+    expect = R.wrap(outs[0] + noise)
+    expect[iu] = 0.4
+    np.testing.assert_allclose(outs[1], expect, atol=1e-12)
+    assert np.all((outs[1] >= -np.pi) & (outs[1] < np.pi))
+
+
+def test_consistency_kernel_matches_measures():
+    from swarmnav.methods.vicsek.measures import circular_mean, deg_con
+
+    rng = np.random.default_rng(1)
+    for spread in (3.0, 0.3, 0.003):
+        th = R.wrap(0.7 + rng.normal(0, spread, 500))
+        for l2 in (False, True):
+            norm = "l2" if l2 else "l1"
+            assert K.consistency(th, 0.7, False, l2) == pytest.approx(deg_con(th, 0.7, norm), abs=1e-12)
+            assert K.consistency(th, 0.0, True, l2) == pytest.approx(deg_con(th, circular_mean(th), norm), abs=1e-12)
+
+
+def test_velocity_kernel_is_eq25_26():
+    rng = np.random.default_rng(9)
+    n = 50
+    theta = rng.uniform(-np.pi, np.pi, n)
+    att, rep = rng.normal(0, 1, (n, 2)), rng.normal(0, 1, (n, 2))
+    avoiding = rng.random(n) < 0.3
+    for tangent in (False, True):
+        out = np.empty((n, 2))
+        K.velocity(theta, avoiding, att, rep, 0.1, 0.1, 0.003, 0.1, tangent, out)
+        u = np.column_stack([np.cos(theta), np.sin(theta)])
+        v = 0.1 * u + 0.1 * rep + 0.003 * att
+        sp = np.linalg.norm(v, axis=1)
+        expect = v / sp[:, None] * np.minimum(sp, 0.1)[:, None]
+        if tangent:
+            expect[avoiding] = (np.minimum(sp, 0.1)[:, None] * u)[avoiding]
+        np.testing.assert_allclose(out, expect, atol=1e-15)
+    out = np.empty((n, 2))
+    K.velocity(theta, avoiding, np.zeros((0, 2)), np.zeros((0, 2)), 0.03, 0.1, 0.003, 0.1, True, out)
+    np.testing.assert_allclose(np.linalg.norm(out, axis=1), 0.03)  # eq. (7): constant speed v0

@@ -19,6 +19,8 @@ from swarmnav.world.generators import periodic_box
 
 from . import dense_reference as R
 
+NO_NOISE = np.zeros(0)
+
 ALIGN = dict(v0=0.03, eta=0.0, c_rep=0.0, c_att=0.0)  # HWVEM Section 3.1
 
 
@@ -167,11 +169,11 @@ def test_avoiding_agents_are_left_out_of_the_genuine_direction():
     theta = np.array([0.0, 2.0, 0.4])
     idx = np.empty(64, np.int64)
     d2 = np.empty(64)
-    indptr, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
+    order, start, end, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
     out = np.empty(3)
     avoiding = np.array([False, True, False])
-    K.genuine_heading(K.VEM, indptr, idx, d2, 1.0, theta, theta.copy(), np.ones(3, np.int64), avoiding, -1,
-                      np.zeros(3, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, out)
+    K.genuine_heading(K.VEM, order, start, end, idx, d2, 1.0, theta, theta.copy(), np.ones(3, np.int64), avoiding, -1,
+                      np.zeros(3, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out)
     assert out[0] == pytest.approx(0.4)  # only agent 2 counts
 
 
@@ -181,10 +183,10 @@ def test_ivem_rule_by_hand():
     theta = np.array([-1.0, 0.0, 0.5, 0.2, 0.0, 0.5])
     idx = np.empty(64, np.int64)
     d2 = np.empty(64)
-    indptr, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
+    order, start, end, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
     out = np.empty(6)
-    K.genuine_heading(K.IVEM, indptr, idx, d2, 1.0, theta, theta.copy(), np.ones(6, np.int64),
-                      np.zeros(6, np.bool_), -1, np.zeros(6, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, out)
+    K.genuine_heading(K.IVEM, order, start, end, idx, d2, 1.0, theta, theta.copy(), np.ones(6, np.int64),
+                      np.zeros(6, np.bool_), -1, np.zeros(6, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out)
     assert out[0] == pytest.approx(-0.75) and out[3] == pytest.approx(0.2)
     assert out[2] == pytest.approx(0.5 - 0.5)  # above both neighbours (-1, 0): down by (0 + 1) / 2
 

@@ -1,7 +1,9 @@
 """Numba kernels of the Vicsek family: cell-list neighbour lists, layers, heading and force sums.
 
-Everything works on a sparse neighbour list in CSR form: the neighbours of agent ``i`` are
-``indices[indptr[i]:indptr[i + 1]]`` with squared distances ``dist2`` alongside. No kernel
+Everything works on a sparse neighbour list (CSR-like): the neighbours of agent ``i`` are
+``indices[start[i]:end[i]]`` with squared distances ``dist2`` alongside, and ``order`` lists the
+agents in the order their rows are stored (cell by cell), which is the order the kernels visit
+them in: the entries are then read sequentially. No kernel
 ever holds an N x N array, so one step costs O(N k) for k neighbours per agent (the models run
 at N = 10^5).
 
@@ -32,9 +34,13 @@ VEM, VEM_A, IVEM, IVEM_A, WVEM, HWVEM = 0, 1, 2, 3, 4, 5
 @njit(cache=True)
 def wrap_angle(a):
     """``a`` mapped to ``[-pi, pi)``."""
-    t = (a + math.pi) % (2.0 * math.pi) - math.pi
-    if t >= math.pi:  # floating-point guard: the modulo can round up to 2 pi
+    if -math.pi <= a < math.pi:  # the common case: already in range
+        return a
+    t = a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
+    if t >= math.pi:  # floating-point guards at the ends of the range
         t -= 2.0 * math.pi
+    elif t < -math.pi:
+        t += 2.0 * math.pi
     return t
 
 
@@ -74,7 +80,12 @@ def _grid(pos, radius, box, periodic, max_cells):
 
 @njit(cache=True)
 def neighbour_csr(pos, radius, box, wrap, indices, dist2):
-    """Fill ``indices`` / ``dist2`` with every neighbour of every agent, row by row.
+    """Fill ``indices`` / ``dist2`` with every neighbour of every agent.
+
+    Agents are visited cell by cell (a counting sort of the cell list), so consecutive agents
+    read the same few cells and the row of agent ``i`` is ``indices[start[i]:end[i]]``; rows are
+    contiguous but stored in cell order, not in agent order. The candidate test is branch-free:
+    every candidate is written and the write position advances only for a true neighbour.
 
     Args:
         pos: (N, 2) positions [m] (in ``[0, box)`` when periodic).
@@ -85,8 +96,10 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2):
         dist2: (cap,) float64 output buffer of squared distances [m^2].
 
     Returns:
-        ``(indptr, total)``: the (N + 1,) row offsets and the number of entries. If ``total``
-        exceeds ``cap`` the buffers hold only a prefix; call again with ``total`` capacity.
+        ``(order, start, end, total)``: the agents in the order their rows are stored (the
+        kernels below visit agents in this order, reading the entries sequentially), (N,) row
+        bounds and the number of entries. If ``total`` exceeds the buffers' length they hold
+        only a prefix; call again with ``total`` capacity.
     """
     n = pos.shape[0]
     cap = indices.shape[0]
@@ -94,15 +107,15 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2):
     x0, y0, h, ncx, ncy = _grid(pos, radius, box, periodic, 4 * n + 64)
     ncell = ncx * ncy
     cell = np.empty(n, dtype=np.int64)
-    start = np.zeros(ncell + 1, dtype=np.int64)
+    first = np.zeros(ncell + 1, dtype=np.int64)
     for i in range(n):
         cx = min(max(int((pos[i, 0] - x0) / h), 0), ncx - 1)
         cy = min(max(int((pos[i, 1] - y0) / h), 0), ncy - 1)
         cell[i] = cx + ncx * cy
-        start[cell[i] + 1] += 1
+        first[cell[i] + 1] += 1
     for c in range(ncell):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
+        first[c + 1] += first[c]
+    fill = first[:-1].copy()
     order = np.empty(n, dtype=np.int64)
     for i in range(n):  # counting sort: agents of a cell stay in index order
         order[fill[cell[i]]] = i
@@ -115,55 +128,57 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2):
 
     r2 = radius * radius
     half = 0.5 * box
-    indptr = np.zeros(n + 1, dtype=np.int64)
+    start = np.empty(n, dtype=np.int64)
+    end = np.empty(n, dtype=np.int64)
     total = 0
     # Stencil per axis: the 3 cells around, or every cell once when the axis has fewer than 3.
     wx = 3 if ncx >= 3 else ncx
     wy = 3 if ncy >= 3 else ncy
-    for i in range(n):
-        px = pos[i, 0]
-        py = pos[i, 1]
-        cx = cell[i] % ncx
-        cy = cell[i] // ncx
-        for a in range(wy):
-            if ncy >= 3:
-                qy = cy + a - 1
-                if periodic:
-                    qy = (qy + ncy) % ncy
-                elif qy < 0 or qy >= ncy:
-                    continue
-            else:
-                qy = a
-            for b in range(wx):
-                if ncx >= 3:
-                    qx = cx + b - 1
-                    if periodic:
-                        qx = (qx + ncx) % ncx
-                    elif qx < 0 or qx >= ncx:
-                        continue
+    for c0 in range(ncell):
+        cx = c0 % ncx
+        cy = c0 // ncx
+        for si in range(first[c0], first[c0 + 1]):
+            px = sx[si]
+            py = sy[si]
+            start[order[si]] = total
+            for a in range(wy):
+                if ncy >= 3:
+                    qy = cy + a - 1
+                    if qy < 0 or qy >= ncy:
+                        if not periodic:
+                            continue
+                        qy = qy + ncy if qy < 0 else qy - ncy
                 else:
-                    qx = b
-                c = qx + ncx * qy
-                for s in range(start[c], start[c + 1]):
-                    dx = sx[s] - px
-                    dy = sy[s] - py
-                    if periodic:  # minimum image (|dx| < box for stored points in [0, box))
-                        if dx > half:
-                            dx -= box
-                        elif dx < -half:
-                            dx += box
-                        if dy > half:
-                            dy -= box
-                        elif dy < -half:
-                            dy += box
-                    d2 = dx * dx + dy * dy
-                    if d2 > 0.0 and d2 <= r2:
+                    qy = a
+                for b in range(wx):
+                    if ncx >= 3:
+                        qx = cx + b - 1
+                        if qx < 0 or qx >= ncx:
+                            if not periodic:
+                                continue
+                            qx = qx + ncx if qx < 0 else qx - ncx
+                    else:
+                        qx = b
+                    c = qx + ncx * qy
+                    for s in range(first[c], first[c + 1]):
+                        dx = sx[s] - px
+                        dy = sy[s] - py
+                        if periodic:  # minimum image (|dx| < box for stored points in [0, box))
+                            if dx > half:
+                                dx -= box
+                            elif dx < -half:
+                                dx += box
+                            if dy > half:
+                                dy -= box
+                            elif dy < -half:
+                                dy += box
+                        d2 = dx * dx + dy * dy
                         if total < cap:
                             indices[total] = order[s]
                             dist2[total] = d2
-                        total += 1
-        indptr[i + 1] = total
-    return indptr, total
+                        total += (d2 > 0.0) & (d2 <= r2)
+            end[order[si]] = total
+    return order, start, end, total
 
 
 # ---------------------------------------------------------------------------------------------
@@ -172,16 +187,17 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2):
 
 
 @njit(cache=True)
-def next_layers(indptr, indices, dist2, r2, layers, iu, out):
+def next_layers(order, start, end, indices, dist2, r2, layers, iu, out):
     """Eq. (5): ``l_i(k) = min {l_j(k-1) + 1 | j in N_i(k-1)}``; the information UAV is layer 1.
 
     ``layers`` are the previous step's layers and the CSR the previous step's neighbours
     (entries farther than ``sqrt(r2)`` are skipped). Unreached agents keep :data:`NO_LAYER`.
     """
     n = layers.shape[0]
-    for i in range(n):
+    for t in range(n):
+        i = order[t]
         best = NO_LAYER
-        for e in range(indptr[i], indptr[i + 1]):
+        for e in range(start[i], end[i]):
             if dist2[e] <= r2:
                 lj = layers[indices[e]]
                 if lj < best:
@@ -192,7 +208,7 @@ def next_layers(indptr, indices, dist2, r2, layers, iu, out):
 
 
 @njit(cache=True)
-def bfs_layers(indptr, indices, dist2, r2, iu, out):
+def bfs_layers(order, start, end, indices, dist2, r2, iu, out):
     """Hop distance + 1 from agent ``iu`` in the current graph (eq. 2-4: the shortest neighbour
     sequence); :data:`NO_LAYER` for agents in another connected component. This is the fixed
     point of eq. (5) on a frozen graph."""
@@ -209,7 +225,7 @@ def bfs_layers(indptr, indices, dist2, r2, iu, out):
     while head < tail:
         i = queue[head]
         head += 1
-        for e in range(indptr[i], indptr[i + 1]):
+        for e in range(start[i], end[i]):
             if dist2[e] <= r2:
                 j = indices[e]
                 if out[j] == NO_LAYER:
@@ -224,9 +240,9 @@ def bfs_layers(indptr, indices, dist2, r2, iu, out):
 
 
 @njit(cache=True)
-def genuine_heading(code, indptr, indices, dist2, r2, theta, theta_g, layers, avoiding, iu, iu_nb,
-                    theta_d, p1, p2, use_nei, k_alpha, k_beta, k_gamma, info_weight, out):
-    """New genuine desired heading of every agent (HWVEM eq. 18, without noise).
+def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g, layers, avoiding, iu, iu_nb,
+                    theta_d, p1, p2, use_nei, k_alpha, k_beta, k_gamma, info_weight, noise, out):
+    """New genuine desired heading of every agent (HWVEM eq. 18) plus the noise of eq. (6).
 
     Weighted models (VEM, VEM-A, WVEM, HWVEM, and IVEM-A next to the information UAV)::
 
@@ -247,25 +263,28 @@ def genuine_heading(code, indptr, indices, dist2, r2, theta, theta_g, layers, av
     with ``lambda = 1`` if ``theta_i <= min``, ``-1`` if ``theta_i >= max``, else 0.
 
     An agent with no contributing neighbour keeps ``theta_g``; the information UAV gets
-    ``theta_d`` (eq. 9 with ``b_ij = 0`` for ``i`` in layer 1).
+    ``theta_d`` (eq. 9 with ``b_ij = 0`` for ``i`` in layer 1). ``noise`` (N,) [rad] is added to
+    every other agent and the sum wrapped to ``[-pi, pi)``; an empty array means no noise.
     """
+    noisy = noise.shape[0] == theta.shape[0]
     n = theta.shape[0]
     max_deg = 0
     for i in range(n):
-        max_deg = max(max_deg, indptr[i + 1] - indptr[i])
+        max_deg = max(max_deg, end[i] - start[i])
     lay_val = np.empty(max_deg + 1, dtype=np.int64)
     lay_cnt = np.empty(max_deg + 1, dtype=np.int64)
     log_p2 = math.log(p2)
     sin_t = np.sin(theta)  # once per agent, not once per neighbour entry
     cos_t = np.cos(theta)
-    for i in range(n):
+    for t in range(n):
+        i = order[t]
         if i == iu:
             out[i] = theta_d
             continue
-        a = indptr[i]
-        b = indptr[i + 1]
+        a = start[i]
+        b = end[i]
         if code == IVEM or (code == IVEM_A and not iu_nb[i]):
-            lo = np.inf
+            lo = np.inf  # min and max neighbour heading
             hi = -np.inf
             for e in range(a, b):
                 if dist2[e] <= r2:
@@ -275,13 +294,15 @@ def genuine_heading(code, indptr, indices, dist2, r2, theta, theta_g, layers, av
                         hi = max(hi, theta[j])
             if lo > hi:
                 out[i] = theta_g[i]
-                continue
-            lam = 0.0
-            if theta[i] <= lo:
-                lam = 1.0
-            elif theta[i] >= hi:
-                lam = -1.0
-            out[i] = wrap_angle(theta[i] + lam * (hi - lo) / 2.0)
+            else:
+                lam = 0.0
+                if theta[i] <= lo:
+                    lam = 1.0
+                elif theta[i] >= hi:
+                    lam = -1.0
+                out[i] = wrap_angle(theta[i] + lam * (hi - lo) / 2.0)
+            if noisy:
+                out[i] = wrap_angle(out[i] + noise[i])
             continue
 
         l_min = NO_LAYER
@@ -357,22 +378,25 @@ def genuine_heading(code, indptr, indices, dist2, r2, theta, theta_g, layers, av
             out[i] = math.atan2(su, cu)
         else:
             out[i] = math.atan2(s, c)
+        if noisy:
+            out[i] = wrap_angle(out[i] + noise[i])
 
 
 @njit(cache=True)
-def attraction_repulsion(indptr, indices, dist2, pos, box, wrap, r_rep, r_att, iu, att, rep):
+def attraction_repulsion(order, start, end, indices, dist2, pos, box, wrap, r_rep, r_att, iu, att, rep):
     """Eq. (23)-(24) with ``x_ij = x_i - x_j``: repulsion ``(r_rep - d)/r_rep`` along ``x_ij`` for
     ``0 < d <= r_rep``, attraction ``(r_rep - d)/(r_att - r_rep)`` along ``x_ij`` (negative:
     toward j) for ``r_rep < d <= r_att``. The information UAV feels neither (Section 2.4)."""
     n = pos.shape[0]
     periodic = box > 0.0 and wrap
-    for i in range(n):
+    for t in range(n):
+        i = order[t]
         ax = 0.0
         ay = 0.0
         rx = 0.0
         ry = 0.0
         if i != iu:
-            for e in range(indptr[i], indptr[i + 1]):
+            for e in range(start[i], end[i]):
                 d = math.sqrt(dist2[e])
                 if d > r_att and d > r_rep:
                     continue
@@ -396,3 +420,58 @@ def attraction_repulsion(indptr, indices, dist2, pos, box, wrap, r_rep, r_att, i
         att[i, 1] = ay
         rep[i, 0] = rx
         rep[i, 1] = ry
+
+
+# ---------------------------------------------------------------------------------------------
+# Velocity and consistency
+# ---------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def velocity(theta, avoiding, att, rep, speed0, c_rep, c_att, v_max, tangent, out):
+    """Eq. (25)-(26): ``v_des = speed0 (cos theta, sin theta) + c_rep rep + c_att att`` with
+    ``speed0 = c_align v0``, scaled to ``min(|v_des|, v_max)``. ``att`` / ``rep`` may be empty
+    (terms off). With ``tangent``, an avoiding agent keeps that speed but flies along its
+    heading theta_obs (Section 2.3: it moves along the tangent)."""
+    n = theta.shape[0]
+    forces = att.shape[0] == n
+    for i in range(n):
+        ux = math.cos(theta[i])
+        uy = math.sin(theta[i])
+        vx = speed0 * ux
+        vy = speed0 * uy
+        if forces:
+            vx += c_rep * rep[i, 0] + c_att * att[i, 0]
+            vy += c_rep * rep[i, 1] + c_att * att[i, 1]
+        sp = math.sqrt(vx * vx + vy * vy)
+        cap = min(sp, v_max)
+        if tangent and avoiding[i]:
+            out[i, 0] = cap * ux
+            out[i, 1] = cap * uy
+        elif sp > 0.0:
+            out[i, 0] = vx * (cap / sp)
+            out[i, 1] = vy * (cap / sp)
+        else:
+            out[i, 0] = 0.0
+            out[i, 1] = 0.0
+
+
+@njit(cache=True)
+def consistency(theta, ref, use_mean, l2):
+    """Deg_con of eq. (28) against ``ref`` [rad], or against the circular mean of ``theta`` when
+    ``use_mean``; the norm is L1 (mean absolute deviation) or, with ``l2``, L2 / N. The same
+    number as ``measures.deg_con`` in one pass."""
+    n = theta.shape[0]
+    if use_mean:
+        s = 0.0
+        c = 0.0
+        for i in range(n):
+            s += math.sin(theta[i])
+            c += math.cos(theta[i])
+        ref = math.atan2(s, c)
+    acc = 0.0
+    for i in range(n):
+        d = abs(wrap_angle(theta[i] - ref))
+        acc += d * d if l2 else d
+    m = math.sqrt(acc) / n if l2 else acc / n
+    return (math.pi - m) / math.pi

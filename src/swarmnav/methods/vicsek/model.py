@@ -27,7 +27,7 @@ from swarmnav.errors import ConfigError
 from swarmnav.methods.base import Observation
 from swarmnav.methods.vicsek import kernels as K
 from swarmnav.methods.vicsek.geometry import Polyline, avoidance, pursue, wrap
-from swarmnav.methods.vicsek.measures import circular_mean, deg_con
+from swarmnav.methods.vicsek.measures import deg_con
 from swarmnav.params import build
 from swarmnav.sensing import signed_distance
 from swarmnav.world.scenario import Scenario
@@ -36,6 +36,8 @@ from swarmnav.world.scenario import Scenario
 MODELS = {"vem": K.VEM, "vem-a": K.VEM_A, "ivem": K.IVEM, "ivem-a": K.IVEM_A, "wvem": K.WVEM, "hwvem": K.HWVEM}
 #: Models with an information UAV.
 WITH_INFO_UAV = ("vem-a", "ivem-a", "wvem", "hwvem")
+_NO_NOISE = np.zeros(0)
+_NO_FORCE = np.zeros((0, 2))
 
 
 @dataclass(frozen=True, slots=True)
@@ -142,11 +144,11 @@ class VicsekFamily:
         self.theta_g = self.theta.copy()
         self.avoiding = np.zeros(n, dtype=np.bool_)
 
-        indptr = self._neighbours(x)
+        nb = self._neighbours(x)
         self.layers = np.full(n, K.NO_LAYER, dtype=np.int64)
         if self.has_info:
             if p.initial_layers == "bfs":
-                K.bfs_layers(indptr, self._idx, self._d2, p.r * p.r, self.iu, self.layers)
+                K.bfs_layers(*nb, p.r * p.r, self.iu, self.layers)
             else:
                 self.layers[self.iu] = 1
 
@@ -159,7 +161,7 @@ class VicsekFamily:
         self.D_obs = np.inf
         self.D_ind = np.inf
         if self.mission:
-            self._track_mission(x, indptr, None)
+            self._track_mission(x, nb, None)
             self._failed |= self._apart > 0  # "from the beginning": with the IU at k = 0
 
     # ------------------------------------------------------------------ step
@@ -168,24 +170,21 @@ class VicsekFamily:
         p = self.params
         x = np.asarray(obs.positions, dtype=np.float64)
         n = self.n
-        indptr = self._neighbours(x)
+        nb = self._neighbours(x)  # (order, start, end, indices, dist2)
         r2 = p.r * p.r
         iu = self.iu
         theta_d = self._theta_d(x) if self.has_info else 0.0
         iu_nb = np.zeros(n, dtype=np.bool_)
         if iu >= 0:
-            row = slice(indptr[iu], indptr[iu + 1])
-            iu_nb[self._idx[row][self._d2[row] <= r2]] = True
+            row = slice(nb[1][iu], nb[2][iu])
+            iu_nb[nb[3][row][nb[4][row] <= r2]] = True
 
+        # eq. (6) noise; the information UAV flies its reference heading (the kernel skips it)
+        noise = rng.uniform(-p.eta / 2, p.eta / 2, n) if p.eta > 0 else _NO_NOISE
         theta_g = np.empty(n)
-        K.genuine_heading(self.code, indptr, self._idx, self._d2, r2, self.theta, self.theta_g, self.layers,
+        K.genuine_heading(self.code, *nb, r2, self.theta, self.theta_g, self.layers,
                           self.avoiding, iu, iu_nb, theta_d, p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta,
-                          p.k_gamma, p.info_weight, theta_g)
-        if p.eta > 0:
-            noise = rng.uniform(-p.eta / 2, p.eta / 2, n)
-            if iu >= 0:
-                noise[iu] = 0.0  # the information UAV flies its reference heading
-            theta_g = wrap(theta_g + noise)
+                          p.k_gamma, p.info_weight, noise, theta_g)
 
         theta = theta_g
         avoiding = np.zeros(n, dtype=np.bool_)
@@ -194,24 +193,20 @@ class VicsekFamily:
             avoiding, theta_obs, dist = avoidance(self.geom, x, theta_g, self.theta, p.r_avoid, p.theta_obstruct)
             theta = np.where(avoiding, theta_obs, theta_g)
 
-        v = p.c_align * p.v0 * np.column_stack([np.cos(theta), np.sin(theta)])
+        att = rep = _NO_FORCE
         if p.c_rep or p.c_att:
             att = np.empty((n, 2))
             rep = np.empty((n, 2))
-            K.attraction_repulsion(indptr, self._idx, self._d2, x, self.box, p.wrap_neighbours,
-                                   p.r_rep, p.r_att, iu, att, rep)
-            v = v + p.c_rep * rep + p.c_att * att
-        speed = np.sqrt(np.einsum("ij,ij->i", v, v))
-        v *= (np.minimum(speed, p.v_max) / np.maximum(speed, 1e-300))[:, None]  # eq. (26)
-        if p.avoid_velocity == "tangent" and avoiding.any():
-            s_av = np.minimum(speed[avoiding], p.v_max)
-            v[avoiding] = s_av[:, None] * np.column_stack([np.cos(theta[avoiding]), np.sin(theta[avoiding])])
+            K.attraction_repulsion(*nb, x, self.box, p.wrap_neighbours, p.r_rep, p.r_att, iu, att, rep)
+        v = np.empty((n, 2))
+        K.velocity(theta, avoiding, att, rep, p.c_align * p.v0, p.c_rep, p.c_att, p.v_max,
+                   p.avoid_velocity == "tangent", v)
 
         if self.mission:
-            self._track_mission(x, indptr, dist)
+            self._track_mission(x, nb, dist)
         if iu >= 0:
             nxt = np.empty_like(self.layers)
-            K.next_layers(indptr, self._idx, self._d2, r2, self.layers, iu, nxt)
+            K.next_layers(*nb, r2, self.layers, iu, nxt)
             self.layers = nxt
         self.theta, self.theta_g, self.avoiding = theta, theta_g, avoiding
 
@@ -248,15 +243,16 @@ class VicsekFamily:
 
     # ------------------------------------------------------------------ helpers
 
-    def _neighbours(self, x: np.ndarray) -> np.ndarray:
-        """CSR neighbour list of ``x`` into the reusable buffers; returns indptr."""
+    def _neighbours(self, x: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Neighbour list of ``x`` in the reusable buffers: ``(order, start, end, indices,
+        dist2)`` with the neighbours of ``i`` in ``indices[start[i]:end[i]]``."""
         wrap_nb = self.params.wrap_neighbours
-        indptr, total = K.neighbour_csr(x, self.radius, self.box, wrap_nb, self._idx, self._d2)
+        order, start, end, total = K.neighbour_csr(x, self.radius, self.box, wrap_nb, self._idx, self._d2)
         if total > len(self._idx):
             self._idx = np.empty(int(total * 1.25) + 64, dtype=np.int64)
             self._d2 = np.empty(len(self._idx), dtype=np.float64)
-            indptr, total = K.neighbour_csr(x, self.radius, self.box, wrap_nb, self._idx, self._d2)
-        return indptr
+            order, start, end, total = K.neighbour_csr(x, self.radius, self.box, wrap_nb, self._idx, self._d2)
+        return order, start, end, self._idx[:total], self._d2[:total]
 
     def _theta_d(self, x: np.ndarray) -> float:
         """Reference heading for the next step: fixed in a periodic world, else the path's."""
@@ -266,22 +262,23 @@ class VicsekFamily:
         return th
 
     def _deg_con(self) -> float:
-        ref = self.theta[self.iu] if self.has_info else circular_mean(self.theta)
-        return deg_con(self.theta, ref, self.params.deg_con_norm)
+        """Deg_con (eq. 28) against the information UAV's heading, or the consensus direction."""
+        ref = float(self.theta[self.iu]) if self.has_info else 0.0
+        return K.consistency(self.theta, ref, not self.has_info, self.params.deg_con_norm == "l2")
 
-    def _track_mission(self, x: np.ndarray, indptr: np.ndarray, dist: np.ndarray | None) -> None:
+    def _track_mission(self, x: np.ndarray, nb: tuple, dist: np.ndarray | None) -> None:
         """Per-step bookkeeping of the success test and the safety distances."""
         p = self.params
         if p.follow_test == "component":
             comp = np.empty(self.n, dtype=np.int64)
-            K.bfs_layers(indptr, self._idx, self._d2, p.r * p.r, self.iu, comp)
+            K.bfs_layers(*nb, p.r * p.r, self.iu, comp)
             near = comp < K.NO_LAYER
         else:
             near = np.sum((x - x[self.iu]) ** 2, axis=1) <= p.follow_radius**2
         self._apart = np.where(near, 0, self._apart + 1)
         self._failed |= self._apart > p.follow_gap
-        if indptr[-1]:
-            self.D_ind = min(self.D_ind, float(np.sqrt(self._d2[: indptr[-1]].min())))
+        if len(nb[4]):
+            self.D_ind = min(self.D_ind, float(np.sqrt(nb[4].min())))
         if self.obstacles is not None:
             if dist is None:
                 dist = signed_distance(self.obstacles, x)
