@@ -122,3 +122,23 @@ def test_identical_configuration_in_two_variants_runs_once_reports_twice(tmp_pat
     assert [(r["variant"], r["seed"]) for r in runs] == [("a", 1), ("a", 2), ("b", 1), ("b", 2)]
     assert [s["done"] for s in summary] == [2, 2]
     assert runs[0]["E_mean"] == runs[2]["E_mean"]
+
+
+def test_experiment_runs_keep_method_artifacts(tmp_path):
+    """An LLM run inside a sweep keeps its transcript beside its trajectory (here the model is
+    unreachable, so every call falls back and is still logged)."""
+    import json
+
+    from swarmnav.experiments import Store
+
+    spec = tmp_path / "llm.toml"
+    spec.write_text('name = "llm"\nmethod = "hes"\nscenario = "default_corridor"\nsteps = 60\nseeds = "1"\n'
+                    '[params]\ndecision = "ollama"\nllm_url = "http://127.0.0.1:9"\nllm_model = "m"\n'
+                    'llm_timeout = 1.0\nllm_interval = 20\n')
+    run_experiment(load_experiment(str(spec)), tmp_path / "o", progress=False)
+    (row,) = Store(tmp_path / "o").rows()
+    assert row["status"] == "done" and row["metrics"]["llm_fallback_used"] == row["metrics"]["llm_calls"] > 0
+    (path,) = row["artifacts"]
+    assert path.endswith("llm_transcript.jsonl")
+    lines = [json.loads(x) for x in (tmp_path / "o" / path).read_text().splitlines()]
+    assert len(lines) == row["metrics"]["llm_calls"] and all(x["fallback"] for x in lines)

@@ -110,6 +110,8 @@ def execute(job: Job, keep_trajectory: bool = True) -> dict[str, Any]:
             np.savez_compressed(buf, positions=res.positions.astype(np.float32), labels=res.labels,
                                 min_clearance=res.min_clearance.astype(np.float32))
             row["_npz"] = buf.getvalue()
+        if res.artifacts:  # e.g. the LLM transcript: kept beside the trajectory
+            row["_artifacts"] = dict(res.artifacts)
         timings = {f"time.{k}": v for k, v in res.timings.items()}  # wall clock, stored beside the metrics
         row.update(status="done", metrics={**res.metrics, **timings})
     except Exception as e:  # noqa: BLE001 - a failed run is recorded, never fatal to the sweep
@@ -127,13 +129,23 @@ def failed_row(job: Job, error: str) -> dict[str, Any]:
             "metrics": {}, "trajectory": "", "status": "failed", "error": error[:500], "wall_time_s": None}
 
 
-def _write_trajectory(root: Path, row: dict) -> None:
-    """Write a row's trajectory bytes under ``trajectories/`` (temp name + rename)."""
+def _write_files(root: Path, row: dict) -> None:
+    """Write a row's trajectory (``trajectories/kk/KEY.npz``) and artifacts
+    (``trajectories/kk/KEY/NAME``), each under a temporary name and renamed into place."""
     data = row.pop("_npz", None)
-    if data is None:
-        return
-    rel = Path("trajectories") / row["key"][:2] / f"{row['key']}.npz"
-    path = root / rel
+    if data is not None:
+        rel = Path("trajectories") / row["key"][:2] / f"{row['key']}.npz"
+        _atomic_write(root / rel, data)
+        row["trajectory"] = str(rel)
+    paths = []
+    for name, content in sorted(row.pop("_artifacts", {}).items()):
+        rel = Path("trajectories") / row["key"][:2] / row["key"] / Path(name).name
+        _atomic_write(root / rel, content.encode() if isinstance(content, str) else content)
+        paths.append(str(rel))
+    row["artifacts"] = paths
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp")
     with open(tmp, "wb") as f:
@@ -141,7 +153,6 @@ def _write_trajectory(root: Path, row: dict) -> None:
         f.flush()
         os.fsync(f.fileno())
     os.replace(tmp, path)
-    row["trajectory"] = str(rel)
 
 
 def run_experiment(
@@ -175,7 +186,7 @@ def run_experiment(
     bar = _Progress(len(jobs), len(jobs) - len(todo), progress)
 
     def finished(row: dict) -> None:
-        _write_trajectory(store.root, row)  # the file exists before the row that names it
+        _write_files(store.root, row)  # the files exist before the row that names them
         store.put(row)  # committed before anything else learns of it
         bar.update(row)
         if on_row is not None:

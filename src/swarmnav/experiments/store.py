@@ -37,6 +37,7 @@ CREATE TABLE IF NOT EXISTS runs (
     wall_time_s  REAL,
     version      TEXT NOT NULL,
     trajectory   TEXT NOT NULL DEFAULT '',    -- path relative to the store directory
+    artifacts    TEXT NOT NULL DEFAULT '[]',  -- JSON list of extra files (e.g. an LLM transcript), relative paths
     finished_at  REAL NOT NULL
 );
 CREATE INDEX IF NOT EXISTS runs_by_variant ON runs (experiment, variant, seed);
@@ -59,6 +60,9 @@ class Store:
         self.path = self.root / DB_NAME
         with closing(self._connect()) as db:
             db.executescript(_SCHEMA)
+            cols = {r[1] for r in db.execute("PRAGMA table_info(runs)")}
+            if "artifacts" not in cols:  # a store written before artifacts were kept
+                db.execute("ALTER TABLE runs ADD COLUMN artifacts TEXT NOT NULL DEFAULT '[]'")
 
     def _connect(self) -> sqlite3.Connection:
         db = sqlite3.connect(self.path, timeout=60.0)
@@ -107,6 +111,7 @@ class Store:
         for r in found:
             for k in ("metrics", "params", "config"):
                 r[k] = json.loads(r[k]) if r[k] else {}
+            r["artifacts"] = json.loads(r.get("artifacts") or "[]")
         return found
 
     def count(self) -> dict[str, int]:
@@ -115,11 +120,12 @@ class Store:
 
 
 _COLUMNS = ["key", "experiment", "variant", "scenario", "method", "seed", "n", "steps", "params", "config",
-            "status", "error", "metrics", "wall_time_s", "version", "trajectory", "finished_at"]
+            "status", "error", "metrics", "wall_time_s", "version", "trajectory", "artifacts", "finished_at"]
 
 
 def _encode(row: dict[str, Any]) -> dict[str, Any]:
     values = dict(row)
+    values["artifacts"] = json.dumps(values.get("artifacts") or [])
     for k in ("params", "config", "metrics"):
         if not isinstance(values.get(k, ""), str):
             values[k] = json.dumps(values[k], sort_keys=True, default=_json_default)
