@@ -192,7 +192,7 @@ class Corridor:
 
 @njit(cache=True)
 def _filter_gaps(gaps, px, py, gx, gy, w_pass, cos_toward, ring, sx, sy, cos_t, sin_t, cx, cy, rho_vis,
-                 max_range, check_vis, approach):
+                 max_range, check_vis, approach, approach_w):
     """Rows of ``gaps`` that are candidate corridors toward the goal, and their route costs."""
     m = gaps.shape[0]
     keep = np.zeros(m, dtype=np.bool_)
@@ -211,9 +211,11 @@ def _filter_gaps(gaps, px, py, gx, gy, w_pass, cos_toward, ring, sx, sy, cos_t, 
         mx = 0.5 * (gaps[j, 0] + gaps[j, 2])
         my = 0.5 * (gaps[j, 1] + gaps[j, 3])
         if check_vis:
-            # straight to the mouth `approach` m in front of the throat, then along the normal
-            ax = mx - approach * gaps[j, 5]
-            ay = my - approach * gaps[j, 6]
+            # straight to the mouth `approach` m in front of a throat narrower than `approach_w`,
+            # then along the normal
+            ap = approach if gaps[j, 4] < approach_w else 0.0
+            ax = mx - ap * gaps[j, 5]
+            ay = my - ap * gaps[j, 6]
             if not (segment_clear(ring, sx, sy, cos_t, sin_t, cx, cy, ax, ay, rho_vis, max_range)
                     and segment_clear(ring, sx, sy, cos_t, sin_t, ax, ay, mx, my, rho_vis, max_range)):
                 continue
@@ -225,15 +227,17 @@ def _filter_gaps(gaps, px, py, gx, gy, w_pass, cos_toward, ring, sx, sy, cos_t, 
 def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pass: float, toward_deg: float,
                      through: float, ring: np.ndarray | None = None, sensor: np.ndarray | None = None,
                      origin: np.ndarray | None = None, rho_vis: float = 0.4, max_range: float = 20.0,
-                     rays: tuple[np.ndarray, np.ndarray] | None = None, approach: float = 0.0) -> list[Corridor]:
+                     rays: tuple[np.ndarray, np.ndarray] | None = None, approach: float = 0.0,
+                     approach_w: float = math.inf) -> list[Corridor]:
     """The candidate corridors leading toward the goal among the openings ``gaps`` seen from ``p``.
 
     Keeps openings at least ``w_pass`` wide whose exit direction is within ``toward_deg`` of the
     bearing to the goal and, if ``ring`` (sensed at ``sensor``) and ``origin`` are given, whose
     throat midpoint can be reached from ``origin`` along a straight line of half-width
-    ``rho_vis`` free of that ring's returns (with ``approach`` > 0: a straight line to the mouth
-    ``approach`` m in front of the throat, then along the throat normal; a throat in a wall seen
-    at a grazing angle is reached through its mouth, not along the wall). Cost = ``|mid - p| + |goal - mid|`` [m] (the length
+    ``rho_vis`` free of that ring's returns (with ``approach`` > 0, for throats narrower than
+    ``approach_w``: a straight line to the mouth ``approach`` m in front of the throat, then along
+    the throat normal; a gap in a wall seen at a grazing angle is reached through its mouth, not
+    along the wall). Cost = ``|mid - p| + |goal - mid|`` [m] (the length
     of the route through the throat midpoint). Sorted by cost.
     """
     if len(gaps) == 0:
@@ -244,7 +248,8 @@ def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pas
     cos_t, sin_t = rays if rays is not None else _rays(len(ring))
     keep, cost = _filter_gaps(gaps, float(p[0]), float(p[1]), float(goal[0]), float(goal[1]), w_pass,
                               math.cos(math.radians(toward_deg)), ring, float(sensor[0]), float(sensor[1]), cos_t, sin_t,
-                              float(origin[0]), float(origin[1]), rho_vis, max_range, check, float(approach))
+                              float(origin[0]), float(origin[1]), rho_vis, max_range, check, float(approach),
+                              float(approach_w))
     out: list[Corridor] = []
     for j in np.flatnonzero(keep):
         row = gaps[j]
@@ -257,33 +262,28 @@ def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pas
 
 
 def seen_passages(gaps: np.ndarray, ring: np.ndarray, px: float, py: float, cos_t: np.ndarray,
-                  sin_t: np.ndarray, max_range: float, guard: float, depth: float) -> np.ndarray:
+                  sin_t: np.ndarray, depth: float, max_range: float) -> np.ndarray:
     """(M,) bool: the openings ``gaps`` (from :func:`detect_gaps` on ``ring`` sensed at
-    ``(px, py)``) that the ring shows as passages, not artefacts of the reconstruction:
+    ``(px, py)``) that are not concave corners: where the peak ray hits (range < ``max_range``),
+    its return lies at least ``depth`` [m] from the throat segment, i.e. the ring sees on through
+    the opening, at least past the thickness of the wall it is cut in.
 
-    * both throat ends lie closer than ``max_range - guard`` [m]: an opening bounded by the last
-      returns before the range limit (e.g. a concave corner just out of range, whose rays all
-      read R_L) has the range circle for a throat, not two obstacle surfaces;
-    * the peak ray's return lies at least ``depth`` [m] from the throat segment: a concave corner
-      seen at a grazing angle has consecutive hits metres apart on one wall, so its closest pair
-      across the two sides looks wide, but the corner itself (the peak) lies only about one ray
-      spacing (<= 0.35 m at R_L) behind that pair; through a real gap the ring sees on, at least
-      past the thickness of the wall the gap is cut in.
+    A concave corner seen at a grazing angle fails: consecutive hits metres apart on one wall
+    make its closest pair across the two sides look wide, but the corner, the peak, lies about
+    one ray spacing (<= 0.35 m at R_L) behind that pair. An opening whose peak reads R_L is
+    kept: the ring cannot tell a passage from a corner out of range.
     """
     if len(gaps) == 0:
         return np.zeros(0, dtype=bool)
     qa = gaps[:, GAP_QA_X:GAP_QA_Y + 1]
     qb = gaps[:, GAP_QB_X:GAP_QB_Y + 1]
-    da = np.hypot(qa[:, 0] - px, qa[:, 1] - py)
-    db = np.hypot(qb[:, 0] - px, qb[:, 1] - py)
-    ok = np.maximum(da, db) < max_range - guard
     pk = gaps[:, GAP_PEAK].astype(np.int64)
     hit = np.column_stack([px + ring[pk] * cos_t[pk], py + ring[pk] * sin_t[pk]])  # the peak ray's return
     e = qb - qa
     ee = np.maximum(np.sum(e * e, axis=1), 1e-12)
     s = np.clip(np.sum((hit - qa) * e, axis=1) / ee, 0.0, 1.0)
     beyond = np.hypot(*(hit - qa - s[:, None] * e).T)  # distance of the peak return from the throat segment
-    return ok & (beyond >= depth)
+    return (beyond >= depth) | (ring[pk] >= max_range)
 
 
 def _rays(n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -27,6 +27,7 @@ from swarmnav.llm import decision_source
 from swarmnav.methods.base import Observation
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.corridors import (
+    GAP_W,
     Corridor,
     corridors_toward,
     detect_gaps,
@@ -103,6 +104,7 @@ class SubSwarm:
     slot_step: int = _NEVER  # step of the last slot assignment
     ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
     passages: list = field(default_factory=list)  # passage mode: list[Passage], oldest first
+    narrow_steps: int = 0  # passage mode: consecutive steps the route was a narrow throat with no wider candidate
 
 
 class Hes:
@@ -117,6 +119,8 @@ class Hes:
         self._gains = F.gain_vector(self.params)
         self._cos, self._sin = _ray_table(self.params.n_rays)
         self._source_override: DecisionSource | None = None
+        # passage mode: throats narrower than this [m] put d_safe_eff < d_safe (w/2 - margin < d_safe)
+        self._w_wide = 2.0 * (self.params.d_safe + self.params.passage_margin)
 
     def use_source(self, source: DecisionSource) -> Hes:
         """Decide structure with ``source`` instead of the rule policy (from the next reset)."""
@@ -249,13 +253,14 @@ class Hes:
         a = sub.subleader
         ra, sx, sy = ring[a], x[a, 0], x[a, 1]
         gaps = detect_gaps(ra, sx, sy, self._cos, self._sin, p.lidar_range, p.h_open)
-        if p.passage_mode:
-            gaps = gaps[seen_passages(gaps, ra, sx, sy, self._cos, self._sin, p.lidar_range, p.gap_range_guard,
-                                      p.gap_depth)]
+        if p.passage_mode:  # a narrow opening must be a seen passage, not a concave corner
+            gaps = gaps[seen_passages(gaps, ra, sx, sy, self._cos, self._sin, p.gap_depth, p.lidar_range)
+                        | (gaps[:, GAP_W] >= self._w_wide)]
         # candidates toward the goal whose throat is reachable straight from the centroid
         cors = corridors_toward(gaps, x[a], self.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
                                 ring=ra, sensor=x[a], origin=pack.centroid, rho_vis=_RHO_VIS, max_range=p.lidar_range,
-                                rays=(self._cos, self._sin), approach=p.passage_len if p.passage_mode else 0.0)
+                                rays=(self._cos, self._sin), approach=p.passage_len if p.passage_mode else 0.0,
+                                approach_w=self._w_wide)
         return Report(pack, tuple(cors), float(ring[members].min()))
 
     def decision_state(self, k: int, reports: dict[int, Report]) -> DecisionState:
@@ -366,7 +371,7 @@ class Hes:
         route = self._choose_route(sub, rep, x, k)
         sub.route = route
         if p.passage_mode:
-            self._remember_passage(sub, route, x, k)
+            self._remember_passage(sub, route, rep, x, k)
         if route is None:
             target = self.goal
         elif route.direct:
@@ -374,6 +379,12 @@ class Hes:
         else:  # `through` metres past the throat, or past the centroid once that is beyond the throat
             along = max(float(np.dot(cent - route.mid, route.normal)), 0.0)
             target = route.mid + (along + p.through) * route.normal
+            a = sub.subleader
+            if p.passage_mode and route.width < self._w_wide and along <= 0.0 and not segment_clear(
+                    self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, cent[0], cent[1], route.mid[0],
+                    route.mid[1], _RHO_VIS, p.lidar_range):
+                # the throat is reached through its mouth (see corridors_toward, approach)
+                target = route.mid - p.passage_len * route.normal
         if p.adaptive:
             # virtual leader: advance toward the target at the (adaptive) cruise speed ...
             step = self._cruise(rep) * p.dt
@@ -426,8 +437,8 @@ class Hes:
             else:
                 return prev
         m = len(rep.pack.members)
-        narrow = prev is not None and not prev.direct and prev.width < 2.0 * (p.d_safe + p.passage_margin)
-        if prev is not None and not prev.direct and not (p.passage_mode and narrow):
+        engaged = prev is not None and any(q.throat is prev for q in sub.passages)  # passage mode
+        if prev is not None and not prev.direct and not engaged:
             # Hold a throat until the whole sub-swarm is through (at most _HOLD_S after the first
             # member passed): the next corridor's target would pull the members still in front
             # of this gap away from it, along the wall.
@@ -451,9 +462,14 @@ class Hes:
             # (the members still in front of it queue for it, see _queue). Replaces the hold above
             # for narrow throats: the head moves on while the queue streams through.
             behind = [q.throat for q in sub.passages if q.crossed[rep.pack.members].any()]
-            cands = [c for c in cands if c.direct or (
+            w_wide = self._w_wide
+            cands = [c for c in cands if c.width >= w_wide or (
                 float(np.dot(cent - c.mid, c.normal)) <= p.through
                 and not any(math.hypot(*(c.mid - b.mid)) <= 0.5 * b.width for b in behind))]
+            # A throat narrower than 2 (d_safe + passage_margin) is the last resort: a candidate
+            # only when the report shows no wider corridor toward the goal.
+            if any(c.width >= w_wide for c in cands):
+                cands = [c for c in cands if c.width >= w_wide]
         if not cands:
             return prev
         cost = [c.cost + self._width_penalty(c.width, m) for c in cands]
@@ -606,15 +622,21 @@ class Hes:
                                 p.brake_margin, p.lidar_range)
         return F.saturate(a, p.a_bound)
 
-    def _remember_passage(self, sub: SubSwarm, route: Corridor | None, x: np.ndarray, k: int) -> None:
-        """Passage mode: keep the narrow throats (w < 2 (d_safe + passage_margin)) this sub-swarm
-        was routed through for ``passage_memory`` seconds after they stopped being its route, and
-        mark which agents have crossed each, so that members still in front of a throat keep its
-        passage (and queue for it) when the subleader's route has moved on to the next corridor."""
+    def _remember_passage(self, sub: SubSwarm, route: Corridor | None, rep: Report, x: np.ndarray, k: int) -> None:
+        """Passage mode: a narrow throat (w < 2 (d_safe + passage_margin)) becomes a passage once it
+        has been the sub-swarm's route, with no wider corridor in its report, for
+        ``passage_confirm`` seconds (the planner's committed choice, not a one-step flicker).
+        Passages are kept for ``passage_memory`` seconds after they stopped being the route, with
+        the agents that have crossed each, so that members still in front of a throat keep its
+        passage (and queue for it) when the route has moved on to the next corridor."""
         p = self.params
+        w_wide = self._w_wide
         keep = [q for q in sub.passages if (k - q.step) * p.dt <= p.passage_memory]
-        if route is not None and not route.direct and route.width < 2.0 * (p.d_safe + p.passage_margin):
-            same = [q for q in keep if math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
+        narrow = route is not None and not route.direct and route.width < w_wide
+        same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
+        only = narrow and all(c.width < w_wide for c in rep.corridors)
+        sub.narrow_steps = sub.narrow_steps + 1 if only else 0
+        if narrow and (same or sub.narrow_steps * p.dt >= p.passage_confirm):
             keep = [q for q in keep if not any(q is r for r in same)]
             crossed = same[-1].crossed if same else np.zeros(self.n, dtype=bool)
             keep.append(Passage(route, k, crossed))

@@ -78,7 +78,6 @@ class HesParams:
     w_split: float = 6.0  # ours [m] a gap counts as a split path (n_c) if a >=5-agent sub-swarm (~3 m across) passes it with d_safe = 1.5 m each side
     h_open: float = 0.5  # ours [m] the ring must rise this much between two minima to form an opening
     toward_deg: float = 80.0  # ours [deg] a corridor leads toward the goal if its exit direction is within this of the goal bearing (< 90: never back)
-    gap_range_guard: float = 1.0  # ours [m] (passage mode) an opening whose throat end lies within this of R_L is the range limit, not a seen passage
     gap_depth: float = 0.6  # ours [m] (passage mode) the peak return must lie this far from the throat: a concave corner seen at a grazing angle (<= one ray spacing, 0.35 m at R_L) is no passage
     switch_margin: float = 3.0  # ours [m] route-cost margin before a sub-swarm switches corridor (hysteresis)
     max_subswarms: int = 3  # ours [-] a split creates at most this many sub-swarms
@@ -96,6 +95,7 @@ class HesParams:
     passage_mode: bool = True  # ours: members inside the tube of their route's throat use d_safe_eff = min(d_safe, w/2 - passage_margin) in eq. (36); False = the paper's law everywhere
     passage_margin: float = 0.3  # ours [m] clearance kept between the throat's centre line and d_safe_eff: the near-obstacle term engages beyond 0.3 m off centre
     passage_len: float = 2.5  # ours [m] tube half-length along the throat normal: d_safe (corner reach) + 1 m (wall thickness either side of the detected throat)
+    passage_confirm: float = 5.0  # ours [s] a narrow throat becomes a passage after being the route, with no wider corridor reported, this long (2 s engaged passages beside blocks that the swarm can fly around: dense_cross_blocks R_unsafe 0.25)
     passage_memory: float = 20.0  # ours [s] a throat keeps its passage this long after the sub-swarm's route moved on (members still in front of it)
     passage_queue: float = 20.0  # ours [m] a member in front of an earlier throat queues for it when within this distance (R_L: it can see the throat)
     passage_reach: float = 1.5  # ours [m] tube half-width beyond w/2: an agent approaching within d_safe of the throat's corners is inside
