@@ -11,6 +11,7 @@ import math
 from typing import Any, Callable
 
 import numpy as np
+from scipy import ndimage
 
 from swarmnav.errors import ScenarioError
 from swarmnav.world.obstacles import Box, Circle
@@ -27,6 +28,8 @@ def random_forest(
     r_max: float = 1.2,
     min_gap: float = 0.0,
     max_tries: int = 200_000,
+    min_passage: float = 0.0,
+    max_forests: int = 200,
 ) -> Scenario:
     """A planar forest of non-overlapping discs filling ``density`` of a rectangle.
 
@@ -39,12 +42,46 @@ def random_forest(
     sequential addition with radii uniform in ``[r_min, r_max]`` [m] and at least ``min_gap``
     [m] between discs; this stays feasible up to ~0.5 area fraction (the jamming limit of
     random sequential addition is ~0.547 for equal discs).
+
+    ``min_passage`` [m] > 0 keeps only crossable forests: a forest is redrawn (the same ``rng``
+    continues, so a forest that passes on the first draw is the one ``min_passage = 0`` gives)
+    until a corridor at least ``min_passage`` wide joins the two ends of the strip, checked on
+    a 0.1 m grid of the exact distance to discs and walls; ``max_forests`` draws at most.
     """
     if not 0.0 <= density < 0.55:
         raise ScenarioError(f"random_forest: density must be in [0, 0.55), got {density}")
     if not (0 < r_min <= r_max):
         raise ScenarioError(f"random_forest: need 0 < r_min <= r_max, got {r_min}, {r_max}")
     rng = np.random.default_rng(seed)
+    for _ in range(max(1, int(max_forests))):
+        centers, radii = _place_discs(rng, density, length, width, r_min, r_max, min_gap, max_tries)
+        if min_passage <= 0.0 or _crossable(centers, radii, length, width, min_passage):
+            break
+    else:
+        raise ScenarioError(
+            f"random_forest: no forest of {max_forests} draws at density {density} has a "
+            f"{min_passage} m passage; lower density or min_passage"
+        )
+    wall = 1.0
+    obstacles: list = [
+        Box((-10.0, width / 2), (length + 10.0, width / 2 + wall)),
+        Box((-10.0, -width / 2 - wall), (length + 10.0, -width / 2)),
+    ]
+    obstacles += [Circle((float(c[0]), float(c[1])), float(r)) for c, r in zip(centers, radii)]
+    scn = Scenario(
+        name=f"random_forest:density={density:g},seed={seed}",
+        bounds=(-10.0, -width / 2 - wall - 1.0, length + 10.0, width / 2 + wall + 1.0),
+        swarm=Swarm(n=n, spawn=(-8.0, -4.0, -2.0, 4.0)),
+        goal=(length + 6.0, 0.0),
+        obstacles=tuple(obstacles),
+        description=f"Random forest, obstacle area density {density:g}, seed {seed}",
+        source=f"random_forest(density={density:g}, seed={seed})",
+    )
+    return validate(scn)
+
+
+def _place_discs(rng, density, length, width, r_min, r_max, min_gap, max_tries):
+    """Random sequential addition of non-overlapping discs up to the area fraction ``density``."""
     target = density * length * width
     centers = np.zeros((0, 2))
     radii = np.zeros(0)
@@ -71,22 +108,23 @@ def random_forest(
             area += math.pi * r * r
             if area >= target:
                 break
-    wall = 1.0
-    obstacles: list = [
-        Box((-10.0, width / 2), (length + 10.0, width / 2 + wall)),
-        Box((-10.0, -width / 2 - wall), (length + 10.0, -width / 2)),
-    ]
-    obstacles += [Circle((float(c[0]), float(c[1])), float(r)) for c, r in zip(centers, radii)]
-    scn = Scenario(
-        name=f"random_forest:density={density:g},seed={seed}",
-        bounds=(-10.0, -width / 2 - wall - 1.0, length + 10.0, width / 2 + wall + 1.0),
-        swarm=Swarm(n=n, spawn=(-8.0, -4.0, -2.0, 4.0)),
-        goal=(length + 6.0, 0.0),
-        obstacles=tuple(obstacles),
-        description=f"Random forest, obstacle area density {density:g}, seed {seed}",
-        source=f"random_forest(density={density:g}, seed={seed})",
-    )
-    return validate(scn)
+    return centers, radii
+
+
+def _crossable(centers: np.ndarray, radii: np.ndarray, length: float, width: float, passage: float,
+               resolution: float = 0.1) -> bool:
+    """Whether free space at least ``passage`` [m] wide joins x < 0 to x > length between
+    the walls: grid nodes with clearance >= passage / 2 from every disc and both walls,
+    4-connected, from the column at x = -1 m to the one at x = length + 1 m."""
+    xs = np.arange(-1.0, length + 1.0 + 1e-9, resolution)
+    ys = np.arange(-width / 2, width / 2 + 1e-9, resolution)
+    gx, gy = np.meshgrid(xs, ys)  # (ny, nx)
+    clear = width / 2 - np.abs(gy)
+    for c, r in zip(centers, radii):
+        clear = np.minimum(clear, np.hypot(gx - c[0], gy - c[1]) - r)
+    labels, _ = ndimage.label(clear >= passage / 2)
+    left = set(labels[:, 0][labels[:, 0] > 0].tolist())
+    return any(lab in left for lab in labels[:, -1][labels[:, -1] > 0].tolist())
 
 
 def periodic_box(n: int = 100, rho: float = 4.102, seed: int = 0) -> Scenario:
