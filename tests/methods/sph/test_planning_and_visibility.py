@@ -27,6 +27,27 @@ def test_astar_is_optimal_in_free_space_and_goes_round_a_wall():
     assert path[:, 1].min() < -3.0  # went round the bottom end of the wall
 
 
+def test_wide_clearance_is_kept_when_the_detour_is_short_and_dropped_when_it_is_not():
+    # two posts 1.4 m apart (a 1.4 m gap): the d_thr tier fits through (0.5 m each side),
+    # the wide 0.9 m clearance does not; the way round the posts is open
+    posts = (Circle((4.0, 1.2), 0.5), Circle((4.0, -1.2), 0.5))
+    g = Geometry.from_obstacles(list(posts))
+    from swarmnav.sensing import signed_distance
+
+    def clearance(wide, cost, bounds):
+        maps = OccupancyMaps(posts, bounds, 1, 0.1, 0.3, 100.0, margin=0.5, wide=wide, wide_cost=cost)
+        maps.observe(0, np.zeros(2))
+        path = maps.search(0, np.array([0.0, 0.0]), np.array([8.0, 0.0]), 10**6)
+        return signed_distance(g, path[1:-1]).min(), np.abs(path[:, 1]).max()
+
+    d, _ = clearance(0.0, 0.0, BOUNDS)
+    assert 0.5 - 0.08 <= d < 0.9 - 0.1  # the paper-only tiers go through the gap
+    d, y = clearance(0.9, 2.0, BOUNDS)
+    assert d >= 0.9 - 0.08 and y > 2.0  # round the posts: a ~1 m detour beats 1 m of gap at cost 3
+    d, _ = clearance(0.9, 0.01, BOUNDS)
+    assert d < 0.9 - 0.1  # nearly free band: straight through again
+
+
 def test_map_only_holds_obstacles_within_sensing_range():
     maps = OccupancyMaps((Circle((2.0, 0.0), 0.5), Circle((14.0, 0.0), 0.5)), BOUNDS, 2, 0.1, 0.3, 5.0)
     assert maps.observe(0, np.array([0.0, 0.0])) == 1

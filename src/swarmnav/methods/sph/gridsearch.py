@@ -4,10 +4,13 @@ The SPH paper's robots build an occupancy grid from onboard perception (Fig. 1) 
 B-spline optimisation with a grid-search path (the released code: A* at 0.1 m). Here every
 robot keeps its own map: an obstacle enters it once the obstacle's bounding box comes within
 the perception range (the paper equates sensing range and R, Section IV); unknown space is
-free. Each cell stores a clearance class: 2 within ``inflation`` of a known obstacle (no room
-for the body), 1 within ``margin`` (inside the ESDF threshold d_thr of eq. 10), 0 free. The
-search first looks for a path through class 0 only, so the initial path keeps the clearance the
-optimiser asks for, and falls back to classes 0-1. It is A* on the 8-connected grid (no corner
+free. Each cell stores a clearance class: the number of clearances it is inside, counting
+``inflation`` (no room for the body) as all of them; with ``margin = d_thr`` and a wider
+``wide`` clearance: 3 within ``inflation``, 2 within d_thr (the ESDF threshold of eq. 10), 1
+within ``wide``, 0 free. The search first looks for a path that keeps d_thr (classes 0-1,
+class 1 costing ``1 + wide_cost`` per metre, so the path keeps the wide clearance unless that
+costs a long detour), and falls back to the body clearance. It is A* on the 8-connected grid
+(no corner
 cutting), compiled with numba.
 """
 
@@ -33,7 +36,8 @@ class OccupancyMaps:
     """
 
     def __init__(self, obstacles: tuple[Obstacle, ...], bounds, n_robots: int, resolution: float,
-                 inflation: float, sensing_range: float, margin: float | None = None):
+                 inflation: float, sensing_range: float, margin: float | None = None, wide: float = 0.0,
+                 wide_cost: float = 0.0):
         x0, y0, x1, y1 = bounds
         self.resolution = float(resolution)
         self.origin = np.array([x0, y0], dtype=float) + 0.5 * self.resolution
@@ -43,21 +47,25 @@ class OccupancyMaps:
         self.sensing_range = float(sensing_range)
         self.grids = np.zeros((n_robots, ny, nx), dtype=np.uint8)
         self.known = np.zeros((n_robots, len(obstacles)), dtype=bool)
-        margin = max(inflation, inflation if margin is None else margin)
+        self.levels = sorted({m for m in (margin or 0.0, wide) if m > inflation})  # clearances beyond the body's [m]
+        margin = max([inflation, *self.levels])
+        top = len(self.levels) + 1
+        # A* step-cost factor per class: 1 + wide_cost inside the wide band (classes 1 .. top - 2)
+        self.cost = np.array([1.0] + [1.0 + wide_cost] * max(top - 2, 0) + [1.0, 1.0])[: top + 1]
         lo, hi, cells = [], [], []
         for o in obstacles:
             g = Geometry.from_obstacles([o])
             blo, bhi = g.bbox_lo.min(axis=0), g.bbox_hi.max(axis=0)
             lo.append(blo)
             hi.append(bhi)
-            cells.append(self._footprint(g, blo - margin, bhi + margin, inflation, margin))
+            cells.append(self._footprint(g, blo - margin, bhi + margin, inflation))
         self.bbox_lo = np.array(lo).reshape(-1, 2)
         self.bbox_hi = np.array(hi).reshape(-1, 2)
         self.footprints = cells
 
-    def _footprint(self, g: Geometry, lo, hi, inflation: float, margin: float) -> tuple[np.ndarray, np.ndarray]:
-        """Flat indices and clearance classes (2 within ``inflation``, 1 within ``margin``) of
-        the cells around one obstacle."""
+    def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
+        """Flat indices and clearance classes (see the module docstring) of the cells around
+        one obstacle."""
         ny, nx = self.shape
         ix0, iy0 = np.maximum(np.floor((lo - self.origin) / self.resolution).astype(int), 0)
         ix1, iy1 = np.minimum(np.ceil((hi - self.origin) / self.resolution).astype(int), [nx - 1, ny - 1])
@@ -66,8 +74,11 @@ class OccupancyMaps:
         iy, ix = np.mgrid[iy0:iy1 + 1, ix0:ix1 + 1]
         pts = self.origin + self.resolution * np.column_stack([ix.ravel(), iy.ravel()])
         d = signed_distance(g, pts)
-        near = d < margin
-        level = np.where(d[near] < inflation, 2, 1).astype(np.uint8)
+        top = len(self.levels) + 1
+        near = d < (self.levels[-1] if self.levels else inflation)
+        dn = d[near]
+        level = sum((dn < m).astype(np.uint8) for m in self.levels) if self.levels else np.zeros(len(dn), np.uint8)
+        level = np.where(dn < inflation, top, level).astype(np.uint8)
         return (iy.ravel()[near] * nx + ix.ravel()[near]).astype(np.int64), level
 
     def observe(self, robot: int, position: np.ndarray) -> int:
@@ -101,11 +112,12 @@ class OccupancyMaps:
         occ = self.grids[robot]
         idx = np.zeros(0, dtype=np.int64)
         gc = self.cell(goal)
-        for blocked in (1, 2):  # keep the d_thr margin if possible, else the body clearance
+        top = len(self.levels) + 1
+        for blocked in (top - 1, top) if top > 1 else (1,):  # keep d_thr if possible, else the body clearance
             s = _nearest_free(occ, *self.cell(start), 40, blocked)
             g = _nearest_free(occ, *gc, 40, blocked)
             if s[0] >= 0 and g[0] >= 0:
-                idx = _astar(occ, s[0], s[1], g[0], g[1], max_expand, blocked)
+                idx = _astar(occ, s[0], s[1], g[0], g[1], max_expand, blocked, self.cost)
                 if len(idx):
                     break
         if len(idx) == 0:
@@ -186,8 +198,9 @@ def _heap_pop(keys, vals, size):
 
 
 @njit(cache=True)
-def _astar(occ, sy, sx, gy, gx, max_expand, blocked):
-    """A* over the cells with ``occ < blocked`` of an 8-connected grid, unit cell cost, diagonal sqrt(2), no corner cutting, octile
+def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost):
+    """A* over the cells with ``occ < blocked`` of an 8-connected grid, step length 1 (diagonal
+    sqrt(2)) times ``cost[occ]`` of the entered cell (all >= 1), no corner cutting, octile
     heuristic (ties broken towards larger g). Returns flat cell indices start -> goal, empty
     if the goal is unreachable within ``max_expand`` expansions."""
     ny, nx = occ.shape
@@ -229,7 +242,7 @@ def _astar(occ, sy, sx, gy, gx, max_expand, blocked):
             nb = y * nx + x
             if closed[nb]:
                 continue
-            ng = g[cur] + (1.4142135623730951 if diag else 1.0)
+            ng = g[cur] + (1.4142135623730951 if diag else 1.0) * cost[occ[y, x]]
             if ng < g[nb]:
                 g[nb] = ng
                 parent[nb] = cur

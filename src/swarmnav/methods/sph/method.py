@@ -64,7 +64,7 @@ class Sph:
         n = scenario.n
         self.esdf = Esdf.build(self.geom, scenario.bounds, p.esdf_resolution)
         self.maps = OccupancyMaps(scenario.obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.R,
-                                  margin=p.d_thr)
+                                  margin=p.d_thr, wide=p.plan_clearance, wide_cost=p.plan_clearance_cost)
         x = np.asarray(positions, dtype=float)
         self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
         self._replan_every = max(1, int(round(p.T_p / p.dt)))

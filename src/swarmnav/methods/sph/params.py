@@ -37,7 +37,11 @@ class SphParams:
     r_floor: float = 0.05  # distance floor in the 1/r repulsion [m] (finite force)
     esdf_resolution: float = 0.1  # ESDF grid [m], as the released sdf_map
     grid_resolution: float = 0.1  # grid-search cell [m], as the released A*
-    inflation: float = 0.3  # grid-search body clearance [m]: body radius 0.2 m + one cell (fallback tier)
+    inflation: float = 0.3  # grid-search body clearance [m]: body radius 0.2 m + one cell (last tier)
+    plan_clearance: float = 0.9  # first-tier grid-search clearance [m]: d_thr + a body diameter, so a
+    #   neighbour abreast of the path at contact distance is still outside the ESDF force band (0 = off)
+    plan_clearance_cost: float = 2.0  # extra A* cost per metre inside plan_clearance [-]: detours up to
+    #   ~2 m per metre of hugging are preferred (ours)
     ctrl_spacing: float = 0.5  # control-point spacing along the initial path [m] (released dist_p)
     horizon_points: int = 10  # path points per local plan (released: first 10); 0 = whole path
     max_iter: int = 200  # L-BFGS-B iteration cap (released opt_maxeval)
