@@ -2,8 +2,8 @@
 
     # 1. run the trials (20 forests per density; resumable)
     swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --workers 2 --out out/sph-forest
-    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=apf --set steps=900 --out out/sph-forest-apf
-    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=hes --set steps=900 --out out/sph-forest-hes
+    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=apf --out out/sph-forest-apf
+    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=hes --out out/sph-forest-hes
     # 2. tabulate
     PYTHONPATH=src python benchmarks/sph_table2.py out/sph-forest out/sph-forest-apf out/sph-forest-hes
 

@@ -23,6 +23,15 @@ def test_undeclared_placeholder_and_reserved_names_fail():
         from_dict({**base, "scenario_vars": {"n": 3}}, "x.toml", {}, "1")
 
 
-def test_unknown_set_key_is_still_a_method_parameter():
-    exp = load_experiment("sph-forest", overrides={"densty": "0.3"}, seeds="1")
-    assert exp.variants[0].params == {"densty": "0.3"}  # rejected when the runner builds the method
+def test_unknown_set_key_fails_at_load_with_its_name():
+    # the spec gives a horizon in seconds, so loading builds the method's parameters (for its
+    # dt) and a typo fails there, before any run
+    with pytest.raises(ConfigError, match="densty"):
+        load_experiment("sph-forest", overrides={"densty": "0.3"}, seeds="1")
+
+
+def test_horizon_gives_equal_time_to_every_method():
+    sph = load_experiment("sph-forest", seeds="1").variants[0]
+    apf = load_experiment("sph-forest", overrides={"method": "apf"}, seeds="1").variants[0]
+    assert sph.horizon == apf.horizon == 90.0
+    assert sph.steps == 4500 and apf.steps == 900  # dt 0.02 s and 0.1 s
