@@ -48,6 +48,21 @@ def test_wide_clearance_is_kept_when_the_detour_is_short_and_dropped_when_it_is_
     assert d < 0.9 - 0.1  # nearly free band: straight through again
 
 
+def test_neighbours_bend_the_seed_path_but_never_block_it():
+    maps = OccupancyMaps((Circle((20.0, 0.0), 0.5),), (-5.0, -5.0, 25.0, 5.0), 1, 0.1, 0.3, 100.0, margin=0.5,
+                         wide=0.9, wide_cost=2.0)
+    start, goal = np.array([0.0, 0.0]), np.array([8.0, 0.0])
+    ahead = np.array([[3.0, 0.0]])
+    plain = maps.search(0, start, goal, 10**6)
+    assert np.abs(plain[:, 1]).max() <= 0.05 + 1e-9  # straight along a row of cell centres
+    bent = maps.search(0, start, goal, 10**6, ahead, 0.6)
+    assert np.linalg.norm(bent - ahead, axis=1).min() >= 0.6 - 0.08  # round the robot ahead
+    assert maps.grids[0].max() <= 3 and not (maps.grids[0] == 1).any()  # the map itself is untouched
+    # a neighbour sitting on the goal costs, it does not block: the path still ends there
+    on_goal = maps.search(0, start, goal, 10**6, goal[None], 0.6)
+    np.testing.assert_allclose(on_goal[-1], goal)
+
+
 def test_map_only_holds_obstacles_within_sensing_range():
     maps = OccupancyMaps((Circle((2.0, 0.0), 0.5), Circle((14.0, 0.0), 0.5)), BOUNDS, 2, 0.1, 0.3, 5.0)
     assert maps.observe(0, np.array([0.0, 0.0])) == 1

@@ -105,11 +105,15 @@ class OccupancyMaps:
     def center(self, iy: np.ndarray, ix: np.ndarray) -> np.ndarray:
         return self.origin + self.resolution * np.column_stack([ix, iy])
 
-    def search(self, robot: int, start: np.ndarray, goal: np.ndarray, max_expand: int) -> np.ndarray | None:
+    def search(self, robot: int, start: np.ndarray, goal: np.ndarray, max_expand: int,
+               others: np.ndarray | None = None, others_radius: float = 0.0) -> np.ndarray | None:
         """A* path from ``start`` to ``goal`` [m] on ``robot``'s map: (P, 2) cell centres, the
         first replaced by ``start`` itself; None if no path. A start or goal inside an
         inflated obstacle is moved to the nearest free cell (as the released planner does)."""
         occ = self.grids[robot]
+        if others is not None and len(others) and others_radius > 0 and len(self.levels) > 1:
+            occ = occ.copy()  # neighbours: cells within others_radius join the wide (costly) band
+            _mark_discs(occ, (np.asarray(others) - self.origin) / self.resolution, others_radius / self.resolution)
         idx = np.zeros(0, dtype=np.int64)
         gc = self.cell(goal)
         top = len(self.levels) + 1
@@ -128,6 +132,19 @@ class OccupancyMaps:
         if g == gc:  # the goal itself is free: end exactly on it
             path[-1] = goal
         return path
+
+
+@njit(cache=True)
+def _mark_discs(occ, centres, radius):
+    """Raise cells within ``radius`` [cells] of each centre [cells] to at least class 1."""
+    ny, nx = occ.shape
+    r = int(radius) + 1
+    for k in range(centres.shape[0]):
+        cx, cy = centres[k, 0], centres[k, 1]
+        for y in range(max(int(cy) - r, 0), min(int(cy) + r + 2, ny)):
+            for x in range(max(int(cx) - r, 0), min(int(cx) + r + 2, nx)):
+                if (x - cx) ** 2 + (y - cy) ** 2 <= radius * radius and occ[y, x] == 0:
+                    occ[y, x] = 1
 
 
 @njit(cache=True)

@@ -110,6 +110,7 @@ class Sph:
         self._steps += 1
         # trajectory planning every T_p (or once, Fig. 3B protocol)
         if self._ref_q is None or (not p.plan_once and obs.step - self._ref_k >= self._replan_every):
+            self._visible = (vi, vj)
             self._replan(obs.step, x, v)
         q_ref, v_ref, a_ref = self._reference(obs.step)
         # eq. (13)
@@ -160,9 +161,17 @@ class Sph:
                 off = np.linalg.norm(start_q - x, axis=1) > p.ref_reset
                 start_q[off], start_v[off] = x[off], v[off]
         plans = []
+        near = None
+        if p.plan_neighbours > 0:  # visible neighbours within plan_neighbours_range, by robot
+            vi, vj = self._visible
+            dist = np.linalg.norm(x[vi] - x[vj], axis=1)
+            close = dist < p.plan_neighbours_range
+            a, b = vi[close], vj[close]
+            near = [np.concatenate([b[a == r], a[b == r]]) for r in range(n)]
         for r in range(n):
             t0 = time.perf_counter()
-            plans.append(self._plan_one(r, start_q[r], start_v[r], start_a[r]))
+            others = x[near[r]] if near is not None else None
+            plans.append(self._plan_one(r, start_q[r], start_v[r], start_a[r], others))
             self._plan_ms.append(1e3 * (time.perf_counter() - t0))
         if p.plan_once:
             length = int(np.ceil(max(pl.duration for pl in plans) / p.dt)) + 1
@@ -176,12 +185,12 @@ class Sph:
             self._ref_q[r], self._ref_v[r], self._ref_a[r] = evaluate(pl.ctrl, pl.dt_knot, tau)
         self._ref_k = step
 
-    def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray):
+    def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, others: np.ndarray | None = None):
         """One robot's replan: update its map, grid search to its goal, optimise the spline."""
         p = self.params
         self.maps.observe(r, q)
         goal = self.goals[r]
-        path = self.maps.search(r, q, goal, p.max_expand)
+        path = self.maps.search(r, q, goal, p.max_expand, others, p.plan_neighbours)
         if path is None:  # no path on the robot's map: head straight for the goal
             self._search_failures += 1
             path = np.vstack([q, goal])
