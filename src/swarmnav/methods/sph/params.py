@@ -42,8 +42,8 @@ class SphParams:
     #   neighbour abreast of the path at contact distance is still outside the ESDF force band (0 = off)
     plan_clearance_cost: float = 2.0  # extra A* cost per metre inside plan_clearance [-]: detours up to
     #   ~2 m per metre of hugging are preferred (ours)
-    plan_neighbours: float = 0.6  # [m] cells this close to a visible neighbour cost like the wide band in
-    #   the grid search (ours; 0 = off, the paper's planner ignoring the others): 0.4 m contact + 0.2 m
+    plan_neighbours: float = 0.0  # [m] cells this close to a visible neighbour cost like the wide band in
+    #   the grid search (ours; 0 = off, as the paper's planner: on, it made contacts more frequent)
     plan_neighbours_range: float = 3.0  # [m] only visible neighbours this close enter the search
     ctrl_spacing: float = 0.5  # control-point spacing along the initial path [m] (released dist_p)
     horizon_points: int = 10  # path points per local plan (released: first 10); 0 = whole path
