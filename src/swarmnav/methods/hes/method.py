@@ -253,7 +253,7 @@ class Hes:
         a = sub.subleader
         ra, sx, sy = ring[a], x[a, 0], x[a, 1]
         gaps = detect_gaps(ra, sx, sy, self._cos, self._sin, p.lidar_range, p.h_open)
-        if p.passage_mode:  # a narrow opening must be a seen passage, not a concave corner
+        if p.passage_mode:  # an opening must be a seen passage, not a concave corner
             gaps = gaps[seen_passages(gaps, ra, sx, sy, self._cos, self._sin, p.gap_depth, p.lidar_range)
                         | (gaps[:, GAP_W] >= self._w_wide)]
         # candidates toward the goal whose throat is reachable straight from the centroid
@@ -315,7 +315,8 @@ class Hes:
             self.labels[g] = sid
             wp = old.waypoint.copy() if sid == s0 else x[g].mean(axis=0)
             self.subs[sid] = SubSwarm(sid, sl, wp, mode=old.mode, route=c, committed=True, commit_step=self._k,
-                                      squeeze=old.squeeze, heading=old.heading.copy())
+                                      squeeze=old.squeeze, heading=old.heading.copy(),
+                                      passages=[Passage(q.throat, q.step, q.crossed.copy()) for q in old.passages])
         if s0 not in self.subs:  # leader-less split cannot happen, but keep ids consistent
             pass
         self.stats["splits"] += 1
@@ -341,6 +342,9 @@ class Hes:
         kept.waypoint = (size[keep] * kept.waypoint + size[drop] * gone.waypoint) / (size[a] + size[b])
         kept.committed = False
         kept.slot_step = _NEVER
+        # passage mode: the merged sub-swarm keeps the passages of both parts (members in front of
+        # a throat stay queued for it)
+        kept.passages = sorted(gone.passages + kept.passages, key=lambda q: q.step)[-_PASSAGES:]
         kept.mode = min(kept.mode, gone.mode) if kept.mode != gone.mode else kept.mode
         self.stats["merges"] += 1
         return {"action": "merge", "source": prop.source, "reason": prop.reason,
@@ -466,10 +470,7 @@ class Hes:
             cands = [c for c in cands if c.width >= w_wide or (
                 float(np.dot(cent - c.mid, c.normal)) <= p.through
                 and not any(math.hypot(*(c.mid - b.mid)) <= 0.5 * b.width for b in behind))]
-            # A throat narrower than 2 (d_safe + passage_margin) is the last resort: a candidate
-            # only when the report shows no wider corridor toward the goal.
-            if any(c.width >= w_wide for c in cands):
-                cands = [c for c in cands if c.width >= w_wide]
+
         if not cands:
             return prev
         cost = [c.cost + self._width_penalty(c.width, m) for c in cands]

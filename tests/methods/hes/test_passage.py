@@ -1,0 +1,119 @@
+"""Passage mode (ours, docs/methods/hes.md "Passage mode"): the safety distance of eq. (36)
+inside a narrow throat the planner chose, the throat memory and queue, the corridor filters."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import swarmnav
+from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.corridors import detect_gaps, seen_passages
+from swarmnav.methods.hes.params import HesParams
+from swarmnav.methods.hes.passage import passage_dsafe
+from swarmnav.sensing import lidar_ring
+from swarmnav.sensing.lidar import _ray_table
+from swarmnav.world.scenario import load_scenario
+
+P = HesParams()
+COS, SIN = _ray_table(P.n_rays)
+GATES = "narrow_alternating_gates"
+MID, NORMAL, W = np.array([11.6, -9.25]), np.array([1.0, 0.0]), 2.3  # gate 1's 2.3 m gap (x = 11.6..12.4)
+
+
+def _tube(x, width=W):
+    return passage_dsafe(np.atleast_2d(x), MID, NORMAL, width, P.d_safe, P.passage_margin, P.passage_len,
+                         P.passage_reach)
+
+
+@pytest.mark.parametrize("width", [2.0, 2.3, 2.9, 3.5, 3.6, 4.0, 8.0])
+def test_d_safe_eff_never_exceeds_half_the_throat_nor_d_safe(width):
+    rng = np.random.default_rng(0)
+    x = MID + rng.uniform(-6.0, 6.0, size=(400, 2))
+    d = _tube(x, width)
+    assert np.all(d <= P.d_safe)
+    inside = d < P.d_safe
+    # inside the tube the centre line keeps `margin` of clearance beyond d_safe_eff
+    assert np.all(d[inside] <= 0.5 * width - P.passage_margin + 1e-12)
+    if width >= 2 * (P.d_safe + P.passage_margin):  # wide corridors are not affected
+        assert not inside.any()
+
+
+def test_leaving_the_tube_restores_d_safe():
+    along = np.array([-P.passage_len - 0.1, -1.0, 0.0, 0.4, 1.0, P.passage_len - 0.1, P.passage_len + 0.1, 6.0])
+    d = _tube(MID + along[:, None] * NORMAL)
+    eff = 0.5 * W - P.passage_margin
+    np.testing.assert_allclose(d, [P.d_safe, eff, eff, eff, eff, eff, P.d_safe, P.d_safe])
+    far_across = MID + np.array([0.0, 0.5 * W + P.passage_reach + 0.1])
+    assert _tube(far_across)[0] == P.d_safe
+
+
+def test_eq36_closes_the_gap_and_passage_mode_opens_it():
+    """In front of the 2.3 m gap, on its centre line 0.6 m before the gate: eq. (36) with the
+    paper's d_safe pushes back with > 10 a_max (the near-obstacle term of the gate corner and the
+    channel wall); inside the tube with d_safe_eff the near-obstacle term is off, only the base
+    term of eq. (36) remains."""
+    x = np.array([[11.0, -9.25]])
+    ring = lidar_ring(load_scenario(GATES).geometry, x, P.n_rays, P.lidar_range)
+    paper = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, P.d_safe, P.d_floor)
+    assert paper[0, 0] < -10 * P.a_max
+    ds = _tube(x)
+    assert ds[0] < P.d_safe
+    relaxed = F.lidar_repulsion_each(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, ds, P.d_floor)
+    base = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, 0.0, P.d_safe, P.d_floor)
+    np.testing.assert_allclose(relaxed, base)
+    assert abs(relaxed[0, 0]) < 0.15 * abs(paper[0, 0])
+
+
+def test_lidar_repulsion_each_with_equal_d_safe_is_the_papers_law():
+    rng = np.random.default_rng(3)
+    ring = rng.uniform(0.3, 20.0, size=(5, P.n_rays))
+    a = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, P.d_safe, P.d_floor)
+    b = F.lidar_repulsion_each(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, np.full(5, P.d_safe),
+                               P.d_floor)
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_single_uav_is_pushed_back_without_passage_mode_and_passes_with_it(seed):
+    scene = load_scenario(GATES, n=1)
+    off = swarmnav.run("hes", scene, seed=seed, steps=300, passage_mode=False)
+    on = swarmnav.run("hes", scene, seed=seed, steps=300)
+    assert off.positions[:, 0, 0].max() < 11.6  # never reaches the gate's face
+    assert on.positions[:, 0, 0].max() > 22.4 + 1.0  # through gates 1 and 2
+    assert on.metrics["d_clr_min"] > 0.0 and on.metrics["collisions"] == 0
+
+
+def test_the_d_safe_actually_used_is_d_safe_outside_passages():
+    """A run on the default corridor (no throat narrower than 2 (d_safe + margin) is ever the only
+    way) never relaxes d_safe, and passage_mode=false never does on the gates scene."""
+    from swarmnav.methods import registry
+
+    for scene, kw in (("default_corridor", {}), (GATES, {"passage_mode": False})):
+        m = registry.make("hes", **kw)
+        seen = []
+        orig = m._dsafe
+
+        def spy(x, orig=orig, seen=seen):
+            d = orig(x)
+            seen.append(float(d.min()))
+            return d
+
+        m._dsafe = spy
+        swarmnav.run(m, scene, seed=1, steps=250)
+        assert min(seen) == P.d_safe, scene
+
+
+def test_concave_corner_seen_at_a_grazing_angle_is_not_a_passage():
+    """From just above gate 1's gap the ring shows an 'opening' 3.4 m wide at the concave corner of
+    gate 1 and the upper channel wall (consecutive hits metres apart on the grazed wall); the real
+    gap and the channel are kept."""
+    p = np.array([[10.33, -7.48]])
+    ring = lidar_ring(load_scenario(GATES).geometry, p, P.n_rays, P.lidar_range)[0]
+    gaps = detect_gaps(ring, p[0, 0], p[0, 1], COS, SIN, P.lidar_range, P.h_open)
+    ok = seen_passages(gaps, ring, p[0, 0], p[0, 1], COS, SIN, P.gap_depth, P.lidar_range)
+    mids = 0.5 * (gaps[:, 0:2] + gaps[:, 2:4])
+    corner = np.flatnonzero((mids[:, 1] > 7.0) & (gaps[:, 4] > 2.0) & (gaps[:, 4] < 5.0))
+    gap1 = np.flatnonzero(np.hypot(*(mids - MID).T) < 1.0)
+    assert len(corner) == 1 and len(gap1) == 1
+    assert not ok[corner[0]] and ok[gap1[0]]
