@@ -253,9 +253,11 @@ class Hes:
         a = sub.subleader
         ra, sx, sy = ring[a], x[a, 0], x[a, 1]
         gaps = detect_gaps(ra, sx, sy, self._cos, self._sin, p.lidar_range, p.h_open)
-        if p.passage_mode:  # an opening must be a seen passage, not a concave corner
-            gaps = gaps[seen_passages(gaps, ra, sx, sy, self._cos, self._sin, p.gap_depth, p.lidar_range)
-                        | (gaps[:, GAP_W] >= self._w_wide)]
+        narrow = gaps[:, GAP_W] < self._w_wide
+        if p.passage_mode and narrow.any():  # a narrow opening must be a seen passage, not a concave corner
+            keep = ~narrow
+            keep[narrow] = seen_passages(gaps[narrow], ra, sx, sy, self._cos, self._sin, p.gap_depth, p.lidar_range)
+            gaps = gaps[keep]
         # candidates toward the goal whose throat is reachable straight from the centroid
         cors = corridors_toward(gaps, x[a], self.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
                                 ring=ra, sensor=x[a], origin=pack.centroid, rho_vis=_RHO_VIS, max_range=p.lidar_range,
@@ -607,12 +609,16 @@ class Hes:
         # nearest neighbour), head for the throat (c_s = its target) and are not coupled to a
         # subleader on the far side of the wall
         queued = self._qidx >= 0
-        cgrp = col * (_PASSAGES + 1) + self._qidx + 1
-        uniq, cgrp = np.unique(cgrp, return_inverse=True)
-        cent = F.group_centroids(x, cgrp, len(uniq))[cgrp]
-        wp[queued] = self._qtgt[queued]
-        follower &= ~queued
-        nn = F.nearest_in_group(x, cgrp)
+        if queued.any():
+            cgrp = col * (_PASSAGES + 1) + self._qidx + 1
+            uniq, cgrp = np.unique(cgrp, return_inverse=True)
+            cent = F.group_centroids(x, cgrp, len(uniq))[cgrp]
+            wp[queued] = self._qtgt[queued]
+            follower &= ~queued
+            nn = F.nearest_in_group(x, cgrp)
+        else:
+            cent = F.group_centroids(x, col, len(ids))[col]
+            nn = F.nearest_in_group(x, self.labels)
         sig = self._occlusion(x, slot, nn, sl_idx, cent)
         vslot = F.slot_velocity(x, slot, speed, p.eps_v)
         dsafe = self._dsafe(x)
@@ -653,7 +659,7 @@ class Hes:
         p = self.params
         q_idx = np.full(self.n, -1, dtype=np.int64)
         q_tgt = np.zeros((self.n, 2))
-        if not p.passage_mode:
+        if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return q_idx, q_tgt
         for s, sub in self.subs.items():  # few sub-swarms x at most _PASSAGES throats
             if sub.mode != NAVIGATE:
@@ -675,7 +681,8 @@ class Hes:
         through (:func:`passage.passage_dsafe`; the smallest value where tubes overlap)."""
         p = self.params
         out = np.full(self.n, p.d_safe)
-        if not p.passage_mode:
+        self.last_dsafe = out
+        if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return out
         for s, sub in self.subs.items():  # a loop over (at most a few) sub-swarms and throats, not agents
             if sub.mode != NAVIGATE or not sub.passages:
