@@ -263,7 +263,12 @@ class Hes:
                                 ring=ra, sensor=x[a], origin=pack.centroid, rho_vis=_RHO_VIS, max_range=p.lidar_range,
                                 rays=(self._cos, self._sin), approach=p.passage_len if p.passage_mode else 0.0,
                                 approach_w=self._w_wide)
-        return Report(pack, tuple(cors), float(ring[members].min()))
+        clr = ring[members].min(axis=1)
+        if p.passage_mode and hasattr(self, "last_dsafe"):
+            # members inside a passage's tube (or queued for one) do not slow the sub-swarm's cruise
+            free = (self.last_dsafe[members] >= p.d_safe) & (self._qidx[members] < 0)
+            clr = clr[free] if free.any() else clr
+        return Report(pack, tuple(cors), float(clr.min()))
 
     def decision_state(self, k: int, reports: dict[int, Report]) -> DecisionState:
         """z(k) of eq. (18) from the reports alone."""
