@@ -22,6 +22,9 @@ from swarmnav.sim import run
 from swarmnav.world import load_scenario
 
 
+FOREST = "random_forest:density={density},seed={seed},length=12,r_min=1.0,r_max=2.0,min_passage=1.0"  # as sph-forest
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="15,30,60")
@@ -33,10 +36,10 @@ def main() -> None:
     print(f"{'N':>4} {'plans':>6} {'plan med ms':>12} {'plan p95 ms':>12} {'plan max ms':>12} "
           f"{'coord med ms':>13} {'wall s':>8} {'sim s':>6}")
     warm = Sph()
-    run(warm, load_scenario(f"random_forest:density={a.density},seed={a.seed},length=12,r_min=1.0,r_max=2.0"),
+    run(warm, load_scenario(FOREST.format(density=a.density, seed=a.seed)),
         seed=a.seed, steps=20)  # compile the numba kernels outside the measurement
     for n in (int(s) for s in a.sizes.split(",")):
-        scn = load_scenario(f"random_forest:density={a.density},seed={a.seed},length=12,r_min=1.0,r_max=2.0", n=n)
+        scn = load_scenario(FOREST.format(density=a.density, seed=a.seed), n=n)
         m = Sph()
         t0 = time.perf_counter()
         run(m, scn, seed=a.seed, steps=a.steps)

@@ -8,7 +8,10 @@
     PYTHONPATH=src python benchmarks/sph_table2.py out/sph-forest out/sph-forest-apf out/sph-forest-hes
 
 Columns as Table II (mean +- population std over the finished trials; Rate = success rate),
-plus the worst inter-robot and robot-obstacle distances over all trials.
+plus the worst inter-robot and robot-obstacle distances over all trials, and why trials failed:
+``contact`` = trials with two robots closer than 0.4 m or a robot closer than 0.2 m to an
+obstacle (the 0.2 m body radius), ``late`` = trials without contact where some robot was not
+within 3 m of the goal at the end.
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ def table(out_dir: Path) -> None:
     dens = sorted({float(r["scenario"].split("density=")[1].split(",")[0]) for r in rows})
     method = rows[0]["method"] if rows else "?"
     print(f"\n{out_dir} ({method})")
-    print(f"{'d_obs':>6} {'runs':>4} " + " ".join(f"{h:>18}" for _, h, _ in COLS) + f" {'min r-r':>8} {'min r-o':>8}")
+    print(f"{'d_obs':>6} {'runs':>4} " + " ".join(f"{h:>18}" for _, h, _ in COLS) + f" {'min r-r':>8} {'min r-o':>8} {'contact':>7} {'late':>5}")
     for d in dens:
         mine = [r for r in rows if f"density={d:g}," in r["scenario"]]
         cells = []
@@ -50,7 +53,10 @@ def table(out_dir: Path) -> None:
             cells.append(f"{100 * v.mean():.0f}" if key == "success_rate" else f"{v.mean():.3g}+-{v.std():.2g}")
         rr = min(float(r["min_inter_robot_distance"]) for r in mine)
         ro = min(float(r["min_robot_obstacle_distance"]) for r in mine)
-        print(f"{d:>6g} {len(mine):>4} " + " ".join(f"{c:>18}" for c in cells) + f" {rr:>8.3f} {ro:>8.3f}")
+        hit = [float(r["min_inter_robot_distance"]) < 0.4 or float(r["min_robot_obstacle_distance"]) < 0.2 for r in mine]
+        late = sum(1 for r, h in zip(mine, hit) if not h and float(r["success_rate"]) < 1.0)
+        print(f"{d:>6g} {len(mine):>4} " + " ".join(f"{c:>18}" for c in cells)
+              + f" {rr:>8.3f} {ro:>8.3f} {sum(hit):>7} {late:>5}")
         if d in paper["d_obs"]:
             k = paper["d_obs"].index(d)
             ref = [_fmt_ref(paper[p][k]) for _, _, p in COLS]
