@@ -117,3 +117,101 @@ def test_concave_corner_seen_at_a_grazing_angle_is_not_a_passage():
     gap1 = np.flatnonzero(np.hypot(*(mids - MID).T) < 1.0)
     assert len(corner) == 1 and len(gap1) == 1
     assert not ok[corner[0]] and ok[gap1[0]]
+
+
+# ---------------------------------------------------------------- per-agent routing along the chain of throats
+def _chain_method(crossed_1, crossed_2, route_is_2, mode=None):
+    """A HES instance on the gates scene with one sub-swarm of 6 agents and two remembered passages:
+    gate 1's gap (11.6, -9.25), normal +x, and gate 2's gap (21.6, +9.25), normal +x."""
+    from swarmnav.methods import registry
+    from swarmnav.methods.hes.corridors import Corridor
+    from swarmnav.methods.hes.method import Passage
+
+    scene = load_scenario(GATES, n=6)
+    x = np.array([[8.0, -8.0], [9.0, -9.0], [14.0, -8.0], [16.0, 0.0], [18.0, 6.0], [24.0, 8.0]])
+    m = registry.make("hes")
+    m.reset(scene, x, np.zeros_like(x), np.random.default_rng(0))
+    g1 = Corridor(MID.copy(), NORMAL.copy(), W, MID + 3.0 * NORMAL, 0.0)
+    mid2 = np.array([21.6, 9.25])
+    g2 = Corridor(mid2, NORMAL.copy(), W, mid2 + 3.0 * NORMAL, 0.0)
+    sub = m.subs[0]
+    sub.passages = [Passage(g1, 0, np.asarray(crossed_1)), Passage(g2, 0, np.asarray(crossed_2))]
+    sub.route = g2 if route_is_2 else None
+    if mode is not None:
+        sub.mode = mode
+    return m, x, g1, g2
+
+
+def test_an_agent_through_throat_k_targets_throat_k_plus_1():
+    """Agents 0-1 are in front of gate 1, agents 2-4 are through gate 1 but in front of gate 2, agent 5
+    is through both. The route is beyond gate 2 (None): each agent is routed to the next throat of the
+    chain it has not crossed -- gate 1, gate 2, or (through both) the sub-swarm's waypoint."""
+    c1 = [False, False, True, True, True, True]
+    c2 = [False, False, False, False, False, True]
+    m, x, g1, g2 = _chain_method(c1, c2, route_is_2=False)
+    q_idx, q_tgt = m._queue(x)
+    np.testing.assert_array_equal(q_idx, [0, 0, 1, 1, 1, -1])
+    np.testing.assert_allclose(q_tgt[:2], np.tile(g1.mid + P.through * g1.normal, (2, 1)))
+    np.testing.assert_allclose(q_tgt[2:5], np.tile(g2.mid + P.through * g2.normal, (3, 1)))
+
+
+@pytest.mark.parametrize("n_through, queued", [(1, False), (2, True)])
+def test_the_routes_throat_queues_its_tail_once_a_head_is_through(n_through, queued):
+    """While gate 2 is the route, its members follow the waypoint until `passage_head` (= 2) members
+    are through; then the head moves on and the others queue for gate 2."""
+    assert P.passage_head == 2
+    c1 = [True] * 6
+    c2 = [False] * (6 - n_through) + [True] * n_through
+    m, x, _, _ = _chain_method(c1, c2, route_is_2=True)
+    q_idx, _ = m._queue(x)
+    near = np.hypot(*(x - np.array([21.6, 9.25])).T) <= P.passage_queue  # agents 2-4 (0-1 are > 20 m away)
+    behind = np.flatnonzero(~np.asarray(c2) & near)
+    assert len(behind) >= 2
+    assert np.all(q_idx[behind] == (1 if queued else -1))
+    assert np.all(q_idx[~near] == -1)
+    assert np.all(q_idx[np.asarray(c2)] == -1)
+
+
+def test_the_queue_holds_in_encircle_mode():
+    """The head reaching the goal (encircle mode) does not cancel the tail's queue behind the last gate."""
+    from swarmnav.methods.hes.decision import ENCIRCLE
+
+    m, x, _, _ = _chain_method([True] * 6, [False, False, False, False, True, True], route_is_2=True, mode=ENCIRCLE)
+    q_idx, _ = m._queue(x)
+    np.testing.assert_array_equal(q_idx, [-1, -1, 1, 1, -1, -1])  # agents 0-1 are beyond passage_queue
+    x2 = x.copy()
+    x2[3] = [20.5, 9.25]  # in gate 2's mouth: the tube relaxation stays available in encircle mode
+    d = m._dsafe(x2)
+    assert d[3] == pytest.approx(0.5 * W - P.passage_margin) and d[0] == P.d_safe
+
+
+def test_the_head_does_not_wait_for_the_tail():
+    """On the gates scene the head moves on from gate 1 while the tail still streams through it: when
+    the 16th agent crosses gate 1, the head is already well into the bay (>= 4 m past the gate) and
+    the sub-swarm's waypoint is past the gate; no corridor behind a crossed passage is ever reported."""
+    from swarmnav.methods import registry
+
+    m = registry.make("hes")
+    seen = {}
+    orig = m.act
+
+    def act(obs, rng, orig=orig):
+        a, info = orig(obs, rng)
+        k = obs.step
+        through = int(np.count_nonzero(obs.positions[:, 0] > 12.4))
+        if through >= 16 and "k16" not in seen:
+            seen["k16"] = k
+            seen["head_x"] = float(obs.positions[:, 0].max())
+            seen["wp_x"] = max(float(s.waypoint[0]) for s in m.subs.values())
+        for s, sub in m.subs.items():
+            for c in m.last_reports[s].corridors:
+                for q in sub.passages:
+                    if q.crossed[sub.subleader] and not c.direct:
+                        assert float(np.dot(c.mid - q.throat.mid, q.throat.normal)) >= 0.0
+        return a, info
+
+    m.act = act
+    swarmnav.run(m, GATES, seed=2, steps=260)
+    assert "k16" in seen
+    assert seen["head_x"] >= 12.4 + 4.0
+    assert seen["wp_x"] > 12.4

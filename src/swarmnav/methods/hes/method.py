@@ -263,6 +263,12 @@ class Hes:
                                 ring=ra, sensor=x[a], origin=pack.centroid, rho_vis=_RHO_VIS, max_range=p.lidar_range,
                                 rays=(self._cos, self._sin), approach=p.passage_len if p.passage_mode else 0.0,
                                 approach_w=self._w_wide)
+        if p.passage_mode and sub.passages:
+            # a corridor behind a passage the subleader has crossed (a bay seen back through the gap)
+            # leads back along the chain, not toward the goal
+            crossed = [q.throat for q in sub.passages if q.crossed[a]]
+            cors = [c for c in cors if c.direct or not any(
+                float(np.dot(c.mid - t.mid, t.normal)) < 0.0 for t in crossed)]
         clr = ring[members].min(axis=1)
         if p.passage_mode and hasattr(self, "last_dsafe"):
             # members inside a passage's tube (or queued for one) do not slow the sub-swarm's cruise
@@ -378,6 +384,8 @@ class Hes:
         sub.mode = mode
         if mode == ENCIRCLE:
             sub.waypoint = self.goal.copy()
+            for q in sub.passages:  # passage mode: members still crossing keep their queue until through
+                q.crossed |= (x - q.throat.mid) @ q.throat.normal > 0.0
             return
         route = self._choose_route(sub, rep, x, k)
         sub.route = route
@@ -396,6 +404,13 @@ class Hes:
                     route.mid[1], _RHO_VIS, p.lidar_range):
                 # the throat is reached through its mouth (see corridors_toward, approach)
                 target = route.mid - p.passage_len * route.normal
+        if p.adaptive and p.passage_mode and sub.passages:
+            # passage chain: a waypoint left behind a wall (the head moved on through a gap) restarts
+            # from the head's centroid
+            a = sub.subleader
+            if not segment_clear(self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, cent[0], cent[1],
+                                 sub.waypoint[0], sub.waypoint[1], 0.2, p.lidar_range):
+                sub.waypoint = cent.copy()
         if p.adaptive:
             # virtual leader: advance toward the target at the (adaptive) cruise speed ...
             step = self._cruise(rep) * p.dt
@@ -448,7 +463,9 @@ class Hes:
             else:
                 return prev
         m = len(rep.pack.members)
-        engaged = prev is not None and any(q.throat is prev for q in sub.passages)  # passage mode
+        # passage mode: in a chain of passages the queues replace the hold (a wide bay corridor held
+        # for the tail would keep the head behind the last gate)
+        engaged = p.passage_mode and bool(sub.passages)
         if prev is not None and not prev.direct and not engaged:
             # Hold a throat until the whole sub-swarm is through (at most _HOLD_S after the first
             # member passed): the next corridor's target would pull the members still in front
@@ -479,6 +496,10 @@ class Hes:
                 and not any(math.hypot(*(c.mid - b.mid)) <= 0.5 * b.width for b in behind))]
 
         if not cands:
+            if (p.passage_mode and prev is not None
+                    and any(q.crossed[a] and math.hypot(*(q.throat.mid - prev.mid)) <= 0.5 * q.throat.width
+                            for q in sub.passages)):
+                return None  # through the last passage seen: head for the goal until the next throat shows
             return prev
         cost = [c.cost + self._width_penalty(c.width, m) for c in cands]
         best = int(np.argmin(cost))
@@ -648,7 +669,9 @@ class Hes:
         same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
         only = narrow and all(c.width < w_wide for c in rep.corridors)
         sub.narrow_steps = sub.narrow_steps + 1 if only else 0
-        if narrow and (same or sub.narrow_steps * p.dt >= p.passage_confirm):
+        # in a chain of narrow throats (a passage is remembered) the next narrow route is confirmed at once
+        chain = narrow and only and bool(keep)
+        if narrow and (same or chain or sub.narrow_steps * p.dt >= p.passage_confirm):
             keep = [q for q in keep if not any(q is r for r in same)]
             crossed = same[-1].crossed if same else np.zeros(self.n, dtype=bool)
             keep.append(Passage(route, k, crossed))
@@ -657,9 +680,12 @@ class Hes:
         sub.passages = keep[-_PASSAGES:]
 
     def _queue(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Passage mode: the members still in front of an earlier throat of their sub-swarm than its
-        current route (within ``passage_queue`` of it) and the target 'through' m past that throat
-        (the oldest such throat first). Returns (N,) int, the index of the agent's throat in its
+        """Passage mode, per-agent routing along the chain of remembered throats: a member that has
+        not crossed a passage of its sub-swarm (within ``passage_queue`` of it) is queued for it and
+        targets the point 'through' m past that throat (the oldest uncrossed throat first) -- for
+        an earlier throat than the route always, for the route's own throat once ``passage_head``
+        members have crossed it (they are the head, which follows the waypoint on to the next
+        throat while the tail streams through; in encircle mode too). Returns (N,) int, the index of the agent's throat in its
         sub-swarm's passages (-1: not queued) and (N, 2) targets."""
         p = self.params
         q_idx = np.full(self.n, -1, dtype=np.int64)
@@ -667,13 +693,12 @@ class Hes:
         if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return q_idx, q_tgt
         for s, sub in self.subs.items():  # few sub-swarms x at most _PASSAGES throats
-            if sub.mode != NAVIGATE:
-                continue
             members = self.labels == s
             for j, q in enumerate(sub.passages):
                 c = q.throat
-                if sub.route is not None and math.hypot(*(c.mid - sub.route.mid)) <= 0.5 * c.width:
-                    continue  # the current route: its members follow the sub-swarm's waypoint
+                if (sub.route is not None and math.hypot(*(c.mid - sub.route.mid)) <= 0.5 * c.width
+                        and np.count_nonzero(members & q.crossed) < p.passage_head):
+                    continue  # the current route, not yet crossed by a head: its members follow the waypoint
                 near = np.hypot(*(x - c.mid).T) <= p.passage_queue
                 pend = members & ~q.crossed & near & (q_idx < 0)
                 q_idx[pend] = j
@@ -682,15 +707,16 @@ class Hes:
 
     def _dsafe(self, x: np.ndarray) -> np.ndarray:
         """Safety distance of eq. (36) per agent [m]: d_safe, except in passage mode for the members
-        of a navigating sub-swarm inside the tube of a throat it is (or was recently) routed
-        through (:func:`passage.passage_dsafe`; the smallest value where tubes overlap)."""
+        of a sub-swarm (navigating, or encircling with members still crossing) inside the tube of a
+        throat it is (or was recently) routed through (:func:`passage.passage_dsafe`; the smallest
+        value where tubes overlap)."""
         p = self.params
         out = np.full(self.n, p.d_safe)
         self.last_dsafe = out
         if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return out
         for s, sub in self.subs.items():  # a loop over (at most a few) sub-swarms and throats, not agents
-            if sub.mode != NAVIGATE or not sub.passages:
+            if not sub.passages:
                 continue
             members = np.flatnonzero(self.labels == s)
             for q in sub.passages:

@@ -98,6 +98,7 @@ class HesParams:
     passage_confirm: float = 5.0  # ours [s] a narrow throat becomes a passage after being the route, with no wider corridor reported, this long (2 s engaged passages beside blocks that the swarm can fly around: dense_cross_blocks R_unsafe 0.25)
     passage_memory: float = 20.0  # ours [s] a throat keeps its passage this long after the sub-swarm's route moved on (members still in front of it)
     passage_queue: float = 20.0  # ours [m] a member in front of an earlier throat queues for it when within this distance (R_L: it can see the throat)
+    passage_head: int = 2  # ours [-] once this many members have crossed the route's passage they are the head (waypoint, subleader) and the rest queue for it: the head moves on while the tail streams through (1 jams the mouth; 3 leaves the whole sub-swarm in formation at the mouth longer, gates seed 4 fails)
     passage_reach: float = 1.5  # ours [m] tube half-width beyond w/2: an agent approaching within d_safe of the throat's corners is inside
 
     # ---------------------------------------------------------------- ablations (Simulation 2)
