@@ -153,15 +153,16 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
     """PNG figures: bars of mean ± std per metric (HES Fig. 4/9) and per-seed box plots (Fig. 7)."""
     from matplotlib.figure import Figure
 
-    names = [v["name"] for v in t["variants"]]
+    names = [_short(v["name"]) for v in t["variants"]]
     metrics = [m for m in t["metrics"] if any(len(v["values"][m]) for v in t["variants"])]
     out = []
     if not metrics:
         return out
-    ncol = min(4, len(metrics))
+    many = len(names) > 12  # one metric per row, so dozens of variants stay legible
+    ncol = 1 if many else min(4, len(metrics))
     nrow = int(np.ceil(len(metrics) / ncol))
-    width = max(3.2, 0.5 * len(names) + 1.5)
-    fig = Figure(figsize=(width * ncol, 3.0 * nrow), layout="constrained")
+    width = min(max(3.2, 0.35 * len(names) + 2.0), 22.0)
+    fig = Figure(figsize=(width * ncol, (3.4 if many else 3.0) * nrow), layout="constrained")
     for k, m in enumerate(metrics):
         ax = fig.add_subplot(nrow, ncol, k + 1)
         means = [np.mean(v["values"][m]) if len(v["values"][m]) else np.nan for v in t["variants"]]
@@ -174,9 +175,10 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
     fig.suptitle(f"{t['title']}: mean ± std over seeds", fontsize=10)
     out.append(("bars.png", _png(fig)))
     box_metrics = metrics[:4]
-    fig = Figure(figsize=(width * len(box_metrics), 3.2), layout="constrained")
+    shape = (len(box_metrics), 1) if many else (1, len(box_metrics))
+    fig = Figure(figsize=(width * shape[1], 3.4 * shape[0]), layout="constrained")
     for k, m in enumerate(box_metrics):
-        ax = fig.add_subplot(1, len(box_metrics), k + 1)
+        ax = fig.add_subplot(*shape, k + 1)
         data = [v["values"][m] if len(v["values"][m]) else np.array([np.nan]) for v in t["variants"]]
         ax.boxplot(data, showmeans=True, widths=0.6)
         rng = np.random.default_rng(0)  # fixed jitter: the figure is reproducible
@@ -188,6 +190,13 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
     fig.suptitle(f"{t['title']}: per-seed distribution (box: IQR, line: median, triangle: mean)", fontsize=10)
     out.append(("boxes.png", _png(fig)))
     return out
+
+
+def _short(name: str, limit: int = 40) -> str:
+    """Axis label of a variant: a generator spec loses its trailing arguments after the first."""
+    if "," in name and ":" in name:
+        name = name.split(",")[0] + ("]" if "[" in name.split(",")[0] else "")
+    return name if len(name) <= limit else name[: limit - 1] + "…"
 
 
 def _png(fig) -> bytes:
