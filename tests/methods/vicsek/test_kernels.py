@@ -129,6 +129,11 @@ def test_heading_kernel_ignores_entries_beyond_the_alignment_radius():
             K.genuine_heading(code, *nb, 0.64, theta, theta_g, layers, avoiding, iu, iu_nb, 0.3,
                               0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out)
             outs.append(out)
+            if radius == 0.8:  # a list built at r: r2 = inf (no distance test) gives the same
+                out_inf = np.empty(80)
+                K.genuine_heading(code, *nb, np.inf, theta, theta_g, layers, avoiding, iu, iu_nb, 0.3,
+                                  0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out_inf)
+                np.testing.assert_array_equal(out_inf, out)
         np.testing.assert_allclose(outs[0], outs[1], atol=1e-12)
 
 

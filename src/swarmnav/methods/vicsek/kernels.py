@@ -248,7 +248,8 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
 
         theta_i <- atan2(sum_j h_ij o_j sin theta_j, sum_j h_ij o_j cos theta_j)
 
-    over neighbours ``j`` within ``sqrt(r2)`` that are not avoiding an obstacle (``o_j = 1``).
+    over neighbours ``j`` within ``sqrt(r2)`` that are not avoiding an obstacle (``o_j = 1``);
+    ``r2 = inf`` declares that every listed neighbour is within r (no distance test).
     ``h_ij`` is 1 (VEM, VEM-A), ``k_alpha`` / ``k_beta`` / ``k_gamma`` by the type of ``j``
     (WVEM), ``info_weight`` for the information UAV (IVEM-A), or eq. (13)-(17) (HWVEM):
     ``(1/l_j + p1) * p2^-(l_j - l_min) * w_nei_ij``; the factor ``p2^l_min`` common to a row
@@ -268,6 +269,12 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
     """
     noisy = noise.shape[0] == theta.shape[0]
     n = theta.shape[0]
+    filt = r2 < np.inf  # r2 = inf: every entry is within r (the list was built at r)
+    any_av = False  # nobody avoiding (always so in open space): skip the o_j lookups
+    for i in range(n):
+        if avoiding[i]:
+            any_av = True
+            break
     max_deg = 0
     for i in range(n):
         max_deg = max(max_deg, end[i] - start[i])
@@ -333,10 +340,10 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
         cu = 0.0
         n_contrib = 0
         for e in range(a, b):
-            if dist2[e] > r2:
+            if filt and dist2[e] > r2:
                 continue
             j = indices[e]
-            if avoiding[j]:
+            if any_av and avoiding[j]:
                 continue
             sj = sin_t[j]
             cj = cos_t[j]

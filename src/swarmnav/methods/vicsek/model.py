@@ -182,7 +182,8 @@ class VicsekFamily:
         # eq. (6) noise; the information UAV flies its reference heading (the kernel skips it)
         noise = rng.uniform(-p.eta / 2, p.eta / 2, n) if p.eta > 0 else _NO_NOISE
         theta_g = np.empty(n)
-        K.genuine_heading(self.code, *nb, r2, self.theta, self.theta_g, self.layers,
+        r2_list = np.inf if self.radius <= p.r else r2  # inf: no entry lies beyond r
+        K.genuine_heading(self.code, *nb, r2_list, self.theta, self.theta_g, self.layers,
                           self.avoiding, iu, iu_nb, theta_d, p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta,
                           p.k_gamma, p.info_weight, noise, theta_g)
 
