@@ -130,6 +130,16 @@ def test_draw_scene_sets_bounds_aspect_and_one_patch_per_obstacle():
     assert {h.get_label() for h in handles} == {"obstacle", "spawn region", "path", "goal"}
 
 
+def test_spawn_rectangle_is_the_region_agents_are_drawn_from():
+    # with a spawn density the swarm is drawn from a square sized to n, not the declared box
+    scn = from_dict({**SCENE, "swarm": {"n": 4, "spawn": [-4.0, -4.0, -1.0, -1.0], "density": 1.0}})
+    ax = Figure().add_subplot()
+    (rect,) = [h for h in draw_scene(ax, scn) if h.get_label() == "spawn region"]
+    x0, y0, x1, y1 = scn.swarm.region
+    assert (x1 - x0, y1 - y0) == (2.0, 2.0)  # sqrt(4 / 1) m, not the 3 m box
+    assert rect.get_xy() == (x0, y0) and (rect.get_width(), rect.get_height()) == (x1 - x0, y1 - y0)
+
+
 def test_periodic_wraps_are_not_drawn_as_motion():
     P = np.array([[[9.5, 1.0]], [[9.9, 1.0]], [[0.2, 1.0]], [[0.6, 1.0]]])  # crosses x = 10 -> 0
     _, valid = trajectory_segments(P, period=10.0)

@@ -64,7 +64,7 @@ def draw_scene(
             (x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor="0.4", linestyle=":", linewidth=1.0,
             zorder=1, label="periodic cell")))
     if show_spawn:
-        sx0, sy0, sx1, sy1 = scenario.swarm.spawn
+        sx0, sy0, sx1, sy1 = scenario.swarm.region  # the rectangle agents are drawn from
         handles.append(ax.add_patch(mpatches.Rectangle(
             (sx0, sy0), sx1 - sx0, sy1 - sy0, fill=False, edgecolor=SPAWN_COLOR, linestyle="--",
             linewidth=1.2, zorder=2, label="spawn region")))
