@@ -8,6 +8,7 @@ figures, so plots and animations draw a scene the same way.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import matplotlib
 import numpy as np
@@ -199,3 +200,10 @@ def fmt_metric(metrics: dict, key: str, spec: str, unit: str = "") -> str:
     except (TypeError, ValueError):
         return "n/a"
     return f"{format(v, spec)}{unit}" if math.isfinite(v) else "n/a"
+
+
+def output_path(out: str | Path) -> Path:
+    """``out`` as a Path whose folder exists (figures may be written into a new directory)."""
+    p = Path(out)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    return p

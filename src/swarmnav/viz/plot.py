@@ -20,7 +20,7 @@ from matplotlib.ticker import MaxNLocator
 from swarmnav.metrics import MetricParams
 from swarmnav.viz.draw import (
     END_COLOR, EVENT_MARKERS, START_COLOR, dot_size, draw_scene, event_handles, event_points, fig_size,
-    fmt_metric, label_colors, period_of, scenario_of, trajectory_segments,
+    fmt_metric, label_colors, output_path, period_of, scenario_of, trajectory_segments,
 )
 from swarmnav.world.scenario import Scenario
 
@@ -34,7 +34,7 @@ MAX_SEGMENTS = 200_000
 
 def plot_scene(scenario: Scenario, out_png: str | Path, *, dpi: int = 150) -> Path:
     """Write a PNG of one scene: title = scene name, subtitle = its description."""
-    out = _prepare(out_png)
+    out = output_path(out_png)
     fig = Figure(figsize=fig_size(scenario.bounds, 8.0, extra_width=1.8, extra_height=1.0), layout="constrained")
     ax = fig.add_subplot()
     handles = draw_scene(ax, scenario)
@@ -55,7 +55,7 @@ def plot_run(result: RunResult, out_png: str | Path, *, dpi: int = 150) -> Path:
     the sub-swarm count (blue, right axis) against time t = k dt [s].
     The title names method, scene and seed and quotes Y, R_goal, E_mean and R_unsafe.
     """
-    out = _prepare(out_png)
+    out = output_path(out_png)
     scn = scenario_of(result)
     P, labels = result.positions, result.labels
     K, N = P.shape[0] - 1, P.shape[1]
@@ -133,9 +133,3 @@ def plot_run(result: RunResult, out_png: str | Path, *, dpi: int = 150) -> Path:
     )
     fig.savefig(out, dpi=dpi)
     return out
-
-
-def _prepare(out: str | Path) -> Path:
-    p = Path(out)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    return p

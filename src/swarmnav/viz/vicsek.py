@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 
 from swarmnav.methods.vicsek.measures import circular_mean, deg_con, headings_from_velocities
 from swarmnav.sim.result import RunResult
-from swarmnav.viz.draw import draw_scene, period_of, scenario_of, trajectory_segments
+from swarmnav.viz.draw import draw_scene, output_path, period_of, scenario_of, trajectory_segments
 
 INFO_COLOR = "tab:red"
 AGENT_COLOR = "tab:blue"
@@ -50,7 +50,7 @@ def plot_snapshots(result: RunResult, out_png: str | Path, steps: Sequence[int] 
 
     Default steps: 1, then a quarter, half and all of k_con, and the last recorded step.
     """
-    out = _prepare(out_png)
+    out = output_path(out_png)
     scn = scenario_of(result)
     P, V = result.positions, result.velocities
     K = P.shape[0] - 1
@@ -91,7 +91,7 @@ def plot_convergence(groups: dict[str, Sequence[RunResult]], out_png: str | Path
                      dpi: int = 150) -> Path:
     """Deg_con(k) over time: each run thin, the per-step median of each group thick, and
     the desired consistency Deg_con^d dashed. ``1 - Deg_con`` on a log axis shows the approach."""
-    out = _prepare(out_png)
+    out = output_path(out_png)
     fig = Figure(figsize=(9.0, 3.6), layout="constrained")
     ax, ax_log = fig.subplots(1, 2)
     for c, (label, runs) in enumerate(groups.items()):
@@ -135,7 +135,7 @@ def _split_variant(name: str) -> tuple[str, int | None]:
 def plot_weights(result_dir: str | Path, out_png: str | Path, *, dpi: int = 150) -> Path:
     """Figure 5 from the ``hwvem-weights`` summary: mean k_con against (a) p1 with p2 = 5 and
     (b) p2 with p1 = 0.01, one line per swarm size (log-x; p1 = 0 is drawn at the left edge)."""
-    out = _prepare(out_png)
+    out = output_path(out_png)
     rows = _read_csv(Path(result_dir) / "summary.csv")
     curves: dict[tuple[str, int | None], list[tuple[float, float]]] = defaultdict(list)
     for r in rows:
@@ -165,7 +165,7 @@ def plot_weights(result_dir: str | Path, out_png: str | Path, *, dpi: int = 150)
 def plot_ablation(result_dir: str | Path, out_png: str | Path, *, dpi: int = 150) -> Path:
     """Figure 6 from the ``hwvem-ablation`` runs: box plots of k_con with (red) and without
     (blue) the neighbourhood-layer-status weight, per swarm size."""
-    out = _prepare(out_png)
+    out = output_path(out_png)
     rows = [r for r in _read_csv(Path(result_dir) / "runs.csv") if r["status"] == "done"]
     data: dict[tuple[int | None, str], list[float]] = defaultdict(list)
     for r in rows:
@@ -196,7 +196,7 @@ def plot_mission(result: RunResult, out_png: str | Path, snapshots: Sequence[int
                  dpi: int = 150) -> Path:
     """Figures 7-8: the mission scene with every trajectory (information UAV in red) and the
     swarm at a few snapshot steps (black dots, the information UAV as a red star)."""
-    out = _prepare(out_png)
+    out = output_path(out_png)
     scn = scenario_of(result)
     P = result.positions
     K, N = P.shape[0] - 1, P.shape[1]
@@ -230,12 +230,6 @@ def plot_mission(result: RunResult, out_png: str | Path, snapshots: Sequence[int
                  f"N = {N}, seed {result.config.get('seed')}: P_s = {fmt['P_s']} %, D_obs = {fmt['D_obs']} m, "
                  f"D_ind = {fmt['D_ind']} m", fontsize=9)
     fig.savefig(out, dpi=dpi)
-    return out
-
-
-def _prepare(out_png: str | Path) -> Path:
-    out = Path(out_png)
-    out.parent.mkdir(parents=True, exist_ok=True)
     return out
 
 
