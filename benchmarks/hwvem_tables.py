@@ -10,6 +10,13 @@ published values from the packaged ``paper_results.toml`` and the wall time of e
     PYTHONPATH=src python benchmarks/hwvem_tables.py --out out/hwvem --print-only
 
 Equivalent CLI runs: ``swarmnav experiment hwvem-alignment --set n=100|200|500 --out DIR``.
+
+Where the mission loses its agents (Table 2 diagnostics: every agent that failed the success
+test, tallied by the obstacle nearest to where its decisive separation from the information
+UAV began; runs in-process, one core):
+
+    PYTHONPATH=src python benchmarks/hwvem_tables.py --losses 50 --seeds 1-100
+    PYTHONPATH=src python benchmarks/hwvem_tables.py --losses 50 --variant HWVEM-II --set trigger_heading=previous
 """
 
 from __future__ import annotations
@@ -20,6 +27,8 @@ import math
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 from swarmnav.experiments import load_experiment, run_experiment
 from swarmnav.experiments.report import paper_results
@@ -119,6 +128,61 @@ def figure_table(out: Path) -> str:
     return "\n".join(lines)
 
 
+def obstacle_label(o) -> str:
+    d = o.to_dict()
+    kind = d.pop("type")
+    if kind == "circle":
+        return f"circle r={d['radius']:g} at ({d['center'][0]:g}, {d['center'][1]:g})"
+    pts = np.asarray(o.vertices() if hasattr(o, "vertices") else d["points"], dtype=float)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    return f"{kind} x {lo[0]:g}..{hi[0]:g}, y {lo[1]:g}..{hi[1]:g}"
+
+
+def losses(n: int, seeds: str | None, variants: list[str] | None, extra: dict[str, str]) -> str:
+    """Run the hwvem-mission variants at size ``n`` and tally the failed agents (eq. 32) by where
+    their decisive separation began: "start" (not with the information UAV at step 0), else the
+    obstacle nearest to that point. Returns a markdown table (agents lost per run)."""
+    from swarmnav.methods import registry
+    from swarmnav.sensing import signed_distance
+    from swarmnav.sim.rollout import run as rollout
+    from swarmnav.world.obstacles import Geometry
+    from swarmnav.world.scenario import load_scenario
+
+    exp = load_experiment("hwvem-mission", overrides={"n": str(n), **extra}, seeds=seeds)
+    chosen = [v for v in exp.variants if not variants or v.name.split("[")[0] in variants]
+    scn = load_scenario(chosen[0].scenario, n=n)
+    labels = [obstacle_label(o) for o in scn.obstacles]
+    geoms = [Geometry.from_obstacles([o]) for o in scn.obstacles]
+    places = ["start", *labels]
+    rows = []
+    for v in chosen:
+        tally = dict.fromkeys(places, 0)
+        never, p_s = 0, []
+        for seed in exp.seeds:
+            m = registry.make(v.method, **v.params)
+            res = rollout(m, scn, seed=seed, steps=v.steps)
+            p_s.append(res.metrics["P_s"])
+            lost = m.losses()
+            never += int(lost["apart_at_end"].sum())
+            for step, x, y in zip(lost["step"], lost["x"], lost["y"]):
+                if step == 0:
+                    tally["start"] += 1
+                    continue
+                d = [float(signed_distance(g, np.array([[x, y]]))[0]) for g in geoms]
+                tally[labels[int(np.argmin(d))]] += 1
+        k = len(exp.seeds)
+        rows.append((v.name, float(np.mean(p_s)), {p: c / k for p, c in tally.items()}, never / k))
+    head = "| where the failing separation began | " + " | ".join(r[0] for r in rows) + " |"
+    lines = [f"Agents lost per run (N = {n}, {len(exp.seeds)} seeds), by the obstacle nearest to where "
+             "the separation that failed them began", "", head, "|---|" + "---|" * len(rows)]
+    for p in places:
+        lines.append(f"| {p} | " + " | ".join(f"{r[2][p]:.2f}" for r in rows) + " |")
+    lines.append("| total lost (= N (1 - P_s)) | " + " | ".join(f"{sum(r[2].values()):.2f}" for r in rows) + " |")
+    lines.append("| of which apart at the end | " + " | ".join(f"{r[3]:.2f}" for r in rows) + " |")
+    lines.append("| P_s [%] | " + " | ".join(f"{r[1]:.2f}" for r in rows) + " |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out/hwvem"))
@@ -127,8 +191,15 @@ def main(argv=None) -> int:
     ap.add_argument("--only", action="append", choices=sorted(TABLES), help="default: table1 and table2")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="extra override for every run")
     ap.add_argument("--print-only", action="store_true", help="do not run, print what the stores hold")
+    ap.add_argument("--losses", type=int, metavar="N", help="tally the failed agents of hwvem-mission at size N")
+    ap.add_argument("--variant", action="append", help="with --losses: only these variants (default: all five)")
     args = ap.parse_args(argv)
     extra = dict(kv.split("=", 1) for kv in args.set)
+    if args.losses:
+        t0 = time.perf_counter()
+        print(losses(args.losses, args.seeds, args.variant, extra))
+        print(f"\n({(time.perf_counter() - t0) / 60:.1f} min on one core)")
+        return 0
     for key in args.only or ["table1", "table2"]:
         name, sizes = TABLES[key]
         out = args.out / key

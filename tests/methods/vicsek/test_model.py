@@ -315,3 +315,52 @@ def test_experiment_specs_resize_the_periodic_box():
     assert s.n == 500 and s.bounds[2] == pytest.approx(math.sqrt(500 / 4.102))
     for name in ("hwvem-mission", "hwvem-weights", "hwvem-ablation"):
         assert load_experiment(name).variants
+
+
+@pytest.mark.parametrize("reading, expect", [("new", True), ("previous", False)])
+def test_avoidance_trigger_tests_the_chosen_genuine_direction(reading, expect):
+    """Eq. (21) with theta^g(k + 1) (just computed, "new") or theta^g(k) ("previous"): agent 0
+    last wanted to fly away from the circle (pi), its only neighbour now pulls it toward it (0)."""
+    scn = from_dict({"swarm": {"n": 2, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+                     "goal": {"position": [20.0, 0.0]},
+                     "obstacles": [{"type": "circle", "center": [2.0, 0.0], "radius": 1.0}]})
+    m = VicsekFamily("vem", eta=0.0, trigger_heading=reading)
+    x = np.array([[0.6, 0.0], [0.1, 0.0]])  # agent 0 is 0.4 m from the circle (< r_avoid)
+    rng = np.random.default_rng(0)
+    m.reset(scn, x, np.zeros_like(x), rng)
+    m.theta[:] = m.theta_g[:] = [math.pi * (1 - 1e-12), 0.0]
+    m.act(Observation(0, 0.0, x, np.zeros_like(x)), rng)
+    assert m.theta_g[0] == pytest.approx(0.0) and m.avoiding[0] == expect and not m.avoiding[1]
+
+
+def test_mission_losses_match_the_component_test_replayed_from_the_trajectory():
+    """losses() (where the separation that failed each agent began) against an oracle: the
+    information UAV's connected component of every recorded state (a k-d tree graph), replayed."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+    from swarmnav.world.scenario import load_scenario
+
+    scn = load_scenario("hwvem_mission", n=20)
+    m = VicsekFamily("hwvem", p1=0.0, p2=100.0)
+    res = swarmnav.run(m, scn, seed=5, steps=700)
+    P = res.positions[:-1]  # the states the method saw, 0 .. K-1
+    gap = m.params.follow_gap
+    expect = {}
+    apart = np.zeros(scn.n, dtype=np.int64)
+    for k, x in enumerate(P):
+        pairs = cKDTree(x).query_pairs(m.params.r, output_type="ndarray")
+        g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(scn.n, scn.n))
+        lab = connected_components(g, directed=False)[1]
+        near = lab == lab[m.iu]
+        apart = np.where(near, 0, apart + 1)
+        for i in np.flatnonzero((apart > gap) | ((k == 0) & (apart > 0)) | ((k == len(P) - 1) & (apart > 0))):
+            expect.setdefault(int(i), (k - apart[i] + 1, *P[k - apart[i] + 1, i]))
+    lost = m.losses()
+    assert len(expect) > 0  # this seed loses agents (so the comparison means something)
+    assert sorted(expect) == lost["agent"].tolist()
+    got = {int(i): (s, x, y) for i, s, x, y in zip(lost["agent"], lost["step"], lost["x"], lost["y"])}
+    for i, (s, x, y) in expect.items():
+        assert got[i][0] == s and got[i][1:] == pytest.approx((x, y))
+    assert res.metrics["P_s"] == pytest.approx(100 * (1 - len(expect) / scn.n))
+    assert lost["apart_at_end"].tolist() == [bool(apart[i] > 0) for i in sorted(expect)]

@@ -80,6 +80,10 @@ class VicsekParams:
     avoid_velocity: Literal["tangent", "heading"] = "tangent"
     r_avoid: float = 0.5  # [m] trigger distance, eq. (20), Sec. 2.3
     theta_obstruct: float = 11 * math.pi / 20  # [rad] trigger half-angle, eq. (21), Sec. 2.3
+    # Which genuine direction the trigger of eq. (21) tests (our choice, see docs/methods/vicsek.md):
+    # "new" = theta^g(k+1) just computed (with its noise), the direction the agent is about to
+    # fly; "previous" = theta^g(k), the index eq. (21) is printed with.
+    trigger_heading: Literal["new", "previous"] = "new"
     lookahead: float = 1.0  # [m] carrot distance of the information UAV's path following (our choice: = r)
     deg_con_d: float = 0.9984  # [-] desired consistency degree, Sec. 3.1
     deg_con_norm: Literal["l1", "l2"] = "l1"  # norm of eq. (28) (our choice, see measures.deg_con)
@@ -158,11 +162,16 @@ class VicsekFamily:
         self.mission = self.has_info and not scenario.periodic
         self._apart = np.zeros(n, dtype=np.int64)  # current run of steps away from the IU
         self._failed = np.zeros(n, dtype=np.bool_)
+        self._k = 0  # steps seen by the success test
+        self._apart_from = np.zeros((n, 3))  # step and position where the current run apart began
+        self._loss = np.full((n, 3), np.nan)  # the same for the run that failed the agent
         self.D_obs = np.inf
         self.D_ind = np.inf
         if self.mission:
             self._track_mission(x, nb, None)
             self._failed |= self._apart > 0  # "from the beginning": with the IU at k = 0
+            self._loss[self._failed] = self._apart_from[self._failed]
+            self._k = 0  # act(k = 0) sees the same state again
 
     # ------------------------------------------------------------------ step
 
@@ -191,7 +200,8 @@ class VicsekFamily:
         avoiding = np.zeros(n, dtype=np.bool_)
         dist = None
         if self.geom is not None:
-            avoiding, theta_obs, dist = avoidance(self.geom, x, theta_g, self.theta, p.r_avoid, p.theta_obstruct)
+            tested = theta_g if p.trigger_heading == "new" else self.theta_g
+            avoiding, theta_obs, dist = avoidance(self.geom, x, tested, self.theta, p.r_avoid, p.theta_obstruct)
             theta = np.where(avoiding, theta_obs, theta_g)
 
         att = rep = _NO_FORCE
@@ -242,6 +252,24 @@ class VicsekFamily:
             out["D_ind"] = float(self.D_ind)
         return out
 
+    def losses(self) -> dict[str, np.ndarray]:
+        """Diagnostics of the success test (eq. 32) of a mission run: the agents that failed.
+
+        For each: ``agent`` (index), ``step`` and ``x``, ``y`` [m] where the run of steps apart
+        from the information UAV that failed it began (step 0: not with it at the start), and
+        ``apart_at_end`` (still apart at the last step, i.e. it never rejoined). Not a metric:
+        benchmarks/hwvem_tables.py --losses tallies these by the nearest obstacle.
+        """
+        if not self.mission:
+            raise ValueError("losses() needs a mission run (open world with an information UAV)")
+        loss = self._loss.copy()
+        at_end = self._apart > 0
+        late = at_end & np.isnan(loss[:, 0])  # apart at the end within follow_gap: fails "to the end"
+        loss[late] = self._apart_from[late]
+        agent = np.flatnonzero(~np.isnan(loss[:, 0]))
+        return {"agent": agent, "step": loss[agent, 0].astype(np.int64), "x": loss[agent, 1],
+                "y": loss[agent, 2], "apart_at_end": at_end[agent]}
+
     # ------------------------------------------------------------------ helpers
 
     def _neighbours(self, x: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -277,7 +305,13 @@ class VicsekFamily:
         else:
             near = np.sum((x - x[self.iu]) ** 2, axis=1) <= p.follow_radius**2
         self._apart = np.where(near, 0, self._apart + 1)
-        self._failed |= self._apart > p.follow_gap
+        began = self._apart == 1
+        self._apart_from[began, 0] = self._k
+        self._apart_from[began, 1:] = x[began]
+        failed = self._failed | (self._apart > p.follow_gap)
+        self._loss[failed & ~self._failed] = self._apart_from[failed & ~self._failed]
+        self._failed = failed
+        self._k += 1
         if len(nb[4]):
             self.D_ind = min(self.D_ind, float(np.sqrt(nb[4].min())))
         if self.obstacles is not None:
