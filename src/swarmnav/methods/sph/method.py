@@ -42,7 +42,7 @@ class Sph:
 
     def __init__(self, **overrides: Any):
         p = build(SphParams, overrides, context="sph")
-        for key in ("h", "m", "v_max", "a_max", "T_p", "dt", "rho0", "esdf_resolution", "grid_resolution",
+        for key in ("h", "m", "v_max", "plan_speed", "a_max", "T_p", "dt", "rho0", "esdf_resolution", "grid_resolution",
                     "ctrl_spacing", "R"):
             if not getattr(p, key) > 0:
                 raise ConfigError(f"sph: {key} must be > 0, got {getattr(p, key)}")
@@ -52,7 +52,8 @@ class Sph:
         self.dt = p.dt
         self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
         self._costs = SplineCosts(p.lambda_s, p.lambda_c, p.lambda_f, p.d_thr, p.v_max, p.a_max)
-        self._dt_knot = p.ctrl_spacing / p.v_max  # knot span [s]: control points ctrl_spacing apart at v_max
+        # knot span [s]: control points ctrl_spacing apart at plan_speed * v_max
+        self._dt_knot = p.ctrl_spacing / (p.plan_speed * p.v_max)
 
     # ------------------------------------------------------------------ contract
 
@@ -159,7 +160,9 @@ class Sph:
                 start_q, start_v = x.copy(), v.copy()
             else:  # released behaviour: continue the reference unless the robot is far from it
                 off = np.linalg.norm(start_q - x, axis=1) > p.ref_reset
-                start_q[off], start_v[off] = x[off], v[off]
+                start_q[off] = x[off]
+                if p.reset_velocity:  # ours: restart from the measured velocity as well
+                    start_v[off] = v[off]
         plans = []
         near = None
         if p.plan_neighbours > 0:  # visible neighbours within plan_neighbours_range, by robot
@@ -204,7 +207,15 @@ class Sph:
         if not reaches_end:
             tangent = pts[-1] - pts[-2]
             end_v = p.v_max * tangent / max(np.linalg.norm(tangent), 1e-9)
-        plan = optimize((q, v, a), (pts[-1], end_v, np.zeros_like(q)), pts[1:-1], self._dt_knot,
+        if p.ctrl_seed == "knots":
+            # C_2 already stands for the path point one knot ahead (q + v dt, eq. 12) and, with a
+            # moving end, C_{K-2} for the one a knot before the end: seed the interior points
+            # with the path points at the knots between, so the reference runs at the knot speed
+            # ctrl_spacing / dt_knot = v_max instead of repeating those two points.
+            guide = pts[2:-1] if reaches_end else pts[2:-2]
+        else:  # released: C_3 .. C_{K-3} = path[1] .. path[-2] (two knots spent on repeated points)
+            guide = pts[1:-1]
+        plan = optimize((q, v, a), (pts[-1], end_v, np.zeros_like(q)), guide, self._dt_knot,
                         self.esdf, self._costs, p.max_iter)
         self._plans += 1
         self._iterations += plan.iterations

@@ -46,10 +46,17 @@ class SphParams:
     #   the grid search (ours; 0 = off, as the paper's planner: on, it made contacts more frequent)
     plan_neighbours_range: float = 3.0  # [m] only visible neighbours this close enter the search
     ctrl_spacing: float = 0.5  # control-point spacing along the initial path [m] (released dist_p)
+    ctrl_seed: Literal["knots", "released"] = "knots"  # initial interior control points: the path points
+    #   at the knot times after C_2 (ours, reference at v_max), or path[1..-2] as the released code
+    #   (repeats the points C_2 and C_{K-2} stand for: the reference crawls at ~0.7 v_max)
+    plan_speed: float = 1.0  # knot speed of the reference as a fraction of v_max [-] (1: the released
+    #   beta = v_max / dist_p)
     horizon_points: int = 10  # path points per local plan (released: first 10); 0 = whole path
     max_iter: int = 200  # L-BFGS-B iteration cap (released opt_maxeval)
     max_expand: int = 2_000_000  # A* expansion cap per search
     replan_from: Literal["state", "reference"] = "reference"  # start state of a replan (released)
     ref_reset: float = 1.0  # "reference" mode: restart from the state beyond this error [m] (released)
+    reset_velocity: bool = False  # on a ref_reset also restart from the measured velocity (ours); the
+    #   released planner moves only the start position and keeps the reference's velocity/acceleration
     goal_spread: float = 0.0  # per-robot goal = goal + goal_spread * (spawn_i - spawn centroid)
     plan_once: bool = False  # plan the whole path once at t = 0 (Fig. 3B protocol)
