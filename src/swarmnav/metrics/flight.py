@@ -17,8 +17,13 @@ within ``r_goal`` of the goal (the horizon K if it never is). Then
 - ``success_rate``: 1.0 if every robot is within ``r_goal`` of the goal at the last step and no
   robot ever touched another (distance < 2 body radii) or an obstacle (clearance < 1 body
   radius), else 0.0; its mean over trials is Table II's Rate;
-- ``coordination_time``: first time the swarm moves coherently, polarisation
-  ``|sum v_i| / sum |v_i| >= phi_coord`` with mean speed ``>= v_coord`` [s] (horizon if never).
+- ``coordination_time``: first time the swarm moves as one body (Fig. 6): the speed of its
+  centre, ``|mean_i v_i|``, first reaches ``phi_coord`` times its median over the flight (up
+  to the last arrival) [s] (horizon if never). Common-mode speed rather than polarisation:
+  in a forest the polarisation ``|sum v_i| / sum |v_i|`` fluctuates around 0.75-1.0 as robots
+  pass trees on either side, so the first crossing of a fixed threshold like 0.9 was either
+  the spawn transient (~1.2 s) or an arbitrary later moment (up to the horizon); relative to
+  the run's own cruise the measure does not depend on how fast the method flies.
 """
 
 from __future__ import annotations
@@ -38,8 +43,8 @@ class FlightParams:
     broadcast_hz: float = 10.0  # position broadcast rate [Hz], SPH paper Section IV-A
     msg_bytes: int = 64  # position message [B]: 3 x float64 position, float64 stamp, uint32 id,
     #                      UDP (8) + IPv4 (20) headers, 4 B padding (our choice; the paper gives none)
-    phi_coord: float = 0.9  # polarisation threshold of a coordinated swarm [-] (our choice)
-    v_coord: float = 0.1  # minimum mean speed of a coordinated swarm [m/s] (our choice)
+    phi_coord: float = 0.8  # coordinated once the swarm's centre moves at this fraction of its
+    #                         median flight speed [-] (our choice; the paper does not define it)
 
 
 def flight_metrics(
@@ -75,10 +80,10 @@ def flight_metrics(
     min_obs = float(clearance.min()) if clearance.size else float("inf")
     touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
     success = bool(inside[-1].all()) and not touched
-    speed = np.linalg.norm(velocities, axis=2)
-    pol = np.linalg.norm(velocities.sum(axis=1), axis=1) / np.maximum(speed.sum(axis=1), 1e-12)
-    coord = (pol >= p.phi_coord) & (speed.mean(axis=1) >= p.v_coord)
-    t_coord = float(np.argmax(coord)) * dt if coord.any() else K * dt
+    centre = np.linalg.norm(velocities.mean(axis=1), axis=1)  # (K + 1,) common-mode speed [m/s]
+    cruise = float(np.median(centre[: max(int(arrival.max()), 1) + 1]))
+    coord = centre >= p.phi_coord * cruise
+    t_coord = float(np.argmax(coord)) * dt if cruise > 0 and coord.any() else K * dt
     return {
         "flight_distance": float(L.mean()),
         "flight_time": float(T.mean()),

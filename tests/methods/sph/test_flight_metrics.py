@@ -57,3 +57,22 @@ def test_coordination_time_is_first_coherent_motion():
     P, V, C = _line(n=3, y_gap=1.0)
     V[:5] = 0.0  # at rest for 0.5 s
     assert flight_metrics(P, V, C, GOAL, DT)["coordination_time"] == pytest.approx(0.5)
+
+
+def test_coordination_time_ignores_weaving_and_scales_with_the_ramp():
+    # Two robots speed up along x over 2 s to 1 m/s, each weaving sideways at 0.6 m/s in
+    # opposite phase (as robots passing trees on either side): the polarisation stays at
+    # 1 / sqrt(1 + 0.36) = 0.86 < 0.9 through the whole flight, but the swarm's centre moves
+    # coherently: it reaches 0.8 x its median speed (1 m/s) at t = 1.6 s.
+    steps = 200
+    t = DT * np.arange(steps + 1)
+    vx = np.minimum(t / 2.0, 1.0)
+    V = np.zeros((steps + 1, 2, 2))
+    V[:, :, 0] = vx[:, None]
+    V[:, 0, 1], V[:, 1, 1] = 0.6 * vx, -0.6 * vx
+    P = np.cumsum(V, axis=0) * DT + np.array([[0.0, 1.0], [0.0, -1.0]])
+    C = np.full(P.shape[:2], np.inf)
+    far = np.array([1e3, 0.0])  # never arrives: the median is over the whole run
+    assert flight_metrics(P, V, C, far, DT)["coordination_time"] == pytest.approx(1.6)
+    # the same flight at half the speed: the same time (relative to the run's own cruise)
+    assert flight_metrics(P / 2, V / 2, C, far, DT)["coordination_time"] == pytest.approx(1.6)
