@@ -200,3 +200,58 @@ def test_safety_filter_bounds_speed_and_closing_speed():
     a2 = F.safety_filter(np.array([[0.0, 50.0]]), np.array([[0.0, 0.0]]), np.full((1, R), 20.0), COS, SIN, 0.1,
                          3.9, 1.5, 0.5, 20.0)
     assert np.linalg.norm(0.1 * a2) == pytest.approx(3.9)  # speed cap
+
+
+def _follow(lead_brake_step, v0=3.0, gap0=4.0, steps=200):
+    """1-D car following under eq. (39): the follower commands +a_max toward the leader every
+    step (the worst attraction), the leader cruises at 2 m/s and brakes at a_max from
+    ``lead_brake_step``; both integrate with the inverse-model dynamics (v += a dt, p += v dt).
+    Returns the smallest gap [m]."""
+    x = np.array([[0.0, 0.0], [gap0, 0.0]])
+    v = np.array([[v0, 0.0], [2.0, 0.0]])
+    active = np.array([True, False])
+    d_min = np.inf
+    for k in range(steps):
+        a = np.array([[P.a_max, 0.0], [0.0, 0.0]])
+        if k >= lead_brake_step:
+            a[1, 0] = -min(P.a_max, v[1, 0] / P.dt)
+        a = F.saturate(F.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max), P.a_max)
+        v = v + P.dt * a
+        x = x + P.dt * v
+        d_min = min(d_min, x[1, 0] - x[0, 0])
+    return d_min
+
+
+@pytest.mark.parametrize("brake_at", [0, 5, 20, 60])
+def test_agent_barrier_follower_never_reaches_the_contact_distance(brake_at):
+    # The follower pushes toward the leader at a_max while the leader brakes to a stop at a_max:
+    # with the barrier the gap stays above the 0.4 m contact distance of the collision metric
+    # (discrete-time slack of one step at <= 3.9 m/s: 0.1 m below agent_margin = 0.6 m).
+    assert _follow(brake_at) >= P.agent_margin - 0.1
+    # without it (inactive) the follower runs into the leader
+    x = np.array([[0.0, 0.0], [4.0, 0.0]])
+    a = np.array([[P.a_max, 0.0], [0.0, 0.0]])
+    v = np.array([[3.0, 0.0], [2.0, 0.0]])
+    out = F.agent_barrier(a, x, v, np.array([False, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    np.testing.assert_allclose(out, a, atol=1e-12)
+
+
+def test_agent_barrier_only_brakes():
+    # i is never pushed away by a neighbour that closes on it (i at rest, j rushing at it), and a
+    # member moving away from its neighbour or sideways is not touched
+    x = np.array([[0.0, 0.0], [0.8, 0.0]])
+    v = np.array([[0.0, 0.0], [-3.0, 0.0]])
+    a = np.zeros((2, 2))
+    out = F.agent_barrier(a, x, v, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    np.testing.assert_array_equal(out[0], [0.0, 0.0])
+    v2 = np.array([[-1.0, 2.0], [0.0, 0.0]])
+    out2 = F.agent_barrier(a, x, v2, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    np.testing.assert_allclose(out2[0], [0.0, 0.0], atol=1e-12)
+    # closing at 2 m/s from 0.9 m: the closing part is cut to sqrt(2 a_brake (0.9 - 0.6)), the
+    # sideways part is kept
+    v3 = np.array([[2.0, 1.0], [0.0, 0.0]])
+    x3 = np.array([[0.0, 0.0], [0.9, 0.0]])
+    out3 = F.agent_barrier(a, x3, v3, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    w = v3[0] + P.dt * out3[0]
+    assert w[0] == pytest.approx(math.sqrt(2 * P.agent_brake * 0.3))
+    assert w[1] == pytest.approx(1.0)

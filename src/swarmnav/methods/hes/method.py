@@ -651,8 +651,17 @@ class Hes:
         a = F.synthesize(x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig,
                          ring, self._cos, self._sin, self._gains, dsafe)
         if p.adaptive:
+            # passage mode: members of a sub-swarm in a chain of narrow throats queue at the gate
+            # mouths and brake for the neighbour in front (agent braking barrier), before and again
+            # after the wall barrier, which may turn a member toward its neighbour
+            brake = p.passage_mode and p.agent_brake > 0.0 and any(sub.passages for sub in self.subs.values())
+            if brake:
+                active = np.array([bool(self.subs[s].passages) for s in ids])[col]
+                a = F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
             a = F.safety_filter(a, v, ring, self._cos, self._sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake,
                                 p.brake_margin, p.lidar_range)
+            if brake:
+                a = F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
         return F.saturate(a, p.a_bound)
 
     def _remember_passage(self, sub: SubSwarm, route: Corridor | None, rep: Report, x: np.ndarray, k: int) -> None:
