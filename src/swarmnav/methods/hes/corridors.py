@@ -28,26 +28,21 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from swarmnav.methods.hes.forces import is_local_min
+
 # Columns of the detect_gaps output rows.
 GAP_QA_X, GAP_QA_Y, GAP_QB_X, GAP_QB_Y, GAP_W, GAP_NX, GAP_NY, GAP_PEAK = range(8)
 
 
 @njit(cache=True)
 def ring_anchors(ring, max_range):
-    """Indices of the local minima of a ring among rays that hit (``d < max_range``)."""
+    """Indices of the local minima of a ring among rays that hit (``d < max_range``); the same
+    test (flat runs included) as the active set of the LiDAR repulsion, eq. (35)."""
     n = ring.shape[0]
     out = np.empty(n, dtype=np.int64)
     m = 0
     for r in range(n):
-        d = ring[r]
-        if d >= max_range or not d < ring[(r - 1) % n]:
-            continue
-        j = (r + 1) % n
-        steps = 0
-        while ring[j] == d and steps < n:
-            j = (j + 1) % n
-            steps += 1
-        if ring[j] > d:
+        if ring[r] < max_range and is_local_min(ring, r):
             out[m] = r
             m += 1
     return out[:m]
