@@ -76,6 +76,16 @@ def finite_means(out: Path, metric: str) -> dict[str, tuple[float, int, int]]:
                 sum(map(math.isfinite, xs)), len(xs)) for v, xs in vals.items()}
 
 
+def variant_key(rows: dict, model: str, n: int) -> str | None:
+    """The store's name of ``model`` at size ``n``: ``model[n=N]`` when the sweep had several
+    sizes, plain ``model`` when it had one (``--sizes 100``)."""
+    if f"{model}[n={n}]" in rows:
+        return f"{model}[n={n}]"
+    if model in rows and rows[model].get("n") == str(n):
+        return model
+    return None
+
+
 def table1(out: Path, sizes=(100, 200, 500)) -> str:
     ref = paper_results()["hwvem"]["table1"]
     s = summary(out)
@@ -85,11 +95,12 @@ def table1(out: Path, sizes=(100, 200, 500)) -> str:
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for n in sizes:
         for model in ("VEM", "VEM-A", "IVEM", "IVEM-A", "WVEM", "HWVEM"):
-            r = s.get(f"{model}[n={n}]")
+            k = variant_key(s, model, n)
             p = ref[f"N{n}"][model]
-            if r is None:
+            if k is None:
                 continue
-            mean, n_fin, n_all = fin[f"{model}[n={n}]"]
+            r = s[k]
+            mean, n_fin, n_all = fin[k]
             lines.append(f"| {n} | {model} | {num(mean)} | {num(r['k_con_p25'], '.1f')} | "
                          f"{num(r['k_con_p50'], '.1f')} | {num(r['k_con_p75'], '.1f')} | "
                          f"{num(r['converged_fraction'])} | {p['k_con'][0]:.2f} | {p['k_con'][1]:.1f} | "
@@ -105,10 +116,11 @@ def table2(out: Path, sizes=(5, 20, 50)) -> str:
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for n in sizes:
         for model in ("VEM-A", "IVEM-A", "WVEM", "HWVEM-I", "HWVEM-II"):
-            r = s.get(f"{model}[n={n}]")
+            k = variant_key(s, model, n)
             p = ref[f"N{n}"][model]
-            if r is None:
+            if k is None:
                 continue
+            r = s[k]
             lines.append(f"| {n} | {model} | {num(r['P_s_mean'])} | {num(r['P_s_p25'], '.1f')} | "
                          f"{num(r['P_s_p50'], '.1f')} | {num(r['P_s_p75'], '.1f')} | {num(r['D_obs_mean'], '.4f')} | "
                          f"{num(r['D_ind_mean'], '.4f')} | {p['P_s'][0]:.2f} | {p['P_s'][1]:.1f} | {p['P_s'][2]:.1f} | "
@@ -188,6 +200,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=Path("out/hwvem"))
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seeds", default=None, help="default: the specs' (1-100)")
+    ap.add_argument("--sizes", default=None, help="swarm sizes, e.g. 100 or 20|50 (default: the table's)")
     ap.add_argument("--only", action="append", choices=sorted(TABLES), help="default: table1 and table2")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="extra override for every run")
     ap.add_argument("--print-only", action="store_true", help="do not run, print what the stores hold")
@@ -202,6 +215,7 @@ def main(argv=None) -> int:
         return 0
     for key in args.only or ["table1", "table2"]:
         name, sizes = TABLES[key]
+        sizes = args.sizes or sizes
         out = args.out / key
         if not args.print_only:
             wall = run(name, sizes, out, args.workers, args.seeds, extra)
@@ -210,7 +224,8 @@ def main(argv=None) -> int:
             print(f"{key}: no results in {out}")
             continue
         print(f"\n### {key}: `{name}`\n")
-        print(table1(out) if key == "table1" else table2(out) if key == "table2" else figure_table(out))
+        ns = tuple(int(v) for v in sizes.split("|"))
+        print(table1(out, ns) if key == "table1" else table2(out, ns) if key == "table2" else figure_table(out))
         if key != "table2":
             print("\n*mean over the runs that reached Deg_con^d within the step cap (their number in brackets); "
                   "quartiles over all runs, a run that never converged counting as +inf.")
