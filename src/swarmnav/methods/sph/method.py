@@ -159,8 +159,12 @@ class Sph:
             if p.replan_from == "state":
                 start_q, start_v = x.copy(), v.copy()
             else:  # released behaviour: continue the reference unless the robot is far from it
-                off = np.linalg.norm(start_q - x, axis=1) > p.ref_reset
-                start_q[off] = x[off]
+                lag = np.linalg.norm(start_q - x, axis=1)
+                off = lag > p.ref_reset
+                if p.ref_clamp:  # ours: pull the start back to ref_reset from the robot (no jump to 0)
+                    start_q[off] = x[off] + (start_q[off] - x[off]) * (p.ref_reset / lag[off])[:, None]
+                else:  # released: restart at the robot
+                    start_q[off] = x[off]
                 if p.reset_velocity:  # ours: restart from the measured velocity as well
                     start_v[off] = v[off]
         plans = []

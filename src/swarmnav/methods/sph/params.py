@@ -55,7 +55,10 @@ class SphParams:
     max_iter: int = 200  # L-BFGS-B iteration cap (released opt_maxeval)
     max_expand: int = 2_000_000  # A* expansion cap per search
     replan_from: Literal["state", "reference"] = "reference"  # start state of a replan (released)
-    ref_reset: float = 1.0  # "reference" mode: restart from the state beyond this error [m] (released)
+    ref_reset: float = 0.5  # "reference" mode: bound on the reference lag at a replan [m] (ours; released 1.0):
+    #   k_p ref_reset = k_rep / (2 body radius) = 2.5 m/s^2, the tracking pull never beats the contact repulsion
+    ref_clamp: bool = True  # beyond ref_reset move the start to ref_reset from the robot (ours; False: onto
+    #   the robot, released): the pull stays continuous, no jump of the reference to the robot
     reset_velocity: bool = False  # on a ref_reset also restart from the measured velocity (ours); the
     #   released planner moves only the start position and keeps the reference's velocity/acceleration
     goal_spread: float = 0.0  # per-robot goal = goal + goal_spread * (spawn_i - spawn centroid)
