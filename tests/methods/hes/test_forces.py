@@ -247,11 +247,11 @@ def test_agent_barrier_only_brakes():
     v2 = np.array([[-1.0, 2.0], [0.0, 0.0]])
     out2 = F.agent_barrier(a, x, v2, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
     np.testing.assert_allclose(out2[0], [0.0, 0.0], atol=1e-12)
-    # closing at 2 m/s from 0.9 m: the closing part is cut to sqrt(2 a_brake (0.9 - 0.6)), the
-    # sideways part is kept
+    # closing at 2 m/s from 1 m: the closing part is cut to sqrt(2 a_brake (1 - agent_margin)),
+    # the sideways part is kept
     v3 = np.array([[2.0, 1.0], [0.0, 0.0]])
-    x3 = np.array([[0.0, 0.0], [0.9, 0.0]])
+    x3 = np.array([[0.0, 0.0], [1.0, 0.0]])
     out3 = F.agent_barrier(a, x3, v3, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
     w = v3[0] + P.dt * out3[0]
-    assert w[0] == pytest.approx(math.sqrt(2 * P.agent_brake * 0.3))
+    assert w[0] == pytest.approx(math.sqrt(2 * P.agent_brake * (1.0 - P.agent_margin)))
     assert w[1] == pytest.approx(1.0)

@@ -215,3 +215,34 @@ def test_the_head_does_not_wait_for_the_tail():
     assert "k16" in seen
     assert seen["head_x"] >= 12.4 + 4.0
     assert seen["wp_x"] > 12.4
+
+
+def test_the_last_member_of_a_queue_is_not_held_at_the_mouth(monkeypatch):
+    """A lone queued member at rest 1 m in front of gate 1's gap, 0.3 m off its centre line (where the
+    last member stalled for good on every gates seed): the base term of eq. (36) from the gate corner
+    ahead balances its slot attraction (the eight terms sum to <= 0 along the exit direction), but
+    in the tube the repulsion's part against the exit direction is dropped, so the command drives it
+    into the gap."""
+    from swarmnav.methods.hes.decision import ENCIRCLE
+
+    c1 = [True, False, True, True, True, True]
+    m, x, _, _ = _chain_method(c1, [False] * 5 + [True], route_is_2=False, mode=ENCIRCLE)
+    x[0], x[1] = [20.0, -2.0], [10.6, -8.93]  # agent 1 alone in front of gate 1
+    v = np.zeros_like(x)
+    m._k = 0
+    ring = m._sense(x)
+    m._qidx, m._qtgt = m._queue(x)
+    assert m._qidx[1] == 0
+    slot, speed = m._references(x, 0)
+    seen = {}
+    terms = F.force_terms
+
+    def spy(*args):
+        seen["t"] = terms(*args).copy()
+        return terms(*args)
+
+    monkeypatch.setattr(F, "force_terms", spy)
+    a = m._control(x, v, ring, slot, speed)
+    assert seen["t"][:, 1].sum(axis=0) @ NORMAL <= 0.0  # the paper's sum holds it at the mouth
+    assert a[1] @ NORMAL > 1.0  # passage mode lets it in
+    assert seen["t"][7, 1] @ NORMAL < -1.0  # the corner's push-back is there, and is what was dropped

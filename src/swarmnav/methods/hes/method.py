@@ -648,8 +648,21 @@ class Hes:
         sig = self._occlusion(x, slot, nn, sl_idx, cent)
         vslot = F.slot_velocity(x, slot, speed, p.eps_v)
         dsafe = self._dsafe(x)
-        a = F.synthesize(x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig,
-                         ring, self._cos, self._sin, self._gains, dsafe)
+        args = (x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig, ring,
+                self._cos, self._sin, self._gains, dsafe)
+        if p.passage_mode and (dsafe < p.d_safe).any():
+            # passage mode: inside a throat's tube the LiDAR repulsion keeps its lateral (centring)
+            # part but loses its part against the throat's exit direction: the base term of eq.
+            # (36) from the gate corners ahead (~5 m/s^2 at 1.3 m) otherwise balances the slot
+            # attraction and holds the last member of a queue, with nobody behind to push, in
+            # front of the mouth for good; the braking barrier still stops it short of any return
+            t = F.force_terms(*args)
+            nrm = self._tube_normal
+            back = np.minimum(np.sum(t[7] * nrm, axis=1), 0.0)
+            t[7] -= back[:, None] * nrm
+            a = t.sum(axis=0)
+        else:
+            a = F.synthesize(*args)
         if p.adaptive:
             # passage mode: members of a sub-swarm in a chain of narrow throats queue at the gate
             # mouths and brake for the neighbour in front (agent braking barrier), before and again
@@ -722,6 +735,7 @@ class Hes:
         p = self.params
         out = np.full(self.n, p.d_safe)
         self.last_dsafe = out
+        self._tube_normal = np.zeros((self.n, 2))  # exit direction of the tube each member is in (0: none)
         if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return out
         for s, sub in self.subs.items():  # a loop over (at most a few) sub-swarms and throats, not agents
@@ -730,9 +744,11 @@ class Hes:
             members = np.flatnonzero(self.labels == s)
             for q in sub.passages:
                 c = q.throat
-                out[members] = np.minimum(out[members], passage_dsafe(
-                    x[members], c.mid, c.normal, c.width, p.d_safe, p.passage_margin, p.passage_len,
-                    p.passage_reach))
+                eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.d_safe, p.passage_margin,
+                                    p.passage_len, p.passage_reach)
+                inside = members[eff < out[members]]
+                self._tube_normal[inside] = c.normal
+                out[members] = np.minimum(out[members], eff)
         self.last_dsafe = out
         return out
 
