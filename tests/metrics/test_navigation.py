@@ -84,3 +84,44 @@ def test_periodic_path_length_uses_minimum_image():
     m = navigation_metrics(P, np.full((4, 1), np.inf), np.zeros(2), periodic_box=10.0)
     assert m["L_mean"] == pytest.approx(2.0)
     assert m["R_unsafe"] == 0.0
+
+
+def _pairs_reference(positions, contact, box):
+    """Plain per-step KD-tree: the smallest nearest-neighbour distance and the contact episodes."""
+    from scipy.spatial import cKDTree
+
+    best, hits, prev = np.inf, 0, set()
+    for P in positions:
+        tree = cKDTree(np.mod(P, box) if box else P, boxsize=box)
+        best = min(best, float(tree.query(P, k=2)[0][:, 1].min()))
+        cur = {tuple(p) for p in tree.query_pairs(contact, output_type="ndarray")}
+        hits += len(cur - prev)
+        prev = cur
+    return best, hits
+
+
+@pytest.mark.parametrize("n, box, spread", [
+    (80, None, 6.0),     # open world, dense
+    (120, 5.0, None),    # periodic, many cells
+    (70, 0.9, None),     # periodic cell under 3 search cells wide
+    (90, None, 400.0),   # two dense clusters 400 m apart: widened cells
+    (65, None, 60.0),    # sparse: no contact in the run, wide fallback search
+])
+def test_cell_list_pairs_match_kdtree_reference(n, box, spread):
+    from swarmnav.metrics.navigation import _inter_agent
+
+    rng = np.random.default_rng(n)
+    start = rng.uniform(0.0, box or min(spread, 6.0), (n, 2))
+    if spread == 400.0:
+        start[n // 2:] += spread
+    walk = np.cumsum(rng.normal(0.0, 0.05, (40, n, 2)), axis=0)
+    positions = start + walk
+    if spread == 60.0:
+        positions = np.arange(n)[None, :, None] * 3.0 + 0.01 * walk  # agents 3 m apart on a line
+    contact = 0.1 if box else 0.4
+    best, hits = _inter_agent(positions, contact, box)
+    ref_best, ref_hits = _pairs_reference(positions, contact, box)
+    assert best == pytest.approx(ref_best, rel=1e-12)
+    assert hits == ref_hits
+    if spread != 60.0:
+        assert hits > 0  # the case exercises contacts

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from swarmnav.metrics._pairs import close_pairs_run
+
 
 @dataclass(frozen=True, slots=True)
 class MetricParams:
@@ -105,13 +107,9 @@ def _inter_agent(positions: np.ndarray, contact: float, box: float | None) -> tu
         iu, ju = np.triu_indices(N, 1)
         d = np.linalg.norm(positions[:, iu] - positions[:, ju], axis=2)  # (K+1, pairs)
         return float(d.min()), _rising_edges(d < contact)
-    best, hits, prev = np.inf, 0, np.zeros(0, dtype=np.int64)
-    for k in range(K1):  # one KD-tree per step: O(N log N), never N x N
-        tree = cKDTree(np.mod(positions[k], box) if box else positions[k], boxsize=box)
-        dd, _ = tree.query(positions[k], k=2)
-        best = min(best, float(dd[:, 1].min()))
-        pairs = tree.query_pairs(contact, output_type="ndarray")
-        key = np.sort(pairs[:, 0].astype(np.int64) * N + pairs[:, 1]) if len(pairs) else np.zeros(0, np.int64)
-        hits += int(len(np.setdiff1d(key, prev, assume_unique=True)))
-        prev = key
-    return best, hits
+    best, hits = close_pairs_run(np.ascontiguousarray(positions, dtype=np.float64), float(box or 0.0),
+                                 contact, contact)
+    if not np.isfinite(best):  # no contact in the whole run: the minimum needs a wider search
+        best = min(float(cKDTree(np.mod(P, box) if box else P, boxsize=box).query(P, k=2)[0][:, 1].min())
+                   for P in positions)
+    return float(best), int(hits)
