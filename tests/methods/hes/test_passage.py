@@ -246,3 +246,25 @@ def test_the_last_member_of_a_queue_is_not_held_at_the_mouth(monkeypatch):
     assert seen["t"][:, 1].sum(axis=0) @ NORMAL <= 0.0  # the paper's sum holds it at the mouth
     assert a[1] @ NORMAL > 1.0  # passage mode lets it in
     assert seen["t"][7, 1] @ NORMAL < -1.0  # the corner's push-back is there, and is what was dropped
+
+
+@pytest.mark.parametrize("chained", [False, True])
+def test_a_waypoint_behind_a_wall_restarts_from_the_subleader_after_a_chain(chained):
+    """After a chain's passages have lapsed (a gates seed stalled this way: the head past gate 5, a
+    straggler in front of it, the waypoint pushed off the far side of the wall), a waypoint that the
+    subleader sees behind a wall restarts from the subleader; a sub-swarm never routed through a
+    passage keeps the paper's waypoint (it only advances toward its target)."""
+    m, _, _, _ = _chain_method([True] * 6, [False] * 6, route_is_2=False)
+    sub = m.subs[0]
+    sub.passages, sub.chained, sub.subleader = [], chained, 0
+    x = np.array([[14.0, -2.0], [15.0, -1.0], [14.5, 0.5], [13.5, -0.5], [9.0, 0.0], [15.5, 1.0]])  # 4 in front
+    sub.waypoint = np.array([10.0, -1.0])  # in front of gate 1's wall (x = 11.6..12.4), the head beyond it
+    v = np.zeros_like(x)
+    m._k = 0
+    ring = m._sense(x)
+    m._qidx, m._qtgt = m._queue(x)
+    m._navigate(sub, m._report(0, x, v, ring), x, 0)
+    if chained:
+        assert sub.waypoint[0] > 12.4  # on the head's side of the wall
+    else:
+        assert sub.waypoint[0] < 11.6

@@ -105,6 +105,7 @@ class SubSwarm:
     ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
     passages: list = field(default_factory=list)  # passage mode: list[Passage], oldest first
     narrow_steps: int = 0  # passage mode: consecutive steps the route was a narrow throat with no wider candidate
+    chained: bool = False  # passage mode: the sub-swarm has been routed through a passage
 
 
 class Hes:
@@ -411,6 +412,16 @@ class Hes:
             if not segment_clear(self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, cent[0], cent[1],
                                  sub.waypoint[0], sub.waypoint[1], 0.2, p.lidar_range):
                 sub.waypoint = cent.copy()
+        if p.adaptive and p.passage_mode and sub.chained and not sub.passages:
+            # after the chain's passages have lapsed, a waypoint the subleader sees behind a wall
+            # (the centroid, with stragglers still in front of the last gate, can lie in the wall
+            # itself) restarts from the subleader: pushed off the wall's far side it would hold the
+            # head at the wall for good
+            a = sub.subleader
+            if not segment_clear(self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, x[a, 0], x[a, 1],
+                                 sub.waypoint[0], sub.waypoint[1], 0.2, p.lidar_range):
+                sub.waypoint = x[a].copy()
+        sub.chained = sub.chained or bool(sub.passages)
         if p.adaptive:
             # virtual leader: advance toward the target at the (adaptive) cruise speed ...
             step = self._cruise(rep) * p.dt
