@@ -268,3 +268,17 @@ def test_a_waypoint_behind_a_wall_restarts_from_the_subleader_after_a_chain(chai
         assert sub.waypoint[0] > 12.4  # on the head's side of the wall
     else:
         assert sub.waypoint[0] < 11.6
+
+
+@pytest.mark.parametrize("front", [True, False])
+def test_a_passage_outlives_its_memory_while_members_are_in_front_of_it(front):
+    """Long after both throats stopped being the route (100 s > passage_memory), gate 1 is still
+    remembered while members are in front of it within passage_queue (they keep their queue), and
+    forgotten once every member has crossed it; gate 2, crossed by all, lapses."""
+    c1 = [not front, not front, True, True, True, True]  # agents 0-1 at (8, -8), (9, -9): in front of gate 1
+    m, x, g1, g2 = _chain_method(c1, [True] * 6, route_is_2=False)
+    sub = m.subs[0]
+    k = int(100.0 / P.dt)
+    m._remember_passage(sub, None, None, x, k)
+    assert any(q.throat is g1 for q in sub.passages) == front
+    assert not any(q.throat is g2 for q in sub.passages)

@@ -692,12 +692,18 @@ class Hes:
         """Passage mode: a narrow throat (w < 2 (d_safe + passage_margin)) becomes a passage once it
         has been the sub-swarm's route, with no wider corridor in its report, for
         ``passage_confirm`` seconds (the planner's committed choice, not a one-step flicker).
-        Passages are kept for ``passage_memory`` seconds after they stopped being the route, with
+        Passages are kept for ``passage_memory`` seconds after they stopped being the route (and
+        beyond, while members are still in front of them within ``passage_queue``), with
         the agents that have crossed each, so that members still in front of a throat keep its
         passage (and queue for it) when the route has moved on to the next corridor."""
         p = self.params
         w_wide = self._w_wide
-        keep = [q for q in sub.passages if (k - q.step) * p.dt <= p.passage_memory]
+        # a passage is kept while it was the route within passage_memory, or while members of the
+        # sub-swarm are still in front of it within passage_queue (they keep their queue: a lapsed
+        # passage left them in the head, whose centroid and leash then fell at the wall)
+        members = self.labels == sub.sid
+        keep = [q for q in sub.passages if (k - q.step) * p.dt <= p.passage_memory or bool(np.any(
+            members & ~q.crossed & (np.hypot(*(x - q.throat.mid).T) <= p.passage_queue)))]
         narrow = route is not None and not route.direct and route.width < w_wide
         same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
         only = narrow and all(c.width < w_wide for c in rep.corridors)
