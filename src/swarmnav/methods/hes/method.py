@@ -662,13 +662,15 @@ class Hes:
         args = (x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig, ring,
                 self._cos, self._sin, self._gains, dsafe)
         if p.passage_mode and (dsafe < p.d_safe).any():
-            # passage mode: inside a throat's tube the LiDAR repulsion keeps its lateral (centring)
-            # part but loses its part against the throat's exit direction: the base term of eq.
-            # (36) from the gate corners ahead (~5 m/s^2 at 1.3 m) otherwise balances the slot
-            # attraction and holds the last member of a queue, with nobody behind to push, in
-            # front of the mouth for good; the braking barrier still stops it short of any return
+            # passage mode: for a queued member inside a throat's tube and lined up with the gap,
+            # the LiDAR repulsion keeps its lateral (centring) part but loses its part against the
+            # throat's exit direction: the base term of eq. (36) from the gate corners ahead
+            # (~5 m/s^2 at 1.3 m) otherwise balances the slot attraction and holds the last member
+            # of a queue, with nobody behind to push, in front of the mouth for good; the braking
+            # barrier still stops it short of any return. (For every tube member, not only queued
+            # ones, the gates' R_unsafe falls further but random-forest contacts rise: docs.)
             t = F.force_terms(*args)
-            nrm = self._tube_normal
+            nrm = np.where((self._qidx >= 0)[:, None], self._tube_normal, 0.0)
             back = np.minimum(np.sum(t[7] * nrm, axis=1), 0.0)
             t[7] -= back[:, None] * nrm
             a = t.sum(axis=0)
@@ -752,7 +754,7 @@ class Hes:
         p = self.params
         out = np.full(self.n, p.d_safe)
         self.last_dsafe = out
-        self._tube_normal = np.zeros((self.n, 2))  # exit direction of the tube each member is in (0: none)
+        self._tube_normal = np.zeros((self.n, 2))  # exit direction of the tube each member is in and lined up with (0: none)
         if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return out
         for s, sub in self.subs.items():  # a loop over (at most a few) sub-swarms and throats, not agents
@@ -764,7 +766,10 @@ class Hes:
                 eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.d_safe, p.passage_margin,
                                     p.passage_len, p.passage_reach)
                 inside = members[eff < out[members]]
-                self._tube_normal[inside] = c.normal
+                # lined up with the gap (within w/2 - margin of its centre line): item 6 applies
+                rel = x[inside] - c.mid
+                lined = np.abs(rel @ np.array([-c.normal[1], c.normal[0]])) <= 0.5 * c.width - p.passage_margin
+                self._tube_normal[inside] = np.where(lined[:, None], c.normal, 0.0)
                 out[members] = np.minimum(out[members], eff)
         self.last_dsafe = out
         return out
