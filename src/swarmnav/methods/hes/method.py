@@ -754,7 +754,8 @@ class Hes:
         p = self.params
         out = np.full(self.n, p.d_safe)
         self.last_dsafe = out
-        self._tube_normal = np.zeros((self.n, 2))  # exit direction of the tube each member is in and lined up with (0: none)
+        # exit direction of the tube each member is in and lined up with (0: none)
+        self._tube_normal = np.zeros((self.n, 2))
         if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return out
         for s, sub in self.subs.items():  # a loop over (at most a few) sub-swarms and throats, not agents
