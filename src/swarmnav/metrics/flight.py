@@ -18,8 +18,9 @@ within ``r_goal`` of the goal (the horizon K if it never is). Then
   robot ever touched another (distance < 2 body radii) or an obstacle (clearance < 1 body
   radius), else 0.0; its mean over trials is Table II's Rate;
 - ``coordination_time``: first time the swarm moves as one body (Fig. 6): the speed of its
-  centre, ``|mean_i v_i|``, first reaches ``phi_coord`` times its median over the flight (up
-  to the last arrival) [s] (horizon if never). Common-mode speed rather than polarisation:
+  centre, ``|mean_i v_i|``, first reaches ``phi_coord`` times its median over the flight up
+  to the first arrival (the cruise, free of the crowding at the goal) [s] (horizon if never).
+  Common-mode speed rather than polarisation:
   in a forest the polarisation ``|sum v_i| / sum |v_i|`` fluctuates around 0.75-1.0 as robots
   pass trees on either side, so the first crossing of a fixed threshold like 0.9 was either
   the spawn transient (~1.2 s) or an arbitrary later moment (up to the horizon); relative to
@@ -81,7 +82,7 @@ def flight_metrics(
     touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
     success = bool(inside[-1].all()) and not touched
     centre = np.linalg.norm(velocities.mean(axis=1), axis=1)  # (K + 1,) common-mode speed [m/s]
-    cruise = float(np.median(centre[: max(int(arrival.max()), 1) + 1]))
+    cruise = float(np.median(centre[: max(int(arrival.min()), 1) + 1]))  # before anyone has arrived
     coord = centre >= p.phi_coord * cruise
     t_coord = float(np.argmax(coord)) * dt if cruise > 0 and coord.any() else K * dt
     return {
