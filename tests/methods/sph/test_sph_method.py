@@ -55,3 +55,48 @@ def test_released_kernel_option_runs_and_differs():
     a = swarmnav.run("sph", from_dict(OPEN), seed=1, steps=60)
     b = swarmnav.run("sph", from_dict(OPEN), seed=1, steps=60, kernel="released")
     assert np.all(np.isfinite(b.positions)) and not np.array_equal(a.positions, b.positions)
+
+
+LONE = {"name": "lone", "swarm": {"n": 1, "spawn": [-0.1, -0.1, 0.1, 0.1]}, "goal": {"position": [30.0, 0.0]},
+        "world": {"bounds": [-6.0, -8.0, 36.0, 8.0]},
+        "obstacles": [{"type": "circle", "center": [4.0, 7.0], "radius": 0.5}]}
+
+
+def _cruise_reference_speed(**params):
+    """Mean reference speed of a lone robot's replans between 4 s and 8 s of an open flight."""
+    m = registry.make("sph", **params)
+    speeds = []
+    orig = m._replan
+
+    def spy(step, x, v):
+        orig(step, x, v)
+        if 4.0 <= step * m.dt <= 8.0:
+            speeds.append(np.linalg.norm(m._ref_v[0], axis=1).mean())
+
+    m._replan = spy
+    swarmnav.run(m, from_dict(LONE), seed=1, steps=450)
+    return float(np.mean(speeds))
+
+
+def test_knot_seeding_runs_the_reference_at_v_max():
+    # The interior control points on the knots after C_2: the reference cruises at the knot
+    # speed ctrl_spacing / dt_knot = v_max (within the smoothing of a 5 m local plan); the
+    # released seeding repeats the points C_2 and C_{K-2} stand for and crawls at ~0.72 v_max.
+    assert _cruise_reference_speed() == pytest.approx(1.0, abs=0.06)
+    assert _cruise_reference_speed(ctrl_seed="released") < 0.85
+
+
+def test_reference_lag_is_bounded_at_each_replan():
+    # A robot held at its start (a_max tiny) falls behind; with ref_clamp every replan starts
+    # ref_reset from it, so its lag right after a replan never exceeds ref_reset (0.5 m).
+    m = registry.make("sph", a_max=1e-6)
+    lags = []
+    orig = m._replan
+
+    def spy(step, x, v):
+        orig(step, x, v)
+        lags.append(float(np.linalg.norm(m._ref_q[0, 0] - x[0])))
+
+    m._replan = spy
+    swarmnav.run(m, from_dict(LONE), seed=1, steps=300)
+    assert max(lags) <= 0.5 + 1e-9 and max(lags) > 0.45  # clamped, and the clamp was reached
