@@ -414,6 +414,77 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead):
 
 
 @njit(cache=True)
+def agent_guard(a, x, v, dt, a_brake, margin, a_max):
+    """Contact guard between agents (ours): a braking bound with priority over the clip of eq. (39).
+
+    ``a`` is the already saturated command (norm <= ``a_max``). For every agent i and every other
+    agent j at distance d, ``u = (p_j - p_i) / d``, agent i's next velocity ``w_i = v_i + a_i dt``
+    may approach j no faster than lets both stop ``margin`` apart if each brakes at ``a_brake``
+    (the sum of the two stopping distances fits in the gap):
+
+        w_i . u  <=  sqrt(max(2 a_brake (d - margin) + s_j |s_j|, 0)),   s_j = v_j . u,
+
+    (s_j > 0: j moves away and its own stopping distance adds room; s_j < 0: j closes in and
+    its stopping distance is taken off; two agents closing head-on each need only ``a_brake``
+    to stay on the bound). An excess is removed along u (pairs in index order, a greedy
+    projection); i only brakes, it is never pushed away from j.
+
+    The braking correction ``b_i`` is then kept whole (up to ``a_max``) and the rest of the
+    command scaled down to make room: the result is ``b_i + lam a_i`` with the largest
+    ``lam`` in [0, 1] that keeps the norm <= ``a_max`` (``a_max b_i / ||b_i||`` if ``b_i`` alone
+    exceeds it). Why: the 1/d repulsions of eqs. (25)/(31) (<= 7 m/s^2 at contact) act on
+    positions, not on the closing speed (1-4 m/s at contact), and eq. (39) scales them down
+    with the far larger LiDAR repulsion near obstacles. Returns the new (N, 2) command.
+    """
+    n = x.shape[0]
+    w = v + dt * a
+    for i in range(n):
+        for j in range(n):
+            if j == i:
+                continue
+            ux = x[j, 0] - x[i, 0]
+            uy = x[j, 1] - x[i, 1]
+            d = math.sqrt(ux * ux + uy * uy)
+            if d <= 0.0:
+                continue
+            ux /= d
+            uy /= d
+            c = w[i, 0] * ux + w[i, 1] * uy
+            if c <= 0.0:
+                continue
+            sj = v[j, 0] * ux + v[j, 1] * uy
+            c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
+            if c > c_max:
+                w[i, 0] -= (c - c_max) * ux
+                w[i, 1] -= (c - c_max) * uy
+    out = np.empty((n, 2))
+    for i in range(n):
+        bx = (w[i, 0] - v[i, 0]) / dt - a[i, 0]
+        by = (w[i, 1] - v[i, 1]) / dt - a[i, 1]
+        if bx == 0.0 and by == 0.0:
+            out[i, 0] = a[i, 0]
+            out[i, 1] = a[i, 1]
+            continue
+        ax, ay = a[i, 0], a[i, 1]
+        tx, ty = ax + bx, ay + by
+        if tx * tx + ty * ty <= a_max * a_max:
+            out[i, 0], out[i, 1] = tx, ty
+            continue
+        bb = bx * bx + by * by
+        if bb >= a_max * a_max:
+            s = a_max / math.sqrt(bb)
+            out[i, 0], out[i, 1] = s * bx, s * by
+            continue
+        # largest lam in [0, 1] with ||b + lam a|| = a_max (||b|| < a_max < ||b + a||)
+        aa = ax * ax + ay * ay
+        ab = ax * bx + ay * by
+        lam = (-ab + math.sqrt(max(ab * ab - aa * (bb - a_max * a_max), 0.0))) / aa
+        lam = min(max(lam, 0.0), 1.0)
+        out[i, 0], out[i, 1] = bx + lam * ax, by + lam * ay
+    return out
+
+
+@njit(cache=True)
 def push_clear(px, py, ring, sx, sy, cos_t, sin_t, clear, max_range, iters):
     """Move point ``(px, py)`` away from the returns of the ring sensed at ``(sx, sy)`` until it is
     ``clear`` [m] from the nearest one, or midway across a passage narrower than ``2 clear``

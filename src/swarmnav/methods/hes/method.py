@@ -688,7 +688,11 @@ class Hes:
                                 p.brake_margin, p.lidar_range)
             if brake:
                 a = F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
-        return F.saturate(a, p.a_bound)
+        a = F.saturate(a, p.a_bound)
+        if p.adaptive and p.agent_guard:
+            # contact guard: every agent brakes for its neighbours, with priority over the clip
+            a = F.agent_guard(a, x, v, p.dt, p.guard_brake, p.guard_margin, p.a_bound)
+        return a
 
     def _remember_passage(self, sub: SubSwarm, route: Corridor | None, rep: Report, x: np.ndarray, k: int) -> None:
         """Passage mode: a narrow throat (w < 2 (d_safe + passage_margin)) becomes a passage once it
