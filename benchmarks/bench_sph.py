@@ -1,7 +1,7 @@
 """SPH real-time check: planning time per robot per replan and coordination time per control
 step, against swarm size (issue 6: median planning time well under T_p = 0.2 s).
 
-    PYTHONPATH=src python benchmarks/bench_sph.py [--sizes 15,30,60] [--density 0.35] [--steps 500]
+    PYTHONPATH=src python benchmarks/bench_sph.py [--sizes 15,30,60] [--density 0.35] [--steps 1000]
 
 Planning = map update + grid search + L-BFGS spline optimisation + sampling of one robot's
 trajectory; coordination = visibility raycasts + SPH forces + ESDF force for the whole swarm.
@@ -29,7 +29,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="15,30,60")
     ap.add_argument("--density", type=float, default=0.35)
-    ap.add_argument("--steps", type=int, default=500)
+    ap.add_argument("--steps", type=int, default=1000)  # 10 s at the default 100 Hz
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     print(f"# {platform.processor() or platform.machine()}, numpy {np.__version__}")

@@ -2,6 +2,8 @@
 deterministic for a seed, and keeps the RunResult contract. New methods and scenes are picked
 up automatically from the registries."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -10,16 +12,22 @@ from swarmnav.methods import registry
 from swarmnav.world.scenario import builtin_names
 
 STEPS = 40
+MIN_TIME = 0.8  # [s]: a fast controller (SPH at 100 Hz) gets enough steps to show it moves
+
+
+def _steps(method: str) -> int:
+    return max(STEPS, math.ceil(MIN_TIME / registry.make(method).dt))
 NAV_SCENES = [s for s in builtin_names()] + ["random_forest:density=0.25,seed=1"]
 
 
 @pytest.mark.parametrize("method", [m for m in registry.names() if registry.spec(m).navigation])
 @pytest.mark.parametrize("scene", NAV_SCENES)
 def test_method_on_scene(method, scene):
-    a = swarmnav.run(method, scene, seed=7, steps=STEPS)
-    b = swarmnav.run(method, scene, seed=7, steps=STEPS)
+    steps = _steps(method)
+    a = swarmnav.run(method, scene, seed=7, steps=steps)
+    b = swarmnav.run(method, scene, seed=7, steps=steps)
     n = a.config["scenario"]["swarm"]["n"]
-    assert a.positions.shape == (STEPS + 1, n, 2)
+    assert a.positions.shape == (steps + 1, n, 2)
     assert np.all(np.isfinite(a.positions)) and np.all(np.isfinite(a.velocities))
     np.testing.assert_array_equal(a.positions, b.positions)
     np.testing.assert_array_equal(a.labels, b.labels)
@@ -27,7 +35,7 @@ def test_method_on_scene(method, scene):
     assert all(isinstance(v, float) for v in a.metrics.values())
     # agents moved: a navigation method is not a stub
     assert np.linalg.norm(a.positions[-1] - a.positions[0], axis=1).mean() > 0.1
-    c = swarmnav.run(method, scene, seed=8, steps=STEPS)
+    c = swarmnav.run(method, scene, seed=8, steps=steps)
     assert not np.array_equal(a.positions[0], c.positions[0])
 
 

@@ -34,4 +34,4 @@ def test_horizon_gives_equal_time_to_every_method():
     sph = load_experiment("sph-forest", seeds="1").variants[0]
     apf = load_experiment("sph-forest", overrides={"method": "apf"}, seeds="1").variants[0]
     assert sph.horizon == apf.horizon == 90.0
-    assert sph.steps == 4500 and apf.steps == 900  # dt 0.02 s and 0.1 s
+    assert sph.steps == 9000 and apf.steps == 900  # dt 0.01 s and 0.1 s

@@ -28,14 +28,15 @@ def test_table_i_defaults_and_strict_parameters():
 
 
 def test_open_flight_reaches_the_goal_without_contact():
-    res = swarmnav.run("sph", from_dict(OPEN), seed=2, steps=900)  # 18 s at 50 Hz
+    dt = registry.make("sph").dt
+    res = swarmnav.run("sph", from_dict(OPEN), seed=2, steps=round(18.0 / dt))  # 18 s
     m = res.metrics
     assert m["success_rate"] == 1.0 and m["collisions"] == 0.0
     assert m["min_inter_robot_distance"] >= 0.4
     assert 0.3 < m["avg_velocity"] <= 1.0 + 1e-9  # never above v_max (eq. 2)
-    assert np.all(np.linalg.norm(np.diff(res.positions, axis=0), axis=2) <= 1.0 * 0.02 + 1e-12)
+    assert np.all(np.linalg.norm(np.diff(res.positions, axis=0), axis=2) <= 1.0 * dt + 1e-12)
     assert np.all(res.labels == 0) and m["N_event"] == 0.0  # one visible swarm throughout
-    assert m["sph_plans"] == 6 * 90  # every robot replans every T_p = 10 steps
+    assert m["sph_plans"] == 6 * 90  # every robot replans every T_p = 0.2 s over 18 s
     t = res.timings if hasattr(res, "timings") else {}
     assert set(t) >= {"plan_ms_median", "plan_ms_p95", "coord_ms_median"}
 
@@ -43,7 +44,7 @@ def test_open_flight_reaches_the_goal_without_contact():
 def test_wall_between_robots_splits_and_logs_visibility_events():
     scn = from_dict({**OPEN, "swarm": {"n": 4, "spawn": [-2.0, -3.0, 0.0, 3.0]},
                      "obstacles": [{"type": "box", "min": [-1.05, -0.05], "max": [1.5, 0.05]}]})
-    res = swarmnav.run("sph", scn, seed=5, steps=200)
+    res = swarmnav.run("sph", scn, seed=5, steps=round(4.0 / registry.make("sph").dt))
     assert len(np.unique(res.labels[0])) >= 1
     for k in range(res.labels.shape[0]):  # every agent carries the label of its smallest member
         for lab in np.unique(res.labels[k]):
@@ -74,7 +75,7 @@ def _cruise_reference_speed(**params):
             speeds.append(np.linalg.norm(m._ref_v[0], axis=1).mean())
 
     m._replan = spy
-    swarmnav.run(m, from_dict(LONE), seed=1, steps=450)
+    swarmnav.run(m, from_dict(LONE), seed=1, steps=round(9.0 / m.dt))
     return float(np.mean(speeds))
 
 
@@ -98,5 +99,5 @@ def test_reference_lag_is_bounded_at_each_replan():
         lags.append(float(np.linalg.norm(m._ref_q[0, 0] - x[0])))
 
     m._replan = spy
-    swarmnav.run(m, from_dict(LONE), seed=1, steps=300)
+    swarmnav.run(m, from_dict(LONE), seed=1, steps=round(6.0 / m.dt))
     assert max(lags) <= 0.5 + 1e-9 and max(lags) > 0.45  # clamped, and the clamp was reached

@@ -32,7 +32,7 @@ class SphParams:
     k_v: float = 3.5  # velocity tracking gain [1/s], eq. (13)
     d_thr: float = 0.5  # obstacle safety threshold [m], eqs. (5), (10)
     # --- our choices (the paper does not give them; see docs/methods/sph.md) ---
-    dt: float = 0.02  # control step [s]: the released code's 50 Hz (updateInterval); the text says >= 100 Hz
+    dt: float = 0.01  # control step [s]: the text's ">= 100 Hz" swarm control (Sec. III); released code 0.02
     kernel: Literal["paper", "released"] = "paper"  # eq. (4) as printed, or the released C++
     r_floor: float = 0.05  # distance floor in the 1/r repulsion [m] (finite force)
     esdf_resolution: float = 0.1  # ESDF grid [m], as the released sdf_map
