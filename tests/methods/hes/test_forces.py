@@ -255,3 +255,107 @@ def test_agent_barrier_only_brakes():
     w = v3[0] + P.dt * out3[0]
     assert w[0] == pytest.approx(math.sqrt(2 * P.agent_brake * (1.0 - P.agent_margin)))
     assert w[1] == pytest.approx(1.0)
+
+
+def _guarded_rollout(x, v, target_acc, steps=150, guard=True):
+    """Agents that command ``target_acc(x, v)`` saturated at a_max (eq. 39), then the contact guard
+    (or not), integrated with the inverse-model dynamics (v += a dt, p += v dt). Returns the
+    smallest pairwise distance [m] (sampled every step), the largest commanded norm [m/s^2] and
+    the final positions."""
+    d_min, a_top = np.inf, 0.0
+    n = x.shape[0]
+    for _ in range(steps):
+        a = F.saturate(target_acc(x, v), P.a_max)
+        if guard:
+            a = F.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
+        a_top = max(a_top, float(np.linalg.norm(a, axis=1).max()))
+        v = v + P.dt * a
+        x = x + P.dt * v
+        d = np.linalg.norm(x[:, None] - x[None], axis=-1) + np.diag(np.full(n, np.inf))
+        d_min = min(d_min, float(d.min()))
+    return d_min, a_top, x
+
+
+@pytest.mark.parametrize("speed", [1.0, 2.0, 3.0, 3.9])
+@pytest.mark.parametrize("offset", [0.0, 0.2])
+def test_agent_guard_head_on_pair_never_touches(speed, offset):
+    # Two agents closing head-on in free space at up to the speed cap (1.3 v_s = 3.9 m/s each),
+    # each pushing toward the other at a_max the whole time (the worst attraction): with the
+    # guard they stop short of the 0.4 m contact distance of the collision metric (one step of
+    # discrete-time slack below guard_margin), and the command never exceeds a_max; without it
+    # they collide.
+    x = np.array([[0.0, 0.0], [12.0, offset]])
+    v = np.array([[speed, 0.0], [-speed, 0.0]])
+
+    def push(x, v):
+        return 100.0 * (x[::-1] - x)
+
+    d_min, a_top, end = _guarded_rollout(x, v, push)
+    assert d_min >= 0.4
+    assert d_min >= P.guard_margin - 0.1
+    assert a_top <= P.a_max + 1e-9
+    if offset == 0.0:  # exactly head-on: they stop, neither slides past (sideways passing is allowed)
+        assert end[1, 0] > end[0, 0]
+        d_off, _, end_off = _guarded_rollout(x, v, push, guard=False)
+        assert d_off < 0.4 or end_off[1, 0] < end_off[0, 0]  # without the guard: contact or passing through
+
+
+@pytest.mark.parametrize("n", [3, 4, 5])
+@pytest.mark.parametrize("speed", [1.0, 3.0])
+def test_agent_guard_agents_converging_on_one_point_never_touch(n, speed):
+    # n agents on a 6 m ring, all driven at a_max toward its centre (inward at ``speed`` at the
+    # start): the cycled projections against every neighbour keep every pair above the contact
+    # distance. (Known limit, docs/methods/hes.md: from 6 agents converging on one point the
+    # pairwise bounds, each along one pair's line, need more than a_max of radial braking and
+    # pairs end at 0.30-0.40 m.)
+    th = 2 * np.pi * np.arange(n) / n
+    x = 6.0 * np.column_stack([np.cos(th), np.sin(th)])
+    v = -speed * np.column_stack([np.cos(th), np.sin(th)])
+    d_min, a_top, _ = _guarded_rollout(x, v, lambda x, v: -100.0 * x, steps=200)
+    assert d_min >= 0.4
+    assert a_top <= P.a_max + 1e-9
+    assert _guarded_rollout(x, v, lambda x, v: -100.0 * x, steps=200, guard=False)[0] < 0.4
+
+
+def test_agent_guard_priority_over_the_clip():
+    # A saturated sideways command (0, a_max) while closing at 1.6 m/s on a neighbour 1 m ahead:
+    # the guard's braking b is realised whole (w . u = sqrt(2 a_brake (d - margin))) and the
+    # sideways rest is scaled down to keep the norm at a_max, not the braking.
+    x = np.array([[0.0, 0.0], [1.0, 0.0]])
+    v = np.array([[1.6, 0.0], [0.0, 0.0]])
+    a = np.array([[0.0, P.a_max], [0.0, 0.0]])
+    out = F.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    c_max = math.sqrt(2 * P.guard_brake * (1.0 - P.guard_margin))
+    b = (c_max - v[0, 0]) / P.dt
+    assert 0.0 < -b < P.a_max
+    assert out[0, 0] == pytest.approx(b)  # the braking, whole
+    assert np.linalg.norm(out[0]) == pytest.approx(P.a_max)  # within eq. (39)'s bound
+    assert out[0, 1] == pytest.approx(math.sqrt(P.a_max**2 - b * b))  # the rest scaled, lam < 1
+    assert (v[0] + P.dt * out[0])[0] == pytest.approx(c_max)
+    # braking beyond a_max (2.5 m/s closing from 1 m): a_max of pure braking, nothing else
+    out2 = F.agent_guard(a, x, np.array([[2.5, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    np.testing.assert_allclose(out2[0], [-P.a_max, 0.0], atol=1e-12)
+    # an agent at rest, one it closes on at rest beside it, and a pair moving apart: untouched
+    x2 = np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]])
+    v2 = np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]])
+    a2 = np.array([[0.0, 0.0], [0.5, 0.0], [1.0, 0.0]])
+    np.testing.assert_allclose(F.agent_guard(a2, x2, v2, P.dt, P.guard_brake, P.guard_margin, P.a_max), a2, atol=1e-12)
+
+
+def test_agent_guard_counts_the_neighbours_own_stopping_distance():
+    # The bound is 2 a_brake (d - margin) + s_j |s_j| (s_j: j's speed away from i): a neighbour
+    # moving away at the same speed leaves i free to follow; one closing in tightens i's bound.
+    x = np.array([[0.0, 0.0], [1.5, 0.0]])
+    a = np.zeros((2, 2))
+    away = F.agent_guard(a, x, np.array([[3.0, 0.0], [3.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    np.testing.assert_allclose(away[0], [0.0, 0.0], atol=1e-12)
+    # at 0.9 m, i closing at 1 m/s: free beside a neighbour at rest (bound sqrt(1.6) m/s), cut to
+    # sqrt(1.6 - 1) m/s when the neighbour closes in at 1 m/s
+    x = np.array([[0.0, 0.0], [0.9, 0.0]])
+    rest = F.agent_guard(a, x, np.array([[1.0, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    np.testing.assert_allclose(rest[0], [0.0, 0.0], atol=1e-12)
+    v = np.array([[1.0, 0.0], [-1.0, 0.0]])
+    out = F.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    c_max = math.sqrt(2 * P.guard_brake * (0.9 - P.guard_margin) - 1.0)
+    w = v[0] + P.dt * out[0]
+    assert w[0] == pytest.approx(c_max)

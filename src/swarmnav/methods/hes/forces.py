@@ -414,7 +414,7 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead):
 
 
 @njit(cache=True)
-def agent_guard(a, x, v, dt, a_brake, margin, a_max):
+def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4):
     """Contact guard between agents (ours): a braking bound with priority over the clip of eq. (39).
 
     ``a`` is the already saturated command (norm <= ``a_max``). For every agent i and every other
@@ -426,8 +426,10 @@ def agent_guard(a, x, v, dt, a_brake, margin, a_max):
 
     (s_j > 0: j moves away and its own stopping distance adds room; s_j < 0: j closes in and
     its stopping distance is taken off; two agents closing head-on each need only ``a_brake``
-    to stay on the bound). An excess is removed along u (pairs in index order, a greedy
-    projection); i only brakes, it is never pushed away from j.
+    to stay on the bound). An excess is removed along u; the projections onto i's half-planes
+    are cycled up to ``passes`` times (each contains w = 0, so the cycle heads for a point that
+    satisfies all of them: one pass leaves a member squeezed between neighbours over the bound
+    of the first); i only brakes, it is never pushed away from j.
 
     The braking correction ``b_i`` is then kept whole (up to ``a_max``) and the rest of the
     command scaled down to make room: the result is ``b_i + lam a_i`` with the largest
@@ -439,24 +441,29 @@ def agent_guard(a, x, v, dt, a_brake, margin, a_max):
     n = x.shape[0]
     w = v + dt * a
     for i in range(n):
-        for j in range(n):
-            if j == i:
-                continue
-            ux = x[j, 0] - x[i, 0]
-            uy = x[j, 1] - x[i, 1]
-            d = math.sqrt(ux * ux + uy * uy)
-            if d <= 0.0:
-                continue
-            ux /= d
-            uy /= d
-            c = w[i, 0] * ux + w[i, 1] * uy
-            if c <= 0.0:
-                continue
-            sj = v[j, 0] * ux + v[j, 1] * uy
-            c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
-            if c > c_max:
-                w[i, 0] -= (c - c_max) * ux
-                w[i, 1] -= (c - c_max) * uy
+        for _ in range(passes):
+            moved = False
+            for j in range(n):
+                if j == i:
+                    continue
+                ux = x[j, 0] - x[i, 0]
+                uy = x[j, 1] - x[i, 1]
+                d = math.sqrt(ux * ux + uy * uy)
+                if d <= 0.0:
+                    continue
+                ux /= d
+                uy /= d
+                c = w[i, 0] * ux + w[i, 1] * uy
+                if c <= 0.0:
+                    continue
+                sj = v[j, 0] * ux + v[j, 1] * uy
+                c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
+                if c > c_max + 1e-12:
+                    w[i, 0] -= (c - c_max) * ux
+                    w[i, 1] -= (c - c_max) * uy
+                    moved = True
+            if not moved:
+                break
     out = np.empty((n, 2))
     for i in range(n):
         bx = (w[i, 0] - v[i, 0]) / dt - a[i, 0]

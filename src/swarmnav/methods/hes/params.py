@@ -92,7 +92,7 @@ class HesParams:
     agent_brake: float = 2.0  # ours [m/s^2] (passage mode) agent braking barrier: a member's own braking budget when closing on a neighbour (1.5: gates R_goal 0.8 on seed 4; 2.6: more contacts); 0 switches the barrier off
     agent_margin: float = 0.7  # ours [m] (passage mode) agent braking barrier: a member stops this far from the neighbour in front (contact 0.4 m + 0.3 m; 0.6: twice the contacts on the gates, 0.8: R_goal 0.6-0.8 on some gates seeds before the tube change, 1.0: Y = 0)
     agent_guard: bool = True  # ours: contact guard (forces.agent_guard), every agent brakes for its neighbours with priority over the clip of eq. (39); False = eq. (39) alone (the faithful build)
-    guard_brake: float = 2.0  # ours [m/s^2] contact guard: braking each agent of a closing pair is assumed to use (< a_max: head-on pairs need exactly this each)
+    guard_brake: float = 2.2  # ours [m/s^2] contact guard: braking each agent of a closing pair is assumed to use (< a_max: head-on pairs need exactly this each; 2.0: one box_field_2 seed of ten stalls in a pocket, 1.8: dense_cross_blocks R_unsafe 0.228)
     guard_margin: float = 0.5  # ours [m] contact guard: a closing pair stops this far apart (contact 0.4 m + 0.1 m)
     wp_clear: float = 2.0  # ours [m] the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if narrower)
 
