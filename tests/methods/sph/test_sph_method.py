@@ -101,3 +101,18 @@ def test_reference_lag_is_bounded_at_each_replan():
     m._replan = spy
     swarmnav.run(m, from_dict(LONE), seed=1, steps=round(6.0 / m.dt))
     assert max(lags) <= 0.5 + 1e-9 and max(lags) > 0.45  # clamped, and the clamp was reached
+
+
+def test_plan_once_reference_waits_for_a_held_robot():
+    # Fig. 3B protocol: no replan re-anchors the reference, so the reference clock of a robot
+    # slows as it lags and stops at once_hold (the reference waits on the planned path), and the
+    # position error is capped there. Without it the lag of a held robot grows with time
+    # (k_p x lag beats the 1/r repulsion and the ESDF force: obstacle contacts in sph-narrow).
+    def max_lag(**params):
+        m = registry.make("sph", a_max=1e-6, plan_once=True, **params)
+        res = swarmnav.run(m, from_dict(LONE), seed=1, steps=round(4.0 / m.dt))
+        q_ref, _, _ = m._reference(res.positions.shape[0] - 2)
+        return float(np.linalg.norm(q_ref[0] - res.positions[-2, 0]))
+
+    assert max_lag() <= 0.5 + 0.011  # once_hold + one step at v_max
+    assert max_lag(once_hold=0.0) > 2.0

@@ -48,6 +48,8 @@ class Sph:
                 raise ConfigError(f"sph: {key} must be > 0, got {getattr(p, key)}")
         if p.horizon_points < 0 or p.max_iter < 0:
             raise ConfigError("sph: horizon_points and max_iter must be >= 0")
+        if p.once_hold < 0:
+            raise ConfigError(f"sph: once_hold must be >= 0, got {p.once_hold}")
         self.params = p
         self.dt = p.dt
         self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
@@ -71,6 +73,7 @@ class Sph:
         self._replan_every = max(1, int(round(p.T_p / p.dt)))
         self._ref_q = self._ref_v = self._ref_a = None  # (N, L, D) sampled references
         self._ref_k = 0  # step at which the references were sampled
+        self._hold = np.zeros(n)  # plan_once: steps each robot's reference clock stood still
         self._prev_labels: np.ndarray | None = None
         self._prev_visible = np.zeros(0, dtype=np.int64)
         self._plans = 0
@@ -114,6 +117,21 @@ class Sph:
             self._visible = (vi, vj)
             self._replan(obs.step, x, v)
         q_ref, v_ref, a_ref = self._reference(obs.step)
+        if p.plan_once and p.once_hold > 0:
+            # Fig. 3B protocol, no replan re-anchors a lagging reference: each robot's reference clock
+            # slows as its lag grows past once_hold / 2 and stops at once_hold, so the reference waits
+            # on the planned path (ours; the paper only says the robots follow the "trajectory trends").
+            # Time scaling by the rate phi: v* = phi v(tau), a* = phi^2 a(tau).
+            lag = np.linalg.norm(q_ref - x, axis=1)
+            phi = np.clip(2.0 - 2.0 * lag / p.once_hold, 0.0, 1.0)
+            self._hold += 1.0 - phi
+            v_ref = phi[:, None] * v_ref
+            a_ref = (phi * phi)[:, None] * a_ref
+            # a waiting clock cannot bring back a reference that has ended (the goal) or a robot pushed
+            # aside: the position error is bounded by once_hold, as ref_clamp bounds it at a replan
+            far = lag > p.once_hold
+            q_ref = q_ref.copy()
+            q_ref[far] = x[far] + (q_ref[far] - x[far]) * (p.once_hold / lag[far])[:, None]
         # eq. (13)
         a = force / p.m + p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref
         return a, {"labels": labels, "events": events}
@@ -146,8 +164,10 @@ class Sph:
 
     def _reference(self, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Reference samples ``tau_j = t_k + j dt`` (eq. 13) for the current step."""
-        k = min(step - self._ref_k, self._ref_q.shape[1] - 1)
-        return self._ref_q[:, k], self._ref_v[:, k], self._ref_a[:, k]
+        n, length = self._ref_q.shape[:2]
+        k = np.clip(step - self._ref_k - np.round(self._hold).astype(np.int64), 0, length - 1)
+        r = np.arange(n)
+        return self._ref_q[r, k], self._ref_v[r, k], self._ref_a[r, k]
 
     def _replan(self, step: int, x: np.ndarray, v: np.ndarray) -> None:
         p = self.params

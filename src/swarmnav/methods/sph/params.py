@@ -63,3 +63,6 @@ class SphParams:
     #   released planner moves only the start position and keeps the reference's velocity/acceleration
     goal_spread: float = 0.0  # per-robot goal = goal + goal_spread * (spawn_i - spawn centroid)
     plan_once: bool = False  # plan the whole path once at t = 0 (Fig. 3B protocol)
+    once_hold: float = 0.5  # plan_once only [m]: a robot's reference clock slows once its lag passes
+    #   once_hold / 2 and stops at once_hold (v* = phi v, a* = phi^2 a), and the position error is capped at
+    #   once_hold (ours: k_p once_hold = k_rep / (2 body radius)); 0 = off, the reference runs on by time alone
