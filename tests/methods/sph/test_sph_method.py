@@ -116,3 +116,41 @@ def test_plan_once_reference_waits_for_a_held_robot():
 
     assert max_lag() <= 0.5 + 0.011  # once_hold + one step at v_max
     assert max_lag(once_hold=0.0) > 2.0
+
+
+def test_lag_reset_with_velocity_restarts_at_the_robot_at_rest():
+    # Released reset (ref_reset = 1 m onto the robot) with reset_velocity: once a held robot is
+    # 1 m behind, the replan starts at the robot with the robot's velocity, so eq. (13) no
+    # longer pushes it with k_v v*; the released planner keeps v* (~v_max) after the reset.
+    def starts(**params):
+        m = registry.make("sph", a_max=1e-6, ref_reset=1.0, ref_clamp=False, **params)
+        out = []
+        orig = m._replan
+
+        def spy(step, x, v):
+            lag_before = None if m._ref_q is None else float(np.linalg.norm(m._reference(step)[0][0] - x[0]))
+            orig(step, x, v)
+            out.append((lag_before, float(np.linalg.norm(m._ref_q[0, 0] - x[0])), float(np.linalg.norm(m._ref_v[0, 0]))))
+
+        m._replan = spy
+        swarmnav.run(m, from_dict(LONE), seed=1, steps=round(4.0 / m.dt))
+        return [(after, speed) for before, after, speed in out if before is not None and before > 1.0]
+
+    resets = starts(reset_velocity=True)
+    assert resets and all(after < 1e-9 and speed < 1e-3 for after, speed in resets)
+    released = starts(reset_velocity=False)
+    assert released and all(after < 1e-9 and speed > 0.5 for after, speed in released)
+
+
+def test_plan_once_narrow_passage_keeps_the_body_clearance():
+    # sph-narrow, Fig. 3B protocol (plan once), seed 1, first 25 s: the swarm queues at and
+    # passes the 2.2 m gap. With the waiting reference clock (once_hold) no robot comes within
+    # the 0.2 m body radius of a block and no two robots touch; with the reference running on by
+    # time alone, k_p x lag (metres) beats the ESDF force 2 k_env (d_thr - d) <= 10 m/s^2 and
+    # robots are dragged into the blocks.
+    dt = registry.make("sph").dt
+    res = swarmnav.run("sph", "sph_narrow", seed=1, steps=round(25.0 / dt), plan_once=True)
+    assert res.metrics["min_robot_obstacle_distance"] > 0.2
+    assert res.metrics["min_inter_robot_distance"] > 0.4
+    old = swarmnav.run("sph", "sph_narrow", seed=1, steps=round(25.0 / dt), plan_once=True, once_hold=0.0)
+    assert old.metrics["min_robot_obstacle_distance"] < 0.2
