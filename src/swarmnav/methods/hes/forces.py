@@ -366,6 +366,45 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
 
 
 @njit(cache=True)
+def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol):
+    """One pass of agent i's braking bounds, in place on its next velocity ``w[i]``: for every
+    other agent j at distance d (``u = (p_j - p_i) / d``, ``s_j = v_j . u``) an excess of
+    ``w_i . u`` over ``c_max`` (+ ``tol``) is removed along u. i only brakes: a neighbour closing
+    on it never pushes it away (that one's own bound brakes it). Returns whether w_i changed.
+
+    ``a_lead > 0``: the car-following bound of :func:`agent_barrier`,
+    ``c_max = sqrt(2 a_brake (max(d - margin, 0) + max(s_j, 0)^2 / (2 a_lead)))``;
+    ``a_lead <= 0``: the two-sided bound of :func:`agent_guard`,
+    ``c_max = sqrt(max(2 a_brake (d - margin) + s_j |s_j|, 0))``.
+    """
+    moved = False
+    for j in range(x.shape[0]):
+        if j == i:
+            continue
+        ux = x[j, 0] - x[i, 0]
+        uy = x[j, 1] - x[i, 1]
+        d = math.sqrt(ux * ux + uy * uy)
+        if d <= 0.0:
+            continue
+        ux /= d
+        uy /= d
+        c = w[i, 0] * ux + w[i, 1] * uy
+        if c <= 0.0:
+            continue
+        sj = v[j, 0] * ux + v[j, 1] * uy
+        if a_lead > 0.0:
+            vj = max(sj, 0.0)
+            c_max = math.sqrt(2.0 * a_brake * (max(d - margin, 0.0) + vj * vj / (2.0 * a_lead)))
+        else:
+            c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
+        if c > c_max + tol:
+            w[i, 0] -= (c - c_max) * ux
+            w[i, 1] -= (c - c_max) * uy
+            moved = True
+    return moved
+
+
+@njit(cache=True)
 def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead):
     """Braking barrier between agents (ours; passage mode's queues, beside :func:`safety_filter`).
 
@@ -388,28 +427,8 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead):
     n = x.shape[0]
     w = v + dt * a
     for i in range(n):
-        if not active[i]:
-            continue
-        for j in range(n):
-            if j == i:
-                continue
-            ux = x[j, 0] - x[i, 0]
-            uy = x[j, 1] - x[i, 1]
-            d = math.sqrt(ux * ux + uy * uy)
-            if d <= 0.0:
-                continue
-            ux /= d
-            uy /= d
-            # i brakes; it is never made to flee from a neighbour that closes on it (that one's
-            # own barrier brakes it): j's speed toward i does not tighten the bound
-            c = w[i, 0] * ux + w[i, 1] * uy
-            if c <= 0.0:
-                continue
-            vj = max(v[j, 0] * ux + v[j, 1] * uy, 0.0)
-            c_max = math.sqrt(2.0 * a_brake * (max(d - margin, 0.0) + vj * vj / (2.0 * a_lead)))
-            if c > c_max:
-                w[i, 0] -= (c - c_max) * ux
-                w[i, 1] -= (c - c_max) * uy
+        if active[i]:
+            _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, 0.0)
     return (w - v) / dt
 
 
@@ -442,27 +461,7 @@ def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4):
     w = v + dt * a
     for i in range(n):
         for _ in range(passes):
-            moved = False
-            for j in range(n):
-                if j == i:
-                    continue
-                ux = x[j, 0] - x[i, 0]
-                uy = x[j, 1] - x[i, 1]
-                d = math.sqrt(ux * ux + uy * uy)
-                if d <= 0.0:
-                    continue
-                ux /= d
-                uy /= d
-                c = w[i, 0] * ux + w[i, 1] * uy
-                if c <= 0.0:
-                    continue
-                sj = v[j, 0] * ux + v[j, 1] * uy
-                c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
-                if c > c_max + 1e-12:
-                    w[i, 0] -= (c - c_max) * ux
-                    w[i, 1] -= (c - c_max) * uy
-                    moved = True
-            if not moved:
+            if not _brake_toward_neighbours(w, x, v, i, a_brake, margin, 0.0, 1e-12):
                 break
     out = np.empty((n, 2))
     for i in range(n):

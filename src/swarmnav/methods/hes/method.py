@@ -405,22 +405,16 @@ class Hes:
                     route.mid[1], _RHO_VIS, p.lidar_range):
                 # the throat is reached through its mouth (see corridors_toward, approach)
                 target = route.mid - p.passage_len * route.normal
-        if p.adaptive and p.passage_mode and sub.passages:
-            # passage chain: a waypoint left behind a wall (the head moved on through a gap) restarts
-            # from the head's centroid
+        if p.adaptive and p.passage_mode and (sub.passages or sub.chained):
+            # passage chain: a waypoint the subleader sees behind a wall (the head moved on through a
+            # gap) restarts from the head's centroid; once the chain's passages have lapsed, from the
+            # subleader (the centroid, with stragglers still in front of the last gate, can lie in
+            # the wall itself: pushed off the wall's far side it would hold the head there for good)
             a = sub.subleader
-            if not segment_clear(self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, cent[0], cent[1],
+            start = cent if sub.passages else x[a]
+            if not segment_clear(self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, start[0], start[1],
                                  sub.waypoint[0], sub.waypoint[1], 0.2, p.lidar_range):
-                sub.waypoint = cent.copy()
-        if p.adaptive and p.passage_mode and sub.chained and not sub.passages:
-            # after the chain's passages have lapsed, a waypoint the subleader sees behind a wall
-            # (the centroid, with stragglers still in front of the last gate, can lie in the wall
-            # itself) restarts from the subleader: pushed off the wall's far side it would hold the
-            # head at the wall for good
-            a = sub.subleader
-            if not segment_clear(self._ring[a], x[a, 0], x[a, 1], self._cos, self._sin, x[a, 0], x[a, 1],
-                                 sub.waypoint[0], sub.waypoint[1], 0.2, p.lidar_range):
-                sub.waypoint = x[a].copy()
+                sub.waypoint = start.copy()
         sub.chained = sub.chained or bool(sub.passages)
         if p.adaptive:
             # virtual leader: advance toward the target at the (adaptive) cruise speed ...
