@@ -108,7 +108,7 @@ def _pairs_reference(positions, contact, box):
     (65, None, 60.0),    # sparse: no contact in the run, wide fallback search
 ])
 def test_cell_list_pairs_match_kdtree_reference(n, box, spread):
-    from swarmnav.metrics.navigation import _inter_agent
+    from swarmnav.metrics._pairs import inter_agent
 
     rng = np.random.default_rng(n)
     start = rng.uniform(0.0, box or min(spread, 6.0), (n, 2))
@@ -119,7 +119,7 @@ def test_cell_list_pairs_match_kdtree_reference(n, box, spread):
     if spread == 60.0:
         positions = np.arange(n)[None, :, None] * 3.0 + 0.01 * walk  # agents 3 m apart on a line
     contact = 0.1 if box else 0.4
-    best, hits = _inter_agent(positions, contact, box)
+    best, hits = inter_agent(positions, contact, box)
     ref_best, ref_hits = _pairs_reference(positions, contact, box)
     assert best == pytest.approx(ref_best, rel=1e-12)
     assert hits == ref_hits

@@ -32,8 +32,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from swarmnav.metrics._pairs import inter_agent
 from swarmnav.metrics.navigation import MetricParams
 
 
@@ -77,7 +77,7 @@ def flight_metrics(
     j2 = np.einsum("knd,knd->kn", jerk, jerk) * dt
     cj = np.vstack([np.zeros((1, n)), np.cumsum(j2, axis=0)])
     E = cj[np.clip(arrival - 2, 0, len(j2)), np.arange(n)]  # jerk samples 0 .. a_i - 3
-    min_ij = _min_pair_distance(positions)
+    min_ij = inter_agent(positions, 2 * p.body_radius, None)[0]
     min_obs = float(clearance.min()) if clearance.size else float("inf")
     touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
     success = bool(inside[-1].all()) and not touched
@@ -97,20 +97,3 @@ def flight_metrics(
         "success_rate": float(success),
         "coordination_time": t_coord,
     }
-
-
-def _min_pair_distance(positions: np.ndarray, chunk: int = 512) -> float:
-    """Smallest distance between two robots over all recorded steps [m] (inf for N < 2);
-    O(N^2) per step in time chunks for small swarms, a k-d tree per step for large ones."""
-    K1, n, _ = positions.shape
-    if n < 2:
-        return float("inf")
-    if n <= 64:
-        iu, ju = np.triu_indices(n, 1)
-        best = np.inf
-        for k0 in range(0, K1, chunk):
-            blk = positions[k0:k0 + chunk]
-            d = blk[:, iu] - blk[:, ju]
-            best = min(best, float(np.sqrt(np.einsum("kpd,kpd->kp", d, d).min())))
-        return best
-    return float(min(cKDTree(positions[k]).query(positions[k], k=2)[0][:, 1].min() for k in range(K1)))

@@ -10,9 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from swarmnav.metrics._pairs import close_pairs_run
+from swarmnav.metrics._pairs import inter_agent
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,7 +64,7 @@ def navigation_metrics(
     Y = float(R_goal >= p.tau_ms)
     clr_term = float(np.clip(d_clr_min / p.r_s, 0.0, 1.0)) if np.isfinite(d_clr_min) else 1.0
     S_scene = 0.4 * Y + 0.3 * R_goal + 0.15 * (1.0 - R_unsafe) + 0.15 * clr_term
-    min_ij, agent_hits = _inter_agent(positions, 2 * p.body_radius, periodic_box)
+    min_ij, agent_hits = inter_agent(positions, 2 * p.body_radius, periodic_box)
     obstacle_hits = _rising_edges(clearance < p.body_radius)
     out = {
         "E_mean": float(e.mean()),
@@ -95,21 +94,3 @@ def _rising_edges(flags: np.ndarray) -> int:
         return 0
     prev = np.vstack([np.zeros((1, flags.shape[1]), dtype=bool), flags[:-1]])
     return int(np.count_nonzero(flags & ~prev))
-
-
-def _inter_agent(positions: np.ndarray, contact: float, box: float | None) -> tuple[float, int]:
-    """Minimum inter-agent distance over the run [m] and the number of agent-agent contacts
-    (a pair closer than ``contact`` counts once per continuous episode)."""
-    K1, N, _ = positions.shape
-    if N < 2:
-        return float("inf"), 0
-    if N <= 64 and box is None:
-        iu, ju = np.triu_indices(N, 1)
-        d = np.linalg.norm(positions[:, iu] - positions[:, ju], axis=2)  # (K+1, pairs)
-        return float(d.min()), _rising_edges(d < contact)
-    best, hits = close_pairs_run(np.ascontiguousarray(positions, dtype=np.float64), float(box or 0.0),
-                                 contact, contact)
-    if not np.isfinite(best):  # no contact in the whole run: the minimum needs a wider search
-        best = min(float(cKDTree(np.mod(P, box) if box else P, boxsize=box).query(P, k=2)[0][:, 1].min())
-                   for P in positions)
-    return float(best), int(hits)

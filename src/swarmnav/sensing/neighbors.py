@@ -71,10 +71,12 @@ def neighbor_lists(positions: np.ndarray, radius: float, box: float | None = Non
     return indptr, dst[order]
 
 
-def pairwise_min_distance(positions: np.ndarray) -> float:
-    """Smallest distance [m] between two distinct agents (open space); ``inf`` for N < 2."""
+def pairwise_min_distance(positions: np.ndarray, box: float | None = None) -> float:
+    """Smallest distance [m] between two distinct agents (minimum-image in a periodic square of
+    side ``box``); ``inf`` for N < 2."""
     pos = as_points(positions, "positions")
     if pos.shape[0] < 2:
         return float("inf")
-    d, _ = cKDTree(pos).query(pos, k=2)
+    tree, pts = _tree(pos, box)
+    d, _ = tree.query(pts, k=2)
     return float(d[:, 1].min())

@@ -24,6 +24,8 @@ import math
 import numpy as np
 from numba import njit
 
+from swarmnav.sensing.cells import neighbour_csr  # noqa: F401  (the models' neighbour lists, K.neighbour_csr)
+
 #: Layer of an agent not (yet) connected to the information UAV: "infinitely deep".
 NO_LAYER = np.int64(1) << np.int64(60)
 
@@ -42,143 +44,6 @@ def wrap_angle(a):
     elif t < -math.pi:
         t += 2.0 * math.pi
     return t
-
-
-# ---------------------------------------------------------------------------------------------
-# Neighbour lists
-# ---------------------------------------------------------------------------------------------
-
-
-@njit(cache=True)
-def _grid(pos, radius, box, periodic, max_cells):
-    """Cell size and grid of the cell list: cells at least ``radius`` wide."""
-    n = pos.shape[0]
-    if periodic:
-        nc = max(1, int(math.floor(box / radius)))
-        while nc * nc > max_cells and nc > 1:
-            nc -= 1
-        h = box / nc
-        return 0.0, 0.0, h, nc, nc
-    x0 = np.inf
-    y0 = np.inf
-    x1 = -np.inf
-    y1 = -np.inf
-    for i in range(n):
-        x0 = min(x0, pos[i, 0])
-        y0 = min(y0, pos[i, 1])
-        x1 = max(x1, pos[i, 0])
-        y1 = max(y1, pos[i, 1])
-    h = radius
-    ncx = int((x1 - x0) / h) + 1
-    ncy = int((y1 - y0) / h) + 1
-    while ncx * ncy > max_cells:  # agents spread far apart: coarser cells, same result
-        h *= 2.0
-        ncx = int((x1 - x0) / h) + 1
-        ncy = int((y1 - y0) / h) + 1
-    return x0, y0, h, ncx, ncy
-
-
-@njit(cache=True)
-def neighbour_csr(pos, radius, box, wrap, indices, dist2):
-    """Fill ``indices`` / ``dist2`` with every neighbour of every agent.
-
-    Agents are visited cell by cell (a counting sort of the cell list), so consecutive agents
-    read the same few cells and the row of agent ``i`` is ``indices[start[i]:end[i]]``; rows are
-    contiguous but stored in cell order, not in agent order. The candidate test is branch-free:
-    every candidate is written and the write position advances only for a true neighbour.
-
-    Args:
-        pos: (N, 2) positions [m] (in ``[0, box)`` when periodic).
-        radius: neighbour radius [m].
-        box: side of the periodic square [m], or <= 0 for open space.
-        wrap: use minimum-image distances in the periodic square.
-        indices: (cap,) int64 output buffer.
-        dist2: (cap,) float64 output buffer of squared distances [m^2].
-
-    Returns:
-        ``(order, start, end, total)``: the agents in the order their rows are stored (the
-        kernels below visit agents in this order, reading the entries sequentially), (N,) row
-        bounds and the number of entries. If ``total`` exceeds the buffers' length they hold
-        only a prefix; call again with ``total`` capacity.
-    """
-    n = pos.shape[0]
-    cap = indices.shape[0]
-    periodic = box > 0.0 and wrap
-    x0, y0, h, ncx, ncy = _grid(pos, radius, box, periodic, 4 * n + 64)
-    ncell = ncx * ncy
-    cell = np.empty(n, dtype=np.int64)
-    first = np.zeros(ncell + 1, dtype=np.int64)
-    for i in range(n):
-        cx = min(max(int((pos[i, 0] - x0) / h), 0), ncx - 1)
-        cy = min(max(int((pos[i, 1] - y0) / h), 0), ncy - 1)
-        cell[i] = cx + ncx * cy
-        first[cell[i] + 1] += 1
-    for c in range(ncell):
-        first[c + 1] += first[c]
-    fill = first[:-1].copy()
-    order = np.empty(n, dtype=np.int64)
-    for i in range(n):  # counting sort: agents of a cell stay in index order
-        order[fill[cell[i]]] = i
-        fill[cell[i]] += 1
-    sx = np.empty(n)
-    sy = np.empty(n)
-    for s in range(n):
-        sx[s] = pos[order[s], 0]
-        sy[s] = pos[order[s], 1]
-
-    r2 = radius * radius
-    half = 0.5 * box
-    start = np.empty(n, dtype=np.int64)
-    end = np.empty(n, dtype=np.int64)
-    total = 0
-    # Stencil per axis: the 3 cells around, or every cell once when the axis has fewer than 3.
-    wx = 3 if ncx >= 3 else ncx
-    wy = 3 if ncy >= 3 else ncy
-    for c0 in range(ncell):
-        cx = c0 % ncx
-        cy = c0 // ncx
-        for si in range(first[c0], first[c0 + 1]):
-            px = sx[si]
-            py = sy[si]
-            start[order[si]] = total
-            for a in range(wy):
-                if ncy >= 3:
-                    qy = cy + a - 1
-                    if qy < 0 or qy >= ncy:
-                        if not periodic:
-                            continue
-                        qy = qy + ncy if qy < 0 else qy - ncy
-                else:
-                    qy = a
-                for b in range(wx):
-                    if ncx >= 3:
-                        qx = cx + b - 1
-                        if qx < 0 or qx >= ncx:
-                            if not periodic:
-                                continue
-                            qx = qx + ncx if qx < 0 else qx - ncx
-                    else:
-                        qx = b
-                    c = qx + ncx * qy
-                    for s in range(first[c], first[c + 1]):
-                        dx = sx[s] - px
-                        dy = sy[s] - py
-                        if periodic:  # minimum image (|dx| < box for stored points in [0, box))
-                            if dx > half:
-                                dx -= box
-                            elif dx < -half:
-                                dx += box
-                            if dy > half:
-                                dy -= box
-                            elif dy < -half:
-                                dy += box
-                        d2 = dx * dx + dy * dy
-                        if total < cap:
-                            indices[total] = order[s]
-                            dist2[total] = d2
-                        total += (d2 > 0.0) & (d2 <= r2)
-            end[order[si]] = total
-    return order, start, end, total
 
 
 # ---------------------------------------------------------------------------------------------
