@@ -125,3 +125,13 @@ def test_cell_list_pairs_match_kdtree_reference(n, box, spread):
     assert hits == ref_hits
     if spread != 60.0:
         assert hits > 0  # the case exercises contacts
+
+
+def test_coincident_agents_are_a_contact_at_distance_zero():
+    from swarmnav.metrics._pairs import inter_agent
+
+    P = np.zeros((3, 70, 2))
+    P[:, :, 0] = np.arange(70) * 2.0  # 70 agents 2 m apart on a line ...
+    P[1, 1] = P[1, 0]  # ... agent 1 sits on agent 0 at step 1 only
+    assert inter_agent(P, 0.4, None) == (0.0, 1)
+    assert inter_agent(P, 0.4, 500.0) == (0.0, 1)
