@@ -95,8 +95,6 @@ def test_scales_to_1e5_agents_without_dense_matrix():
 
 
 def test_pairwise_min_distance_uses_the_minimum_image_in_a_periodic_box():
-    from swarmnav.sensing import pairwise_min_distance
-
     pts = np.array([[0.1, 5.0], [9.8, 5.0], [5.0, 1.0]])  # 0.3 m apart across the seam x = 0 / 10
     assert pairwise_min_distance(pts) == pytest.approx(np.hypot(4.8, 4.0))  # open space: the seam is far
     assert pairwise_min_distance(pts, box=10.0) == pytest.approx(0.3)
