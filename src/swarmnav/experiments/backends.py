@@ -8,23 +8,24 @@ rows are identical whatever the back end or worker count.
 from __future__ import annotations
 
 import ctypes
+import multiprocessing as mp
 import os
 import signal
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from concurrent.futures.process import BrokenProcessPool
+from collections import deque
+from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Callable
 
 from swarmnav.errors import ConfigError
 from swarmnav.experiments.runner import Job, execute, failed_row
 
-#: How many times a pool broken by a dying worker is rebuilt before the rest is marked failed.
-MAX_POOL_RESTARTS = 3
+#: How many times a job whose worker process died under it is run again before it is recorded
+#: as failed (to be retried by the next rerun of the sweep).
+MAX_JOB_RETRIES = 2
 
 
 def _die_with_parent() -> None:
-    """Worker initialiser: on Linux, get SIGKILL when the driver dies, so a killed sweep
-    leaves no orphaned workers behind."""
+    """On Linux, get SIGKILL when the driver dies, so a killed sweep leaves no orphaned workers."""
     try:
         libc = ctypes.CDLL("libc.so.6", use_errno=True)
         libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
@@ -32,13 +33,44 @@ def _die_with_parent() -> None:
         pass
 
 
+def _worker(conn: Connection, keep_trajectory: bool) -> None:
+    """Worker process: run the jobs the driver sends down ``conn`` until it sends None.
+
+    Ctrl-C is the driver's to handle (it stops the workers), so a worker ignores SIGINT
+    rather than printing a traceback per process.
+    """
+    _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    while (job := conn.recv()) is not None:
+        conn.send(execute(job, keep_trajectory))
+
+
+class _Slot:
+    """One worker process, its private pipe, and the job it is running (None when idle)."""
+
+    def __init__(self, ctx, keep_trajectory: bool):
+        self.conn, child = ctx.Pipe()
+        self.proc = ctx.Process(target=_worker, args=(child, keep_trajectory), daemon=True)
+        self.proc.start()
+        child.close()
+        self.job: Job | None = None
+
+    def stop(self) -> None:
+        if self.proc.is_alive():
+            self.proc.kill()
+        self.proc.join()
+        self.conn.close()
+
+
 def local(jobs: list[Job], *, workers: int, on_result: Callable[[dict], None], keep_trajectory: bool = True,
           ray_address: str | None = None) -> None:
-    """Run on this machine: in-process for one worker, else a process pool of ``workers``.
+    """Run on this machine: in-process for one worker, else ``workers`` worker processes.
 
-    A worker killed mid-run breaks the pool; the runs that had finished are kept, the pool is
-    rebuilt and the unfinished runs are submitted again (at most MAX_POOL_RESTARTS times,
-    then the remainder is recorded as failed, to be retried by the next rerun).
+    Every worker has its own pipe, so a worker that dies (SIGKILL, out of memory, a crash in
+    compiled code) takes down only the job it was running: the driver sees its pipe close,
+    starts a replacement and runs that job again (at most MAX_JOB_RETRIES times, then records
+    it as failed, to be retried by the next rerun). Nothing is shared between workers, so no
+    lock can be left held by a dead one.
     """
     if ray_address:
         raise ConfigError("--ray-address needs --backend ray")
@@ -46,26 +78,50 @@ def local(jobs: list[Job], *, workers: int, on_result: Callable[[dict], None], k
         for j in jobs:
             on_result(execute(j, keep_trajectory))
         return
-    pending = list(jobs)
-    for attempt in range(MAX_POOL_RESTARTS + 1):
-        finished: set[str] = set()
-        try:
-            with ProcessPoolExecutor(max_workers=workers, initializer=_die_with_parent) as pool:
-                futures = {pool.submit(execute, j, keep_trajectory): j for j in pending}
-                for f in as_completed(futures):
-                    row = f.result()
+    todo = deque(jobs)
+    deaths: dict[str, int] = {}
+    ctx = mp.get_context()
+    slots: list[_Slot] = []
+    try:
+        while todo or slots:
+            while len(slots) < min(workers, len(todo) + sum(s.job is not None for s in slots)):
+                slots.append(_Slot(ctx, keep_trajectory))
+            for s in slots:
+                if s.job is None and todo:
+                    s.job = todo.popleft()
+                    s.conn.send(s.job)
+            busy = [s for s in slots if s.job is not None]
+            if not busy:
+                break
+            ready = set(wait([s.conn for s in busy] + [s.proc.sentinel for s in busy]))
+            for s in busy:
+                if s.conn not in ready and s.proc.sentinel not in ready:
+                    continue
+                try:  # a result sent just before the worker died is still in the pipe
+                    row = s.conn.recv() if s.conn.poll() else None
+                except Exception:  # noqa: BLE001 - EOF or a half-written result from a dying worker
+                    row = None
+                if row is not None:
+                    s.job = None
                     on_result(row)
-                    finished.add(row["key"])
-        except BrokenProcessPool:
-            for f, j in futures.items():  # keep what completed before the pool broke
-                if j.key not in finished and f.done() and not f.cancelled() and f.exception() is None:
-                    on_result(f.result())
-                    finished.add(j.key)
-        pending = [j for j in pending if j.key not in finished]
-        if not pending:
-            return
-    for j in pending:
-        on_result(failed_row(j, "worker process died (pool broke repeatedly)"))
+                    if s.proc.is_alive():
+                        continue
+                if s.job is not None:  # the worker died running it
+                    n = deaths[s.job.key] = deaths.get(s.job.key, 0) + 1
+                    if n > MAX_JOB_RETRIES:
+                        on_result(failed_row(s.job, f"worker process died {n} times running it "
+                                                    f"(exit code {s.proc.exitcode})"))
+                    else:
+                        todo.appendleft(s.job)
+                    s.job = None
+                s.stop()
+                slots.remove(s)
+        for s in slots:  # all done: let the idle workers exit on their own
+            s.conn.send(None)
+            s.proc.join(5)
+    finally:
+        for s in slots:
+            s.stop()
 
 
 def ray(jobs: list[Job], *, workers: int, on_result: Callable[[dict], None], keep_trajectory: bool = True,
