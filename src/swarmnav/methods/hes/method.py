@@ -474,12 +474,16 @@ class Hes:
         if prev is not None and not prev.direct and not engaged:
             # Hold a throat until the whole sub-swarm is through (at most _HOLD_S after the first
             # member passed): the next corridor's target would pull the members still in front
-            # of this gap away from it, along the wall.
+            # of this gap away from it, along the wall. Only members in line with the gap count as
+            # in front of it: a member stuck beside it (beyond its side wall, e.g. in a block's
+            # concave corner) held the route for 15 s while the target ran on along the old exit
+            # direction and led the rest into a closed pocket (dense_cross_blocks seeds 16, 26).
             rel = rep.pack.positions - prev.mid
             along = rel @ prev.normal
             across = np.abs(rel @ np.array([-prev.normal[1], prev.normal[0]]))
-            through = int(np.count_nonzero((along > 0.0) & (across < 0.5 * prev.width + 2.0)))  # passed the gap
-            before = int(np.count_nonzero(along <= 0.0))
+            band = across < 0.5 * prev.width + 2.0  # in line with the gap
+            through = int(np.count_nonzero((along > 0.0) & band))  # passed the gap
+            before = int(np.count_nonzero((along <= 0.0) & band))  # still in front of it
             seen = segment_clear(ring_a, sl[0], sl[1], self._cos, self._sin, cent[0], cent[1], prev.mid[0],
                                  prev.mid[1], _RHO_VIS, p.lidar_range)
             if through > 0 and before > 0 and seen:
