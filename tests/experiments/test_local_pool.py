@@ -81,3 +81,34 @@ def _children():
             if int(stat[1]) == me and stat[0] != "Z":
                 out.append(int(d))
     return out
+
+
+
+def test_a_worker_that_dies_idle_costs_its_next_job_nothing(monkeypatch):
+    """A worker killed between jobs: sending it the next job fails and the job goes to another
+    worker without counting as a death (with no retries allowed it would otherwise fail)."""
+    monkeypatch.setattr(backends, "execute", lambda job, keep=True: {"key": job.key, "status": "done"})
+    monkeypatch.setattr(backends, "MAX_JOB_RETRIES", 0)
+    slots, killed, driver = [], [], os.getpid()
+    real_init, real_send = backends._Slot.__init__, backends.Connection.send
+
+    def init(self, ctx, keep):
+        real_init(self, ctx, keep)
+        slots.append(self)
+
+    def send(conn, obj):
+        if os.getpid() == driver and obj is not None and not killed:  # kill the first job's worker first
+            (slot,) = [s for s in slots if s.conn is conn]
+            os.kill(slot.proc.pid, signal.SIGKILL)
+            slot.proc.join()
+            killed.append(slot.proc.pid)
+        return real_send(conn, obj)
+
+    monkeypatch.setattr(backends._Slot, "__init__", init)
+    monkeypatch.setattr(backends.Connection, "send", send)
+    jobs = _jobs("1-2")
+    rows = []
+    backends.local(jobs, workers=2, on_result=rows.append)
+    assert killed
+    assert sorted(r["key"] for r in rows) == sorted(j.key for j in jobs)
+    assert all(r["status"] == "done" for r in rows)

@@ -86,10 +86,15 @@ def local(jobs: list[Job], *, workers: int, on_result: Callable[[dict], None], k
         while todo or slots:
             while len(slots) < min(workers, len(todo) + sum(s.job is not None for s in slots)):
                 slots.append(_Slot(ctx, keep_trajectory))
-            for s in slots:
+            for s in list(slots):
                 if s.job is None and todo:
+                    try:
+                        s.conn.send(todo[0])
+                    except OSError:  # it died idle: the job never started, so it costs no retry
+                        s.stop()
+                        slots.remove(s)
+                        continue
                     s.job = todo.popleft()
-                    s.conn.send(s.job)
             busy = [s for s in slots if s.job is not None]
             if not busy:
                 break
