@@ -293,3 +293,25 @@ def direct_corridor(p: np.ndarray, goal: np.ndarray) -> Corridor:
     d = math.hypot(g[0], g[1])
     u = g / d if d > 0 else np.array([1.0, 0.0])
     return Corridor(mid=p.copy(), normal=u, width=math.inf, target=goal.copy(), cost=d, direct=True)
+
+
+@njit(cache=True)
+def newest_visible(ring, sx, sy, cos_t, sin_t, trail, count, members, rho, reach, max_range):
+    """Index ``(t, j)`` of the newest trail point ``trail[t, j]`` (t < ``count``, j in ``members``)
+    within ``reach`` [m] of the sensor ``(sx, sy)`` and joined to it by a straight segment of
+    half-width ``rho`` free of this ring's returns; ``(-1, -1)`` if none. Newest: largest t,
+    then the nearest point."""
+    r2 = reach * reach
+    for t in range(count - 1, -1, -1):
+        best, jb = np.inf, -1
+        for j in members:
+            dx = trail[t, j, 0] - sx
+            dy = trail[t, j, 1] - sy
+            d2 = dx * dx + dy * dy
+            if d2 > r2 or d2 >= best:
+                continue
+            if segment_clear(ring, sx, sy, cos_t, sin_t, sx, sy, trail[t, j, 0], trail[t, j, 1], rho, max_range):
+                best, jb = d2, j
+        if jb >= 0:
+            return t, jb
+    return -1, -1

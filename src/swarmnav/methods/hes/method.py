@@ -33,6 +33,7 @@ from swarmnav.methods.hes.corridors import (
     detect_gaps,
     direct_corridor,
     free_points,
+    newest_visible,
     segment_clear,
     seen_passages,
 )
@@ -67,6 +68,7 @@ from swarmnav.sensing.lidar import _ray_table
 from swarmnav.world.scenario import Scenario
 
 _NEVER = -(10**9)
+SIG_SLOT_, SIG_NN_, SIG_SL_, SIG_CENT_ = F.SIG_SLOT, F.SIG_NN, F.SIG_SL, F.SIG_CENT
 _RING_ANGLES = np.linspace(0.0, 2 * math.pi, 72, endpoint=False)  # encircle slot candidates (5 deg)
 _SLOT_REFRESH = 10  # steps between re-solving the slot assignment (ours: 1 s)
 _RHO_VIS = 0.4  # [m] half-width of the straight line from the centroid to a throat that must be free (ours)
@@ -74,6 +76,10 @@ _COMMIT_S = 20.0  # [s] a split's corridor assignment lapses after this long if 
 _HOLD_S = 15.0  # [s] longest a sub-swarm waits at a throat for its last members (ours)
 _PASSAGES = 3  # passage mode: throats remembered per sub-swarm (ours; the current one and the two before)
 _STRAY = 4.0  # [m] a subleader farther than this from its sub-swarm's centroid hands over its role (ours)
+_TRAIL_EVERY = 10  # steps between two samples of the members' trail (ours: 1 s)
+_TRAIL_LEN = 200  # trail samples kept (ours: 200 s, longer than a run)
+_TRAIL_REACH = 10.0  # [m] a cut-off member looks for trail points this close (ours: half R_L)
+_CUT_S = 2.0  # [s] a member cut off from its sub-swarm this long follows the trail (ours: not a member briefly behind a corner)
 
 
 @dataclass(slots=True)
@@ -155,6 +161,11 @@ class Hes:
         self.last_reports: dict[int, Report] = {}
         self._qidx = np.full(n, -1, dtype=np.int64)  # passage mode: queued members (see _queue)
         self._qtgt = np.zeros((n, 2))
+        self._trail = np.zeros((_TRAIL_LEN, n, 2))  # members' positions every _TRAIL_EVERY steps (trail_follow)
+        self._trail_n = 0
+        self._blocked = np.zeros((n, 4), dtype=np.bool_)  # segment to slot / nn / subleader / centroid blocked
+        self.last_cut = np.zeros(n, dtype=np.bool_)  # trail_follow: members following the trail this step
+        self._cut_steps = np.zeros(n, dtype=np.int64)  # trail_follow: consecutive steps cut off from the sub-swarm
 
     def summary(self) -> dict[str, float]:
         out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}
@@ -175,6 +186,12 @@ class Hes:
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         ring = self._sense(x)
         self._k = k
+        if p.trail_follow and k % _TRAIL_EVERY == 0:
+            if self._trail_n == _TRAIL_LEN:
+                self._trail[:-1] = self._trail[1:]
+                self._trail_n -= 1
+            self._trail[self._trail_n] = x
+            self._trail_n += 1
         events: list[dict] = []
 
         self._reelect(x)
@@ -655,6 +672,8 @@ class Hes:
             cent = F.group_centroids(x, col, len(ids))[col]
             nn = F.nearest_in_group(x, self.labels)
         sig = self._occlusion(x, slot, nn, sl_idx, cent)
+        if p.trail_follow:
+            self._follow_trail(x, slot, wp, sig, cent, sl_idx, queued)
         vslot = F.slot_velocity(x, slot, speed, p.eps_v)
         dsafe = self._dsafe(x)
         args = (x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig, ring,
@@ -777,12 +796,61 @@ class Hes:
         self.last_dsafe = out
         return out
 
+    def _follow_trail(self, x, slot, wp, sig, cent, sl_idx, queued) -> None:
+        """Trail following (ours, ``trail_follow``): a member cut off from its sub-swarm -- the
+        segments to its slot, its subleader and its centroid all blocked for ``_CUT_S`` (2 s),
+        farther than ``d_c`` from the centroid, not the subleader, not in a sub-swarm with a
+        passage chain (queues and tubes route those members) -- takes as slot and corridor-centering
+        target the newest point of its teammates' trail (their positions, sampled every second)
+        that it can reach in a straight line (no return of its own ring within 0.4 m of the
+        segment, at most ``_TRAIL_REACH`` away). Once there, a newer point is in view: it
+        retraces the way the others went. Its subleader, centroid and (if blocked) nearest
+        neighbour couplings are switched off meanwhile. Modifies ``slot``, ``wp`` and ``sig`` in place.
+
+        Why: eqs. (24) and (32) pull a member straight at its slot and the waypoint c_s, through
+        any wall between them (eq. (30) attenuates the slot term, not the centering term, which
+        grows with the distance). A member left in a block's concave corner -- the wall between
+        it and the swarm, the way out pointing away from the swarm -- was held there by them
+        against the LiDAR repulsion for the rest of the run (dense_cross_blocks held-out seeds:
+        one or two stragglers, R_unsafe 0.45-0.65 on those runs)."""
+        p = self.params
+        b = self._blocked
+        cut = b[:, SIG_SLOT_] & b[:, SIG_SL_] & b[:, SIG_CENT_]
+        if not cut.any():  # the common case: nobody is cut off
+            self._cut_steps[:] = 0
+            self.last_cut = cut
+            return
+        cut &= ~queued & (sl_idx != np.arange(self.n))
+        if p.passage_mode:  # a passage chain routes its members itself (queues, tubes)
+            chain = np.array([bool(self.subs[s].passages) for s in sorted(self.subs)])
+            cut &= ~chain[np.searchsorted(np.asarray(sorted(self.subs)), self.labels)]
+        cut &= np.hypot(*(x - cent).T) > p.d_c
+        self._cut_steps = np.where(cut, self._cut_steps + 1, 0)
+        cut &= self._cut_steps * p.dt >= _CUT_S
+        self.last_cut = cut
+        if not cut.any() or self._trail_n == 0:
+            return
+        for i in np.flatnonzero(cut):
+            mates = np.flatnonzero((self.labels == self.labels[i]) & ~cut)
+            t, j = newest_visible(self._ring[i], x[i, 0], x[i, 1], self._cos, self._sin, self._trail, self._trail_n,
+                                  mates, _RHO_VIS, _TRAIL_REACH, p.lidar_range)
+            if t >= 0:
+                slot[i] = wp[i] = self._trail[t, j]
+                sig[i, SIG_SLOT_] = 1.0
+                # the couplings it cannot see (subleader, centroid, nearest neighbour) no longer
+                # pull it at the wall: attenuated by eq. (30) they still pinned it there
+                sig[i, SIG_SL_] = sig[i, SIG_CENT_] = 0.0
+                if b[i, SIG_NN_]:
+                    sig[i, SIG_NN_] = 0.0
+
     def _occlusion(self, x, slot, nn, sl_idx, cent) -> np.ndarray:
         """Eq. (30): sigma_occ where the segment to the slot / nearest neighbour / subleader /
-        centroid meets an obstacle, 1 otherwise; (N, 4)."""
+        centroid meets an obstacle, 1 otherwise; (N, 4). The blocked flags are kept in
+        ``self._blocked`` (trail following reads them, also with sigma_occ = 1)."""
         p = self.params
         n = self.n
-        if self.geom.is_empty or p.sigma == 1.0:
+        self._blocked = np.zeros((n, 4), dtype=np.bool_)
+        if self.geom.is_empty or (p.sigma == 1.0 and not p.trail_follow):
             return np.ones((n, 4))
         q_nn = x[np.where(nn >= 0, nn, np.arange(n))]
         P = np.concatenate([x, x, x, x])
@@ -790,4 +858,5 @@ class Hes:
         blocked = np.empty(4 * n, dtype=np.bool_)
         segments_blocked_kernel(*self._garr, P, Q, blocked)  # = swarmnav.sensing.segments_blocked
         blocked = blocked.reshape(4, n).T
+        self._blocked = blocked
         return np.where(blocked, p.sigma, 1.0)

@@ -94,6 +94,7 @@ class HesParams:
     agent_guard: bool = True  # ours: contact guard (forces.agent_guard), every agent brakes for its neighbours with priority over the clip of eq. (39); False = eq. (39) alone (the faithful build)
     guard_brake: float = 2.2  # ours [m/s^2] contact guard: braking each agent of a closing pair is assumed to use (< a_max: head-on pairs need exactly this each; 2.0: one box_field_2 seed of ten stalls in a pocket, 1.8: dense_cross_blocks R_unsafe 0.228)
     guard_margin: float = 0.5  # ours [m] contact guard: a closing pair stops this far apart (contact 0.4 m + 0.1 m)
+    trail_follow: bool = True  # ours: a member cut off from its sub-swarm (slot, subleader and centroid behind obstacles, > d_c from the centroid) retraces its teammates' trail instead of pulling at its slot through the wall (Hes._follow_trail); False = eqs. (24)/(32) toward the slot and c_s always
     wp_clear: float = 2.0  # ours [m] the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if narrower)
 
     # ---------------------------------------------------------------- passage mode (ours, beyond the paper; docs "Passage mode")
