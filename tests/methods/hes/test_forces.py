@@ -202,6 +202,28 @@ def test_safety_filter_bounds_speed_and_closing_speed():
     assert np.linalg.norm(0.1 * a2) == pytest.approx(3.9)  # speed cap
 
 
+
+def test_safety_filter_meets_every_ray_bound_between_obstacles():
+    """Property: whatever the command, the next velocity respects the braking bound of every
+    LiDAR return at once, also with returns on several sides (two trees, a corner), where
+    one greedy sweep over the rays can leave a bound broken that an earlier ray had met."""
+    rng = np.random.default_rng(7)
+    for _ in range(400):
+        ring = np.full((3, R), 20.0)
+        for row in ring:  # two or three obstacles: arcs of close returns around random bearings
+            for _ in range(rng.integers(2, 4)):
+                c, w = rng.integers(0, R), rng.integers(5, 60)
+                idx = (c + np.arange(-w, w + 1)) % R
+                row[idx] = np.minimum(row[idx], rng.uniform(0.2, 2.0) + 0.3 * np.abs(np.arange(-w, w + 1)) / w)
+        v = rng.normal(0.0, 1.0, (3, 2))
+        a = rng.normal(0.0, 30.0, (3, 2))
+        out = F.safety_filter(a, v, ring, COS, SIN, 0.1, 1.3, 1.5, 0.5, 20.0)
+        w = v + 0.1 * out
+        closing = w @ np.vstack([COS, SIN])  # (3, R)
+        bound = np.sqrt(2 * 1.5 * np.maximum(ring - 0.5, 0.0))
+        assert np.all(closing[ring < 20.0] <= bound[ring < 20.0] + 1e-9)
+        assert np.all(np.linalg.norm(w, axis=1) <= 1.3 + 1e-9)
+
 def _follow(lead_brake_step, v0=3.0, gap0=4.0, steps=200):
     """1-D car following under eq. (39): the follower commands +a_max toward the leader every
     step (the worst attraction), the leader cruises at 2 m/s and brakes at a_max from

@@ -324,19 +324,28 @@ def saturate(a, a_max):
 
 # --------------------------------------------------------------------------- safety stack (ours)
 
+#: Sweeps of the wall braking barrier over the rays before the rest is scaled away (safety_filter).
+#: A module constant, not a default argument: numba dispatches calls that omit an argument slowly.
+WALL_PASSES = 3
+
+
 @njit(cache=True)
 def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_range):
     """Adaptive motion regulation (ours; the safety stack's layers around eq. (38), Section 5.3).
 
-    Projects each agent's commanded next velocity ``v + a dt`` onto
+    Projects each agent's commanded next velocity ``w = v + a dt`` onto
 
-    1. the speed cap ``||v_next|| <= v_cap`` (scaled down if longer), then
+    1. the speed cap ``||w|| <= v_cap`` (scaled down if longer), then
     2. the braking barrier: for every LiDAR ray r (range d_r < R_L, direction u_r) the closing
-       speed ``v_next . u_r`` may not exceed ``sqrt(2 a_brake max(d_r - margin, 0))``, the speed
-       a deceleration ``a_brake`` can stop within the remaining distance; an excess is removed
-       along u_r (rays processed in order, a greedy projection onto the half-planes),
+       speed ``w . u_r`` may not exceed ``c_r = sqrt(2 a_brake max(d_r - margin, 0))``, the speed
+       a deceleration ``a_brake`` can stop within the remaining distance. Up to ``passes`` sweeps
+       over the rays remove an excess along u_r (cyclic projection onto the half-planes); one
+       sweep is not enough between two obstacles, where removing the excess toward one ray adds
+       closing speed toward another already visited (an agent slid into a tree that way). What
+       is left after the sweeps is removed by scaling w toward 0, which meets every bound
+       (c_r >= 0): the barrier always holds,
 
-    and returns the acceleration ``(v_next - v) / dt`` that realises it. Saturation (eq. 39)
+    and returns the acceleration ``(w - v) / dt`` that realises it. Saturation (eq. 39)
     is applied afterwards by the caller.
     """
     n, nr = ring.shape
@@ -349,19 +358,37 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
             wx *= v_cap / s
             wy *= v_cap / s
         row = ring[i]
-        for r in range(nr):
-            d = row[r]
-            if d >= max_range:
-                continue
-            c = wx * cos_t[r] + wy * sin_t[r]
-            if c <= 0.0:
-                continue
-            c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
-            if c > c_max:
-                wx -= (c - c_max) * cos_t[r]
-                wy -= (c - c_max) * sin_t[r]
-        out[i, 0] = (wx - v[i, 0]) / dt
-        out[i, 1] = (wy - v[i, 1]) / dt
+        moved = True
+        for _ in range(WALL_PASSES):  # usually one sweep: nothing to remove, nothing moved
+            moved = False
+            for r in range(nr):
+                d = row[r]
+                if d >= max_range:
+                    continue
+                c = wx * cos_t[r] + wy * sin_t[r]
+                if c <= 0.0:
+                    continue
+                c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
+                if c > c_max + 1e-12:
+                    wx -= (c - c_max) * cos_t[r]
+                    wy -= (c - c_max) * sin_t[r]
+                    moved = True
+            if not moved:
+                break
+        scale = 1.0
+        if moved:  # the sweeps did not settle: scale toward 0 until every bound holds
+            for r in range(nr):
+                d = row[r]
+                if d >= max_range:
+                    continue
+                c = wx * cos_t[r] + wy * sin_t[r]
+                if c <= 0.0:
+                    continue
+                c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
+                if c > c_max:
+                    scale = min(scale, c_max / c)
+        out[i, 0] = (scale * wx - v[i, 0]) / dt
+        out[i, 1] = (scale * wy - v[i, 1]) / dt
     return out
 
 

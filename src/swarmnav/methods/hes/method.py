@@ -701,10 +701,11 @@ class Hes:
             if brake:
                 active = np.array([bool(self.subs[s].passages) for s in ids])[col]
                 a = F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
-            a = F.safety_filter(a, v, ring, self._cos, self._sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake,
-                                p.brake_margin, p.lidar_range)
-            if brake:
-                a = F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
+            wall = (ring, self._cos, self._sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake, p.brake_margin, p.lidar_range)
+            a = F.safety_filter(a, v, *wall)
+            if brake:  # the queue barrier may turn a member toward a wall: the wall barrier has the last word
+                a = F.safety_filter(F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound),
+                                    v, *wall)
         a = F.saturate(a, p.a_bound)
         if p.adaptive and p.agent_guard:
             # contact guard: every agent brakes for its neighbours, with priority over the clip
