@@ -63,7 +63,7 @@ from swarmnav.methods.hes.hierarchy import (
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.passage import passage_dsafe
 from swarmnav.params import build
-from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, segments_blocked_kernel
+from swarmnav.sensing import PreparedGeometry
 from swarmnav.sensing.lidar import _ray_table
 from swarmnav.world.scenario import Scenario
 
@@ -141,9 +141,7 @@ class Hes:
         self.scenario = scenario
         self.goal = scenario.goal_array.astype(float)
         self.geom = scenario.geometry
-        # Hot path: the sensing kernels are called directly on the geometry arrays converted once
-        # here (lidar_ring / segments_blocked would re-validate and re-convert them every call).
-        self._garr = geom_arrays(self.geom)
+        self._obstacles = PreparedGeometry(self.geom)  # the per-step LiDAR and line-of-sight queries
         n = len(positions)
         self.n = n
         self.source: DecisionSource = self._source_override or decision_source(p, RulePolicy(p.d_merge, p.t_cd), project)
@@ -229,8 +227,7 @@ class Hes:
         if self.geom.is_empty:
             ring = np.full((len(x), p.n_rays), p.lidar_range)
         else:  # = swarmnav.sensing.lidar_ring(geom, x, n_rays, R_L)
-            ring = np.empty((len(x), p.n_rays))
-            lidar_kernel(*self._garr, x, self._cos, self._sin, float(p.lidar_range), ring)
+            ring = self._obstacles.lidar_into(x, self._cos, self._sin, p.lidar_range, np.empty((len(x), p.n_rays)))
         self._ring = ring  # read by the corridor choice and the encircle slots of this step
         return ring
 
@@ -245,9 +242,7 @@ class Hes:
         sl = np.array([self.subs[s].subleader for s in ids])
         far = np.hypot(*(x[sl] - cents).T) > _STRAY
         if not self.geom.is_empty:
-            cut = np.empty(len(ids), dtype=np.bool_)
-            segments_blocked_kernel(*self._garr, np.ascontiguousarray(x[sl]), cents, cut)
-            far |= cut
+            far |= self._obstacles.blocked_into(np.ascontiguousarray(x[sl]), cents, np.empty(len(ids), dtype=np.bool_))
         for j in np.flatnonzero(far):
             members = np.flatnonzero(col == j)
             self.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
@@ -856,8 +851,6 @@ class Hes:
         q_nn = x[np.where(nn >= 0, nn, np.arange(n))]
         P = np.concatenate([x, x, x, x])
         Q = np.concatenate([slot, q_nn, x[sl_idx], cent])
-        blocked = np.empty(4 * n, dtype=np.bool_)
-        segments_blocked_kernel(*self._garr, P, Q, blocked)  # = swarmnav.sensing.segments_blocked
-        blocked = blocked.reshape(4, n).T
+        blocked = self._obstacles.blocked_into(P, Q, np.empty(4 * n, dtype=np.bool_)).reshape(4, n).T
         self._blocked = blocked
         return np.where(blocked, p.sigma, 1.0)
