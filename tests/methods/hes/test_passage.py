@@ -282,3 +282,17 @@ def test_a_passage_outlives_its_memory_while_members_are_in_front_of_it(front):
     m._remember_passage(sub, None, None, x, k)
     assert any(q.throat is g1 for q in sub.passages) == front
     assert not any(q.throat is g2 for q in sub.passages)
+
+
+def test_passage_relief_widens_a_4m_throat_and_leaves_narrow_ones_alone():
+    """A 4 m throat leaves a 1 m band under d_safe = 1.5 m; in its tube d_safe_eff is
+    d_safe - passage_relief (band 1.4 m), outside the tube d_safe. A 2.3 m throat keeps
+    w/2 - margin, which is already below d_safe - relief."""
+    x = MID + np.array([[0.0, 0.0], [0.0, 1.0], [-P.passage_len - 0.1, 0.0]])  # centre, off centre, before the tube
+    args = (MID, NORMAL)
+    wide = passage_dsafe(x, *args, 4.0, P.d_safe, P.passage_margin, P.passage_len, P.passage_reach, P.passage_relief)
+    np.testing.assert_allclose(wide, [P.d_safe - P.passage_relief] * 2 + [P.d_safe])
+    narrow = passage_dsafe(x, *args, 2.3, P.d_safe, P.passage_margin, P.passage_len, P.passage_reach, P.passage_relief)
+    np.testing.assert_allclose(narrow[:2], 2.3 / 2 - P.passage_margin)
+    # which throats are passages: the free band under d_safe narrower than passage_band
+    assert 4.0 - 2 * P.d_safe < P.passage_band <= 4.5 - 2 * P.d_safe

@@ -128,6 +128,7 @@ class Hes:
         self._source_override: DecisionSource | None = None
         # passage mode: throats narrower than this [m] put d_safe_eff < d_safe (w/2 - margin < d_safe)
         self._w_wide = 2.0 * (self.params.d_safe + self.params.passage_margin)
+        self._w_passage = 2.0 * self.params.d_safe + max(self.params.passage_band, 2.0 * self.params.passage_margin)
 
     def use_source(self, source: DecisionSource) -> Hes:
         """Decide structure with ``source`` instead of the rule policy (from the next reset)."""
@@ -716,7 +717,7 @@ class Hes:
         the agents that have crossed each, so that members still in front of a throat keep its
         passage (and queue for it) when the route has moved on to the next corridor."""
         p = self.params
-        w_wide = self._w_wide
+        w_wide = self._w_passage
         # a passage is kept while it was the route within passage_memory, or while members of the
         # sub-swarm are still in front of it within passage_queue (they keep their queue: a lapsed
         # passage left them in the head, whose centroid and leash then fell at the wall)
@@ -782,7 +783,7 @@ class Hes:
             for q in sub.passages:
                 c = q.throat
                 eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.d_safe, p.passage_margin,
-                                    p.passage_len, p.passage_reach)
+                                    p.passage_len, p.passage_reach, p.passage_relief)
                 inside = members[eff < out[members]]
                 # lined up with the gap (within w/2 - margin of its centre line): item 6 applies
                 rel = x[inside] - c.mid

@@ -100,6 +100,8 @@ class HesParams:
     # ---------------------------------------------------------------- passage mode (ours, beyond the paper; docs "Passage mode")
     passage_mode: bool = True  # ours: members inside the tube of their route's throat use d_safe_eff = min(d_safe, w/2 - passage_margin) in eq. (36); False = the paper's law everywhere
     passage_margin: float = 0.3  # ours [m] clearance kept between the throat's centre line and d_safe_eff: the near-obstacle term engages beyond 0.3 m off centre
+    passage_band: float = 1.2  # ours [m] a route throat is a passage when the free band the paper's law leaves in it, w - 2 d_safe, is narrower than this (3 body diameters: room for one file). The first rule, w < 2 (d_safe + passage_margin), was a 0.6 m band: 4 m gates left 1 m and the swarm queued there without passage mode (hes_gates_4m_shifted Y 0). 1.6 m was tried and dropped: centred 4.2 m gates fell from Y 1 to 0.6
+    passage_relief: float = 0.2  # ours [m] inside a passage's tube d_safe_eff <= d_safe - passage_relief, so a throat wider than 2 (d_safe + passage_margin) still widens its band (4 m gate: 1.0 -> 1.4 m) and its members queue as in any passage
     passage_len: float = 2.5  # ours [m] tube half-length along the throat normal: d_safe (corner reach) + 1 m (wall thickness either side of the detected throat)
     passage_confirm: float = 5.0  # ours [s] a narrow throat becomes a passage after being the route, with no wider corridor reported, this long (2 s engaged passages beside blocks that the swarm can fly around: dense_cross_blocks R_unsafe 0.25)
     passage_memory: float = 20.0  # ours [s] a throat keeps its passage this long after the sub-swarm's route moved on (members still in front of it)

@@ -25,7 +25,7 @@ import numpy as np
 
 
 def passage_dsafe(x: np.ndarray, mid: np.ndarray, normal: np.ndarray, width: float, d_safe: float,
-                  margin: float, half_len: float, reach: float) -> np.ndarray:
+                  margin: float, half_len: float, reach: float, relief: float = 0.0) -> np.ndarray:
     """Per-agent safety distance [m] for agents at ``x`` (M, 2) following a throat.
 
     Args:
@@ -42,5 +42,5 @@ def passage_dsafe(x: np.ndarray, mid: np.ndarray, normal: np.ndarray, width: flo
     along = rel @ normal
     across = np.abs(rel @ np.array([-normal[1], normal[0]]))
     inside = (np.abs(along) <= half_len) & (across <= 0.5 * width + reach)
-    eff = min(d_safe, max(0.5 * width - margin, 0.0))
+    eff = min(d_safe - relief, max(0.5 * width - margin, 0.0))
     return np.where(inside, eff, d_safe)
