@@ -98,7 +98,7 @@ class HesParams:
     wp_clear: float = 2.0  # ours [m] the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if narrower)
 
     # ---------------------------------------------------------------- passage mode (ours, beyond the paper; docs "Passage mode")
-    passage_mode: bool = True  # ours: members inside the tube of their route's throat use d_safe_eff = min(d_safe, w/2 - passage_margin) in eq. (36); False = the paper's law everywhere
+    passage_mode: bool = True  # ours: members inside the tube of their route's throat use d_safe_eff = min(d_safe - passage_relief, w/2 - passage_margin) in eq. (36); False = the paper's law everywhere
     passage_margin: float = 0.3  # ours [m] clearance kept between the throat's centre line and d_safe_eff: the near-obstacle term engages beyond 0.3 m off centre
     passage_band: float = 1.2  # ours [m] a route throat is a passage when the free band the paper's law leaves in it, w - 2 d_safe, is narrower than this (3 body diameters: room for one file). The first rule, w < 2 (d_safe + passage_margin), was a 0.6 m band: 4 m gates left 1 m and the swarm queued there without passage mode (hes_gates_4m_shifted Y 0). 1.6 m was tried and dropped: centred 4.2 m gates fell from Y 1 to 0.6
     passage_relief: float = 0.2  # ours [m] inside a passage's tube d_safe_eff <= d_safe - passage_relief, so a throat wider than 2 (d_safe + passage_margin) still widens its band (4 m gate: 1.0 -> 1.4 m) and its members queue as in any passage

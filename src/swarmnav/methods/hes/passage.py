@@ -10,13 +10,14 @@ a sub-swarm whose route is a detected throat of width w, while inside the throat
 (within ``half_len`` of the throat along its normal and within ``w/2 + reach`` of its centre
 line across it), uses
 
-    d_safe_eff = min(d_safe, w/2 - margin)
+    d_safe_eff = min(d_safe - relief, w/2 - margin)
 
 so the centre line of the throat keeps ``margin`` of clearance beyond d_safe_eff (the
 near-obstacle term stays off there and engages only for an agent more than ``margin`` off
 centre), and the term never pushes a member out of a throat it fits through. Everywhere else,
-and as soon as the member leaves the tube, d_safe applies unchanged. For ``w >= 2 (d_safe +
-margin)`` d_safe_eff = d_safe: wide corridors are not affected.
+and as soon as the member leaves the tube, d_safe applies unchanged. ``relief`` lowers d_safe a
+little even where w/2 - margin >= d_safe, for throats that leave a narrow band without being
+narrower than 2 (d_safe + margin) (which throats are passages at all: ``HesParams.passage_band``).
 """
 
 from __future__ import annotations
@@ -34,9 +35,10 @@ def passage_dsafe(x: np.ndarray, mid: np.ndarray, normal: np.ndarray, width: flo
         width: throat width w [m]; d_safe: the nominal safety distance [m] (Table A1).
         margin: clearance [m] kept between the throat's centre line and d_safe_eff.
         half_len: tube half-length [m] along ``normal``; reach: tube half-width beyond w/2 [m].
+        relief: [m] d_safe_eff never exceeds d_safe - relief inside the tube.
 
     Returns:
-        (M,) d_safe_eff = min(d_safe, max(w/2 - margin, 0)) inside the tube, d_safe outside.
+        (M,) d_safe_eff = min(d_safe - relief, max(w/2 - margin, 0)) inside the tube, d_safe outside.
     """
     rel = np.asarray(x, dtype=float) - mid
     along = rel @ normal
