@@ -349,7 +349,7 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
     and returns the acceleration ``(w - v) / dt`` that realises it. Saturation (eq. 39)
     is applied afterwards by the caller.
     """
-    n, nr = ring.shape
+    n = ring.shape[0]
     out = np.empty((n, 2))
     for i in range(n):
         wx = v[i, 0] + dt * a[i, 0]
@@ -358,39 +358,44 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
         if s > v_cap:
             wx *= v_cap / s
             wy *= v_cap / s
-        row = ring[i]
         moved = True
         for _ in range(WALL_PASSES):  # usually one sweep: nothing to remove, nothing moved
-            moved = False
-            for r in range(nr):
-                d = row[r]
-                if d >= max_range:
-                    continue
-                c = wx * cos_t[r] + wy * sin_t[r]
-                if c <= 0.0:
-                    continue
-                c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
-                if c > c_max + 1e-12:
-                    wx -= (c - c_max) * cos_t[r]
-                    wy -= (c - c_max) * sin_t[r]
-                    moved = True
+            wx, wy, moved, _s = _wall_sweep(wx, wy, ring[i], cos_t, sin_t, a_brake, margin, max_range, True)
             if not moved:
                 break
         scale = 1.0
         if moved:  # the sweeps did not settle: scale toward 0 until every bound holds
-            for r in range(nr):
-                d = row[r]
-                if d >= max_range:
-                    continue
-                c = wx * cos_t[r] + wy * sin_t[r]
-                if c <= 0.0:
-                    continue
-                c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
-                if c > c_max:
-                    scale = min(scale, c_max / c)
+            scale = _wall_sweep(wx, wy, ring[i], cos_t, sin_t, a_brake, margin, max_range, False)[3]
         out[i, 0] = (scale * wx - v[i, 0]) / dt
         out[i, 1] = (scale * wy - v[i, 1]) / dt
     return out
+
+
+@njit(cache=True)
+def _wall_sweep(wx, wy, row, cos_t, sin_t, a_brake, margin, max_range, project):
+    """One sweep of :func:`safety_filter` over the rays of one agent's ring. ``project``: remove
+    each excess of the closing speed ``w . u_r`` over its bound along u_r, in ray order, and
+    report whether w moved; otherwise leave w and return (4th value) the largest s <= 1 with
+    s w within every bound."""
+    moved = False
+    scale = 1.0
+    tol = 1e-12 if project else 0.0
+    for r in range(row.shape[0]):
+        d = row[r]
+        if d >= max_range:
+            continue
+        c = wx * cos_t[r] + wy * sin_t[r]
+        if c <= 0.0:
+            continue
+        c_max = math.sqrt(2.0 * a_brake * max(d - margin, 0.0))
+        if c > c_max + tol:
+            if project:
+                wx -= (c - c_max) * cos_t[r]
+                wy -= (c - c_max) * sin_t[r]
+                moved = True
+            else:
+                scale = min(scale, c_max / c)
+    return wx, wy, moved, scale
 
 
 @njit(cache=True)
