@@ -68,7 +68,6 @@ from swarmnav.sensing.lidar import _ray_table
 from swarmnav.world.scenario import Scenario
 
 _NEVER = -(10**9)
-SIG_SLOT_, SIG_NN_, SIG_SL_, SIG_CENT_ = F.SIG_SLOT, F.SIG_NN, F.SIG_SL, F.SIG_CENT
 _RING_ANGLES = np.linspace(0.0, 2 * math.pi, 72, endpoint=False)  # encircle slot candidates (5 deg)
 _SLOT_REFRESH = 10  # steps between re-solving the slot assignment (ours: 1 s)
 _RHO_VIS = 0.4  # [m] half-width of the straight line from the centroid to a throat that must be free (ours)
@@ -126,7 +125,9 @@ class Hes:
         self._gains = F.gain_vector(self.params)
         self._cos, self._sin = _ray_table(self.params.n_rays)
         self._source_override: DecisionSource | None = None
-        # passage mode: throats narrower than this [m] put d_safe_eff < d_safe (w/2 - margin < d_safe)
+        # passage mode: a throat narrower than _w_wide [m] is narrow for gap detection and the corridor
+        # filter (w/2 - margin < d_safe); one narrower than _w_passage can become a passage (the band
+        # the paper's law leaves in it, w - 2 d_safe, is under passage_band)
         self._w_wide = 2.0 * (self.params.d_safe + self.params.passage_margin)
         self._w_passage = 2.0 * self.params.d_safe + max(self.params.passage_band, 2.0 * self.params.passage_margin)
 
@@ -812,7 +813,7 @@ class Hes:
         one or two stragglers, R_unsafe 0.45-0.65 on those runs)."""
         p = self.params
         b = self._blocked
-        cut = b[:, SIG_SLOT_] & b[:, SIG_SL_] & b[:, SIG_CENT_]
+        cut = b[:, F.SIG_SLOT] & b[:, F.SIG_SL] & b[:, F.SIG_CENT]
         if not cut.any():  # the common case: nobody is cut off
             self._cut_steps[:] = 0
             self.last_cut = cut
@@ -833,12 +834,12 @@ class Hes:
                                   mates, _RHO_VIS, _TRAIL_REACH, p.lidar_range)
             if t >= 0:
                 slot[i] = wp[i] = self._trail[t, j]
-                sig[i, SIG_SLOT_] = 1.0
+                sig[i, F.SIG_SLOT] = 1.0
                 # the couplings it cannot see (subleader, centroid, nearest neighbour) no longer
                 # pull it at the wall: attenuated by eq. (30) they still pinned it there
-                sig[i, SIG_SL_] = sig[i, SIG_CENT_] = 0.0
-                if b[i, SIG_NN_]:
-                    sig[i, SIG_NN_] = 0.0
+                sig[i, F.SIG_SL] = sig[i, F.SIG_CENT] = 0.0
+                if b[i, F.SIG_NN]:
+                    sig[i, F.SIG_NN] = 0.0
 
     def _occlusion(self, x, slot, nn, sl_idx, cent) -> np.ndarray:
         """Eq. (30): sigma_occ where the segment to the slot / nearest neighbour / subleader /
