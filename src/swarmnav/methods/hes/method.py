@@ -299,7 +299,7 @@ class Hes:
         S = len(ids)
         d_goal = np.hypot(*(cents - self.goal).T)
         widths = [c.width for s in ids for c in reports[s].corridors]
-        n_c = max(sum(1 for c in reports[s].corridors if c.width >= p.w_split) for s in ids)
+        n_c = max(len(self._split_paths(reports[s])) for s in ids)
         n_near = int(np.sum(d_goal < p.r_merge))  # eq. (15)
         d_swarm_min = math.inf
         if S >= 2:  # eq. (14)
@@ -318,6 +318,16 @@ class Hes:
         )
 
     # ------------------------------------------------------------------ structural actions
+    def _split_paths(self, rep: Report) -> list[Corridor]:
+        """The split paths n_c counts (eq. 13): reported corridors at least ``w_split`` wide whose
+        mouth is no farther from the goal than the sub-swarm's centroid. A wider gap seen behind
+        the swarm -- the bay it has just crossed, seen back through the gate it is threading --
+        does not lead to the target, and a sub-swarm sent there turned back through the gate
+        (alternating 4.5 / 5 m gates: Y 0.3 / 0.7 with such splits, 1 / 1 with none)."""
+        d0 = float(np.hypot(*(rep.pack.centroid - self.goal)))
+        return [c for c in rep.corridors
+                if c.width >= self.params.w_split and float(np.hypot(*(c.mid - self.goal))) <= d0]
+
     def _split(self, x: np.ndarray, reports: dict[int, Report], prop: Proposal) -> dict:
         """Split the single sub-swarm into one sub-swarm per split path (at most max_subswarms,
         each of at least min_size agents): corridors ranked by route cost, agents assigned by
@@ -326,7 +336,7 @@ class Hes:
         (s0,) = self.subs
         rep = reports[s0]
         members = rep.pack.members
-        cors = [c for c in rep.corridors if c.width >= p.w_split]
+        cors = self._split_paths(rep)
         m = max(2, min(len(cors), p.max_subswarms, len(members) // max(p.min_size, 1)))
         cors = cors[:m]
         cent = rep.pack.centroid
