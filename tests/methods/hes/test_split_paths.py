@@ -23,6 +23,8 @@ def test_a_gap_behind_the_swarm_is_not_a_split_path():
     gate (mouth at x = 19 m). Only the first leads to the goal at (66, 0)."""
     hes = Hes()
     hes.goal = np.array([66.0, 0.0])
+    hes._ring = np.full((2, 360), hes.params.lidar_range)  # nothing in view blocks either exit
+    hes._cos, hes._sin = np.cos(2 * np.pi * np.arange(360) / 360), np.sin(2 * np.pi * np.arange(360) / 360)
     pos = np.array([[26.6, -8.2], [28.8, -7.2]])
     pack = Pack(0, 0, np.array([0, 1]), pos, np.zeros_like(pos), pos.mean(axis=0))
     ahead, behind, narrow = _corridor([36.7, 8.0], 7.5), _corridor([19.0, -5.9], 13.2, (0.0, 1.0)), _corridor([35, 0], 3.0)
@@ -35,3 +37,21 @@ def test_no_split_into_the_bay_behind_on_the_45m_gates():
     reaches the goal."""
     r = swarmnav.run("hes", str(Path(__file__).parent / "scenes" / "hes_gates_4p5m.toml"), seed=1, steps=1000)
     assert r.metrics["Y"] == 1.0
+
+
+def test_a_path_whose_exit_lies_in_an_obstacles_shadow_is_not_a_split_path():
+    """hes_gates_4p5m seed 3: from inside a gate's gap the subleader saw a 'corridor' at the
+    bottom of the bay whose exit lies behind the gate's own wall, in its LiDAR shadow. A split
+    path's exit point must be in view (the ray toward it reaches it)."""
+    from swarmnav.sensing import lidar_ring
+    from swarmnav.world.obstacles import Box, Geometry
+
+    hes = Hes()
+    hes.goal = np.array([66.0, 0.0])
+    sensor = np.array([38.95, 8.24])
+    ring = lidar_ring(Geometry.from_obstacles([Box((39.6, -10.4), (40.4, 5.9)), Box((-12.0, -11.4), (65.0, -10.4))]),
+                      sensor[None], n_rays=hes.params.n_rays, max_range=hes.params.lidar_range)[0]
+    hes._cos, hes._sin = np.cos(2 * np.pi * np.arange(360) / 360), np.sin(2 * np.pi * np.arange(360) / 360)
+    assert not hes._in_view(ring, *sensor, np.array([42.4, -7.5]))  # behind the gate's wall
+    assert hes._in_view(ring, *sensor, np.array([46.5, 2.9]))  # over the gate's top, in view
+    assert hes._in_view(ring, *sensor, np.array([39.0, -7.0]))  # down the near side of the wall

@@ -324,9 +324,20 @@ class Hes:
         the swarm -- the bay it has just crossed, seen back through the gate it is threading --
         does not lead to the target, and a sub-swarm sent there turned back through the gate
         (alternating 4.5 / 5 m gates: Y 0.3 / 0.7 with such splits, 1 / 1 with none)."""
+        p = self.params
         d0 = float(np.hypot(*(rep.pack.centroid - self.goal)))
+        sx, sy = rep.pack.subleader_position
+        ring = self._ring[rep.pack.subleader]
         return [c for c in rep.corridors
-                if c.width >= self.params.w_split and float(np.hypot(*(c.mid - self.goal))) <= d0]
+                if c.width >= p.w_split and float(np.hypot(*(c.mid - self.goal))) <= d0
+                and (c.direct or self._in_view(ring, sx, sy, c.target))]
+
+    def _in_view(self, ring: np.ndarray, sx: float, sy: float, q: np.ndarray) -> bool:
+        """The point ``q`` is seen from the sensor at ``(sx, sy)``: the ray toward it reaches at least
+        to within ``_RHO_VIS`` of it (not occluded, not in an obstacle's shadow)."""
+        dx, dy = q[0] - sx, q[1] - sy
+        r = int(round(math.atan2(dy, dx) / (2.0 * math.pi) * len(ring))) % len(ring)
+        return bool(ring[r] >= min(math.hypot(dx, dy) - _RHO_VIS, self.params.lidar_range))
 
     def _split(self, x: np.ndarray, reports: dict[int, Report], prop: Proposal) -> dict:
         """Split the single sub-swarm into one sub-swarm per split path (at most max_subswarms,
