@@ -140,6 +140,12 @@ class HesParams:
             raise ConfigError(f"hes: n_rays must be >= 8, got {self.n_rays}")
         if self.max_subswarms < 1 or self.min_size < 1 or self.n_move_max < 0:
             raise ConfigError("hes: max_subswarms and min_size must be >= 1, n_move_max >= 0")
+        for name in ("passage_margin", "passage_len", "passage_reach", "passage_band", "passage_relief", "agent_brake",
+                     "agent_margin", "guard_brake", "guard_margin", "a_brake", "brake_margin", "w_split"):
+            if not getattr(self, name) >= 0:  # our safety-stack and passage-mode lengths [m] and decelerations [m/s^2]
+                raise ConfigError(f"hes: {name} must be >= 0, got {getattr(self, name)}")
+        if not self.passage_relief < self.d_safe:
+            raise ConfigError(f"hes: passage_relief must be < d_safe ({self.d_safe} m), got {self.passage_relief}")
 
     # -- derived
     @property
