@@ -44,6 +44,31 @@ def _grid(pos, radius, box, periodic, max_cells):
     return x0, y0, h, ncx, ncy
 
 
+@njit(cache=True, inline="always")
+def _stencil_cell(c, k, nc, periodic):
+    """Cell k (0, 1, 2) of the 3-wide stencil around cell ``c`` on an axis of ``nc`` cells:
+    wrapped in a periodic square, -1 beyond an open edge. An axis under 3 cells wide lists
+    each of its cells once (cell k), so no pair is visited twice."""
+    if nc < 3:
+        return k
+    q = c + k - 1
+    if q < 0 or q >= nc:
+        if not periodic:
+            return -1
+        q = q + nc if q < 0 else q - nc
+    return q
+
+
+@njit(cache=True, inline="always")
+def _min_image(d, box, half):
+    """Minimum-image coordinate difference for |d| < box [m]."""
+    if d > half:
+        return d - box
+    if d < -half:
+        return d + box
+    return d
+
+
 @njit(cache=True)
 def neighbour_csr(pos, radius, box, wrap, indices, dist2, min_d2=0.0):
     """Fill ``indices`` / ``dist2`` with every neighbour of every agent.
@@ -111,36 +136,20 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2, min_d2=0.0):
             py = sy[si]
             start[order[si]] = total
             for a in range(wy):
-                if ncy >= 3:
-                    qy = cy + a - 1
-                    if qy < 0 or qy >= ncy:
-                        if not periodic:
-                            continue
-                        qy = qy + ncy if qy < 0 else qy - ncy
-                else:
-                    qy = a
+                qy = _stencil_cell(cy, a, ncy, periodic)
+                if qy < 0:
+                    continue
                 for b in range(wx):
-                    if ncx >= 3:
-                        qx = cx + b - 1
-                        if qx < 0 or qx >= ncx:
-                            if not periodic:
-                                continue
-                            qx = qx + ncx if qx < 0 else qx - ncx
-                    else:
-                        qx = b
+                    qx = _stencil_cell(cx, b, ncx, periodic)
+                    if qx < 0:
+                        continue
                     c = qx + ncx * qy
                     for s in range(first[c], first[c + 1]):
                         dx = sx[s] - px
                         dy = sy[s] - py
                         if periodic:  # minimum image (|dx| < box for stored points in [0, box))
-                            if dx > half:
-                                dx -= box
-                            elif dx < -half:
-                                dx += box
-                            if dy > half:
-                                dy -= box
-                            elif dy < -half:
-                                dy += box
+                            dx = _min_image(dx, box, half)
+                            dy = _min_image(dy, box, half)
                         d2 = dx * dx + dy * dy
                         if total < cap:
                             indices[total] = order[s]
