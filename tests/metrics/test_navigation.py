@@ -106,6 +106,7 @@ def _pairs_reference(positions, contact, box):
     (70, 0.9, None),     # periodic cell under 3 search cells wide
     (90, None, 400.0),   # two dense clusters 400 m apart: widened cells
     (65, None, 60.0),    # sparse: no contact in the run, wide fallback search
+    (60, 300.0, None),   # periodic and sparse: the fallback search across the seam
 ])
 def test_cell_list_pairs_match_kdtree_reference(n, box, spread):
     from swarmnav.metrics._pairs import inter_agent
@@ -123,8 +124,10 @@ def test_cell_list_pairs_match_kdtree_reference(n, box, spread):
     ref_best, ref_hits = _pairs_reference(positions, contact, box)
     assert best == pytest.approx(ref_best, rel=1e-12)
     assert hits == ref_hits
-    if spread != 60.0:
+    if spread != 60.0 and box != 300.0:
         assert hits > 0  # the case exercises contacts
+    else:
+        assert hits == 0  # the case exercises the fallback search
 
 
 def test_coincident_agents_are_a_contact_at_distance_zero():

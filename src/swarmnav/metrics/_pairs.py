@@ -7,7 +7,6 @@ import numpy as np
 from numba import njit
 
 from swarmnav.sensing.cells import neighbour_csr
-from swarmnav.sensing.neighbors import pairwise_min_distance
 
 
 @njit(cache=True)
@@ -61,12 +60,46 @@ def close_pairs_run(positions, box, contact):
     return np.sqrt(best2), hits
 
 
+@njit(cache=True)
+def min_pair_run(positions, box, r0):
+    """Smallest distance between two agents over the run [m] (minimum image when ``box > 0``):
+    per step the cell-list radius starts at ``r0`` and doubles until some pair lies within it.
+    Needs N >= 2."""
+    K1, N, _ = positions.shape
+    periodic = box > 0.0
+    cap = 8 * N
+    idx = np.empty(cap, np.int64)
+    d2 = np.empty(cap)
+    best2 = np.inf
+    for k in range(K1):
+        P = positions[k] - box * np.floor(positions[k] / box) if periodic else positions[k]
+        r = r0
+        while True:
+            order, start, end, total = neighbour_csr(P, r, box, periodic, idx, d2, -1.0)
+            if total > cap:
+                cap = 2 * total
+                idx = np.empty(cap, np.int64)
+                d2 = np.empty(cap)
+                order, start, end, total = neighbour_csr(P, r, box, periodic, idx, d2, -1.0)
+            found = False
+            for i in range(N):
+                for e in range(start[i], end[i]):
+                    if idx[e] != i:
+                        found = True
+                        best2 = min(best2, d2[e])
+            if found:
+                break
+            r *= 2.0
+    return np.sqrt(best2)
+
+
 def inter_agent(positions: np.ndarray, contact: float, box: float | None) -> tuple[float, int]:
     """Minimum inter-agent distance over the run [m] and the number of agent-agent contacts
     (a pair closer than ``contact`` counts once per continuous episode)."""
     if positions.shape[1] < 2:
         return float("inf"), 0
-    best, hits = close_pairs_run(np.ascontiguousarray(positions, dtype=np.float64), float(box or 0.0), contact)
+    P = np.ascontiguousarray(positions, dtype=np.float64)
+    best, hits = close_pairs_run(P, float(box or 0.0), contact)
     if not np.isfinite(best):  # no pair ever came within contact: the minimum needs a wider search
-        best = min(pairwise_min_distance(P, box) for P in positions)
+        best = min_pair_run(P, float(box or 0.0), contact)
     return float(best), int(hits)

@@ -55,6 +55,7 @@ def flight_metrics(
     goal: np.ndarray,
     dt: float,
     params: FlightParams = FlightParams(),
+    min_pair: float | None = None,
 ) -> dict[str, float]:
     """Table II metrics of one run (see the module docstring).
 
@@ -62,6 +63,8 @@ def flight_metrics(
         positions, velocities: (K + 1, N, 2) [m], [m/s].
         clearance: (K + 1, N) signed distance to the nearest obstacle [m] (+inf: none).
         goal: (2,) goal [m]; dt: step of the recorded states [s].
+        min_pair: the smallest robot-robot distance of the run [m] if already known (the rollout
+            passes navigation_metrics' ``min_inter_agent_distance``: one pass over the run, not two).
     """
     K = positions.shape[0] - 1
     n = positions.shape[1]
@@ -77,7 +80,7 @@ def flight_metrics(
     j2 = np.einsum("knd,knd->kn", jerk, jerk) * dt
     cj = np.vstack([np.zeros((1, n)), np.cumsum(j2, axis=0)])
     E = cj[np.clip(arrival - 2, 0, len(j2)), np.arange(n)]  # jerk samples 0 .. a_i - 3
-    min_ij = inter_agent(positions, 2 * p.body_radius, None)[0]
+    min_ij = inter_agent(positions, 2 * p.body_radius, None)[0] if min_pair is None else float(min_pair)
     min_obs = float(clearance.min()) if clearance.size else float("inf")
     touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
     success = bool(inside[-1].all()) and not touched

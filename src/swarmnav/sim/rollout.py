@@ -101,7 +101,9 @@ def run(
         P, C, scn.goal_array, result.n_subswarms, n_struct, MetricParams(),
         periodic_box=period,
     )
-    metrics.update(flight_metrics(P, V, C, scn.goal_array, dt))
+    # same pairs, same contact distance: the open-world minimum is reused, not searched again
+    open_min = metrics["min_inter_agent_distance"] if period is None else None
+    metrics.update(flight_metrics(P, V, C, scn.goal_array, dt, min_pair=open_min))
     metrics.update(m.summary())
     result.metrics = metrics
     timings = getattr(m, "timings", None)  # optional hook: wall-clock figures, never metrics
