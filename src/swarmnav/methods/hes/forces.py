@@ -325,8 +325,6 @@ def saturate(a, a_max):
 # --------------------------------------------------------------------------- safety stack (ours)
 
 #: Sweeps of the wall braking barrier over the rays before the rest is scaled away (safety_filter).
-#: A module constant: as a default argument, HES's calls went through numba's slow dispatch path
-#: (``_compile_for_args``, 0.2 s per 1000-step run in the profile; not reproduced in isolation).
 WALL_PASSES = 3
 
 
@@ -339,7 +337,7 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
     1. the speed cap ``||w|| <= v_cap`` (scaled down if longer), then
     2. the braking barrier: for every LiDAR ray r (range d_r < R_L, direction u_r) the closing
        speed ``w . u_r`` may not exceed ``c_r = sqrt(2 a_brake max(d_r - margin, 0))``, the speed
-       a deceleration ``a_brake`` can stop within the remaining distance. Up to ``passes`` sweeps
+       a deceleration ``a_brake`` can stop within the remaining distance. Up to ``WALL_PASSES`` sweeps
        over the rays remove an excess along u_r (cyclic projection onto the half-planes); one
        sweep is not enough between two obstacles, where removing the excess toward one ray adds
        closing speed toward another already visited (an agent slid into a tree that way). What
