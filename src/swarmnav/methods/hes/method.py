@@ -674,6 +674,7 @@ class Hes:
         sl_idx = np.array([self.subs[s].subleader for s in ids])[col]
         wp = np.array([self.subs[s].waypoint for s in ids])[col]
         nav = np.array([self.subs[s].mode == NAVIGATE for s in ids])[col]
+        chained = np.array([bool(self.subs[s].passages) for s in ids])[col]  # passage mode: in a throat chain
         follower = sl_idx != np.arange(n)
         # passage mode: the members queued at one throat are their own cohesion group (centroid,
         # nearest neighbour), head for the throat (c_s = its target) and are not coupled to a
@@ -691,7 +692,7 @@ class Hes:
             nn = F.nearest_in_group(x, self.labels)
         sig = self._occlusion(x, slot, nn, sl_idx, cent)
         if p.trail_follow:
-            self._follow_trail(x, slot, wp, sig, cent, sl_idx, queued)
+            self._follow_trail(x, slot, wp, sig, cent, sl_idx, queued | chained)
         vslot = F.slot_velocity(x, slot, speed, p.eps_v)
         dsafe = self._dsafe(x)
         args = (x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig, ring,
@@ -715,14 +716,13 @@ class Hes:
             # passage mode: members of a sub-swarm in a chain of narrow throats queue at the gate
             # mouths and brake for the neighbour in front (agent braking barrier), before and again
             # after the wall barrier, which may turn a member toward its neighbour
-            brake = p.passage_mode and p.agent_brake > 0.0 and any(sub.passages for sub in self.subs.values())
+            brake = p.passage_mode and p.agent_brake > 0.0 and bool(chained.any())
             if brake:
-                active = np.array([bool(self.subs[s].passages) for s in ids])[col]
-                a = F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
+                a = F.agent_barrier(a, x, v, chained, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
             wall = (ring, self._cos, self._sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake, p.brake_margin, p.lidar_range)
             a = F.safety_filter(a, v, *wall)
             if brake:  # the queue barrier may turn a member toward a wall: the wall barrier has the last word
-                a = F.safety_filter(F.agent_barrier(a, x, v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound),
+                a = F.safety_filter(F.agent_barrier(a, x, v, chained, p.dt, p.agent_brake, p.agent_margin, p.a_bound),
                                     v, *wall)
         a = F.saturate(a, p.a_bound)
         if p.adaptive and p.agent_guard:
@@ -815,7 +815,7 @@ class Hes:
         self.last_dsafe = out
         return out
 
-    def _follow_trail(self, x, slot, wp, sig, cent, sl_idx, queued) -> None:
+    def _follow_trail(self, x, slot, wp, sig, cent, sl_idx, routed) -> None:
         """Trail following (ours, ``trail_follow``): a member cut off from its sub-swarm -- the
         segments to its slot, its subleader and its centroid all blocked for ``_CUT_S`` (2 s),
         farther than ``d_c`` from the centroid, not the subleader, not in a sub-swarm with a
@@ -825,6 +825,7 @@ class Hes:
         segment, at most ``_TRAIL_REACH`` away). Once there, a newer point is in view: it
         retraces the way the others went. Its subleader, centroid and (if blocked) nearest
         neighbour couplings are switched off meanwhile. Modifies ``slot``, ``wp`` and ``sig`` in place.
+        ``routed``: (N,) bool, the members passage mode routes (queued, or in a throat chain).
 
         Why: eqs. (24) and (32) pull a member straight at its slot and the waypoint c_s, through
         any wall between them (eq. (30) attenuates the slot term, not the centering term, which
@@ -839,10 +840,7 @@ class Hes:
             self._cut_steps[:] = 0
             self.last_cut = cut
             return
-        cut &= ~queued & (sl_idx != np.arange(self.n))
-        if p.passage_mode:  # a passage chain routes its members itself (queues, tubes)
-            chain = np.array([bool(self.subs[s].passages) for s in sorted(self.subs)])
-            cut &= ~chain[np.searchsorted(np.asarray(sorted(self.subs)), self.labels)]
+        cut &= ~routed & (sl_idx != np.arange(self.n))  # a passage chain routes its own members
         cut &= np.hypot(*(x - cent).T) > p.d_c
         self._cut_steps = np.where(cut, self._cut_steps + 1, 0)
         cut &= self._cut_steps * p.dt >= _CUT_S
