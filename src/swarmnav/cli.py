@@ -99,6 +99,8 @@ def _cmd_run(args) -> int:
         raise ConfigError("run: give exactly one of --scenario NAME or --scenario-file PATH")
     if args.steps < 1:
         raise ConfigError(f"run: --steps must be >= 1, got {args.steps}")
+    if args.seed < 0:
+        raise ConfigError(f"run: --seed must be >= 0, got {args.seed}")
     params = _llm_sets(args, _parse_sets(args.set))
     n = params.pop("n", None)
     scn = load_scenario(args.scenario_file or args.scenario, n=int(n) if n is not None else None)

@@ -235,4 +235,6 @@ def parse_seeds(text: str) -> tuple[int, ...]:
         raise ConfigError(f"--seeds: expected a list like 1-10 or 1,3,5, got {text!r}") from None
     if not seeds:
         raise ConfigError(f"--seeds: no seeds in {text!r}")
+    if min(seeds) < 0:
+        raise ConfigError(f"--seeds: seeds must be >= 0, got {text!r}")
     return tuple(dict.fromkeys(seeds))

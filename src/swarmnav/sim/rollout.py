@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav._version import __version__
+from swarmnav.errors import ConfigError
 from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
 from swarmnav.metrics.flight import flight_metrics
@@ -43,9 +44,9 @@ def run(
     scn = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
     m = registry.make(method, **params) if isinstance(method, str) else method
     if steps < 1:
-        from swarmnav.errors import ConfigError
-
         raise ConfigError(f"steps must be >= 1, got {steps}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
     rng = np.random.default_rng(seed)
     pos = scn.spawn_positions(rng)
     vel = np.zeros_like(pos)
