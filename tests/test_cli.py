@@ -57,6 +57,10 @@ def test_scenario_file_and_plot(tmp_path):
     (["run", "--method", "apf", "--scenario", "default_corridor", "--steps", "0", "--out", "X"], "--steps must be >= 1"),
     (["run", "--method", "apf", "--scenario", "default_corridor", "--seed", "-1", "--out", "X"], "--seed must be >= 0"),
     (["experiment", "apf-scenes", "--seeds=-3", "--out", "X"], "seeds must be >= 0"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--set", "n=2.5", "--out", "X"], "--set n: expected an integer"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "F/sub"], "cannot create the directory"),
+    (["experiment", "apf-scenes", "--seeds", "1", "--out", "F"], "cannot create the directory"),
+    (["scenarios", "show", "default_corridor", "--plot", "F/scene.png"], "cannot create the directory"),
     (["run", "--method", "apf", "--scenario-file", "missing.toml", "--out", "X"], "no such scene file"),
     (["experiment", "nope", "--out", "X"], "unknown experiment"),
     (["experiment", "apf-scenes", "--seeds", "x-y", "--out", "X"], "--seeds"),
@@ -65,7 +69,8 @@ def test_scenario_file_and_plot(tmp_path):
     (["run", "--bogus-flag"], "arguments are required"),
 ])
 def test_bad_input_is_one_line_exit_2(args, fragment, tmp_path):
-    p = _run(*[a.replace("X", str(tmp_path / "x")) for a in args])
+    (tmp_path / "f").write_text("a file where an output directory should go")
+    p = _run(*[a.replace("X", str(tmp_path / "x")).replace("F", str(tmp_path / "f")) for a in args])
     assert p.returncode == 2, p.stderr
     assert "Traceback" not in p.stderr
     lines = [l for l in p.stderr.splitlines() if l.strip()]
@@ -129,3 +134,14 @@ def test_readme_main_job_command(tmp_path, capsys):
                  "--out", str(out), "--plot"]) == 0
     assert (out / "trajectory.png").stat().st_size > 10_000
     assert "Y =" in capsys.readouterr().out
+
+
+def test_plot_and_animate_into_an_unwritable_place_are_one_line(tmp_path):
+    run_dir, blocker = tmp_path / "r", tmp_path / "f"
+    blocker.write_text("a file, not a directory")
+    assert main(["run", "--method", "apf", "--scenario", "default_corridor", "--steps", "5", "--out", str(run_dir)]) == 0
+    for cmd in (["plot", str(run_dir), "--out", str(blocker / "t.png")],
+                ["animate", str(run_dir), "--out", str(blocker / "a.gif")]):
+        p = _run(*cmd)
+        assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+        assert len(p.stderr.strip().splitlines()) == 1 and "cannot create the directory" in p.stderr

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
 from pathlib import Path
 from typing import Sequence
 
@@ -62,6 +63,27 @@ def _llm_sets(args, params: dict[str, str]) -> dict[str, str]:
     return params
 
 
+def _writable_dir(path, flag: str, shown=None) -> Path:
+    """Create ``path`` (with parents) and check it can be written, before any long work."""
+    d, shown = Path(path), shown or path
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ConfigError(f"{flag} {shown}: cannot create the directory {d} ({e.strerror})") from None
+    try:  # os.access says yes to root even where files cannot be made (/proc, read-only mounts)
+        with tempfile.TemporaryFile(dir=d):
+            pass
+    except OSError as e:
+        raise ConfigError(f"{flag} {shown}: cannot write in {d} ({e.strerror})") from None
+    return d
+
+
+def _writable_file(path, flag: str) -> Path:
+    """``path``'s directory exists (created if needed) and is writable."""
+    _writable_dir(Path(path).parent, flag, shown=path)
+    return Path(path)
+
+
 def _cmd_scenarios(args) -> int:
     from swarmnav.world.generators import GENERATORS
     from swarmnav.world.scenario import builtin_names, load_scenario
@@ -75,6 +97,8 @@ def _cmd_scenarios(args) -> int:
     if args.action != "show" or not args.name:
         raise ConfigError("usage: swarmnav scenarios [show NAME [--plot PNG]]")
     s = load_scenario(args.name)
+    if args.plot:
+        _writable_file(args.plot, "--plot")
     print(json.dumps(s.to_dict(), indent=2))
     if args.plot:
         from swarmnav.viz import plot_scene
@@ -103,7 +127,13 @@ def _cmd_run(args) -> int:
         raise ConfigError(f"run: --seed must be >= 0, got {args.seed}")
     params = _llm_sets(args, _parse_sets(args.set))
     n = params.pop("n", None)
-    scn = load_scenario(args.scenario_file or args.scenario, n=int(n) if n is not None else None)
+    if n is not None:
+        try:
+            n = int(n)
+        except ValueError:
+            raise ConfigError(f"--set n: expected an integer, got {n!r}") from None
+    scn = load_scenario(args.scenario_file or args.scenario, n=n)
+    _writable_dir(args.out, "--out")
     progress = sys.stderr.isatty() and not args.quiet
     res = run(args.method, scn, seed=args.seed, steps=args.steps, progress=progress, **params)
     out = res.save(args.out)
@@ -139,7 +169,7 @@ def _cmd_plot(args) -> int:
     from swarmnav.viz import plot_run
 
     res = RunResult.load(args.dir)
-    out = args.out or Path(args.dir) / "trajectory.png"
+    out = _writable_file(args.out or Path(args.dir) / "trajectory.png", "--out")
     print(f"wrote {plot_run(res, out)}")
     return 0
 
@@ -149,6 +179,7 @@ def _cmd_animate(args) -> int:
     from swarmnav.viz import animate_run
 
     res = RunResult.load(args.dir)
+    _writable_file(args.out, "--out")
     print(f"wrote {animate_run(res, args.out, fps=args.fps)}")
     return 0
 
@@ -165,6 +196,7 @@ def _cmd_experiment(args) -> int:
     if args.workers < 1:
         raise ConfigError(f"experiment: --workers must be >= 1, got {args.workers}")
     exp = load_experiment(args.spec or args.name, overrides=_parse_sets(args.set), seeds=args.seeds)
+    _writable_dir(args.out, "--out")
     rows, summary = run_experiment(exp, args.out, workers=args.workers, backend=args.backend,
                                    ray_address=args.ray_address, save_trajectories=not args.no_trajectories,
                                    progress=not args.quiet)
