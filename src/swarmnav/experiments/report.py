@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav.errors import SwarmnavError
+from swarmnav.experiments import stats
 from swarmnav.experiments.store import DB_NAME, Store
 
 #: Columns shown when a spec's [report] does not list its own.
@@ -122,7 +123,8 @@ def _cell(vals: np.ndarray) -> str:
         return "–"
     if len(vals) == 1:
         return _num(vals[0])
-    return f"{_num(np.mean(vals))} ± {_num(np.std(vals))}"
+    sd = stats.std(vals)
+    return f"{_num(stats.mean(vals))}" + (f" ± {_num(sd)}" if np.isfinite(sd) else "")
 
 
 def _header(m: str) -> str:
@@ -165,8 +167,8 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
     fig = Figure(figsize=(width * ncol, (3.4 if many else 3.0) * nrow), layout="constrained")
     for k, m in enumerate(metrics):
         ax = fig.add_subplot(nrow, ncol, k + 1)
-        means = [np.mean(v["values"][m]) if len(v["values"][m]) else np.nan for v in t["variants"]]
-        stds = [np.std(v["values"][m]) if len(v["values"][m]) else 0.0 for v in t["variants"]]
+        means = [stats.mean(v["values"][m]) for v in t["variants"]]
+        stds = [np.nan_to_num(stats.std(v["values"][m])) for v in t["variants"]]
         x = np.arange(len(names))
         ax.bar(x, means, yerr=stds, capsize=3, color=[f"C{i % 10}" for i in range(len(names))], alpha=0.85)
         ax.set_xticks(x, names, rotation=35, ha="right", fontsize=7)

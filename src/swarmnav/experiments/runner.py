@@ -24,6 +24,7 @@ import numpy as np
 
 from swarmnav._version import __version__
 from swarmnav.errors import ConfigError, SwarmnavError
+from swarmnav.experiments import stats
 from swarmnav.experiments.spec import Experiment, Variant
 from swarmnav.experiments.store import Store, config_key
 
@@ -259,13 +260,13 @@ def summarize(rows: list[dict], variants: list[dict]) -> list[dict]:
             vals = np.array([float(r[k]) for r in done if _is_number(r.get(k))], dtype=float)
             if not len(vals):
                 continue
-            s[f"{k}_mean"] = float(np.mean(vals))
-            s[f"{k}_std"] = float(np.std(vals))  # population form, as the HES paper
+            s[f"{k}_mean"] = stats.mean(vals)
+            s[f"{k}_std"] = stats.std(vals)
             if k in MIN_METRICS:
                 s[f"{k}_min"] = float(np.min(vals))
             if k in QUANTILE_METRICS:
                 for q in (25, 50, 75):
-                    s[f"{k}_p{q}"] = float(np.percentile(vals, q))
+                    s[f"{k}_p{q}"] = stats.percentile(vals, q)
             if k in FRACTION_METRICS:
                 s[f"{k}_fraction"] = float(np.mean(vals == 1.0))
         out.append(s)
