@@ -33,6 +33,9 @@ def test_infinite_values_give_defined_numbers_without_warnings():
         assert stats.percentile(v, 60) == np.inf  # between 3 and inf
         assert stats.percentile(v, 75) == np.inf  # between inf and inf
         assert np.isnan(stats.mean(np.array([])))
+        lows = np.array([-np.inf, 1.0, 2.0])
+        assert stats.percentile(lows, 25) == -np.inf and stats.percentile(lows, 75) == 1.5
+        assert np.isnan(stats.percentile(np.array([-np.inf, np.inf]), 50))
 
 
 def test_summary_of_runs_that_never_converge_is_quiet():

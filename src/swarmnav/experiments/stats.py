@@ -9,6 +9,8 @@ linear rule, where interpolating toward inf gives inf.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -36,6 +38,9 @@ def percentile(vals: np.ndarray, q: float) -> float:
         return float("nan")
     pos = q / 100.0 * (len(v) - 1)
     lo, hi = int(np.floor(pos)), int(np.ceil(pos))
-    if lo == hi or v[lo] == v[hi]:
-        return float(v[lo])
-    return float(v[lo] + (pos - lo) * (v[hi] - v[lo]))
+    a, b = float(v[lo]), float(v[hi])
+    if lo == hi or a == b:
+        return a
+    if math.isinf(a) or math.isinf(b):  # toward +inf is +inf, away from -inf is -inf, between them undefined
+        return b if a > -math.inf else (a if b < math.inf else math.nan)
+    return a + (pos - lo) * (b - a)
