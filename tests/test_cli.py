@@ -10,15 +10,18 @@ import pytest
 from swarmnav.cli import main
 
 
-def _run(*args):
+def _env() -> dict:
     import os
     from pathlib import Path
 
     import swarmnav
 
     src = str(Path(swarmnav.__file__).resolve().parents[1])  # works installed or from a checkout
-    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    return subprocess.run([sys.executable, "-m", "swarmnav.cli", *args], capture_output=True, text=True, env=env)
+    return {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
+
+
+def _run(*args):
+    return subprocess.run([sys.executable, "-m", "swarmnav.cli", *args], capture_output=True, text=True, env=_env())
 
 
 def test_run_writes_run_directory_and_is_reproducible(tmp_path, capsys):
@@ -145,3 +148,14 @@ def test_plot_and_animate_into_an_unwritable_place_are_one_line(tmp_path):
         p = _run(*cmd)
         assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
         assert len(p.stderr.strip().splitlines()) == 1 and "cannot create the directory" in p.stderr
+
+
+def test_a_closed_pipe_on_stdout_is_not_a_traceback(tmp_path):
+    # `swarmnav run ... | head -1`: the reader is gone before the summary is printed
+    p = subprocess.Popen([sys.executable, "-m", "swarmnav.cli", "run", "--method", "apf", "--scenario", "default_corridor",
+                          "--steps", "5", "--out", str(tmp_path / "o")],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env())
+    p.stdout.close()
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) == 1 and "Traceback" not in err, err
+    assert (tmp_path / "o" / "metrics.json").exists()
