@@ -159,3 +159,17 @@ def test_a_closed_pipe_on_stdout_is_not_a_traceback(tmp_path):
     err = p.stderr.read().decode()
     assert p.wait(timeout=120) == 1 and "Traceback" not in err, err
     assert (tmp_path / "o" / "metrics.json").exists()
+
+
+def test_only_a_broken_stdout_counts_as_the_reader_leaving(monkeypatch):
+    import os
+
+    from swarmnav.cli import _stdout_closed
+
+    r, w = os.pipe()
+    with os.fdopen(w, "w") as out:
+        monkeypatch.setattr(sys, "stdout", out)
+        assert not _stdout_closed()  # reader still there: another pipe broke, keep the traceback
+        os.close(r)
+        assert _stdout_closed()
+        monkeypatch.undo()

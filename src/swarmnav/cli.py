@@ -301,9 +301,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("swarmnav: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:  # `swarmnav ... | head`: the reader left; stop quietly, as Unix tools do
+        if not _stdout_closed():
+            raise  # some other pipe (a worker's, a server's): a bug, keep the traceback
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # Python's exit flush would raise again
         return 1
+
+
+def _stdout_closed() -> bool:
+    """True if stdout is a pipe whose reader has gone (poll reports an error on our end)."""
+    import select
+
+    if not hasattr(select, "poll"):
+        return True  # cannot tell; a broken pipe in a CLI is almost always stdout
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(ev & select.POLLERR for _, ev in poller.poll(0))
+    except (OSError, ValueError):
+        return False
 
 
 if __name__ == "__main__":
