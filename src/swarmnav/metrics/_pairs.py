@@ -10,6 +10,18 @@ from swarmnav.sensing.cells import neighbour_csr
 
 
 @njit(cache=True)
+def _neighbours(P, r, box, periodic, idx, d2):
+    """:func:`neighbour_csr` within ``r`` (coincident agents included, rows hold self), into
+    ``idx`` / ``d2``, grown to twice the need when they are too short; returns them with the CSR."""
+    order, start, end, total = neighbour_csr(P, r, box, periodic, idx, d2, -1.0)
+    if total > idx.shape[0]:
+        idx = np.empty(2 * total, np.int64)
+        d2 = np.empty(2 * total)
+        order, start, end, total = neighbour_csr(P, r, box, periodic, idx, d2, -1.0)
+    return order, start, end, idx, d2
+
+
+@njit(cache=True)
 def close_pairs_run(positions, box, contact):
     """(smallest distance between two agents over the run if some pair ever came within
     ``contact``, else inf; number of contact episodes: a pair closer than ``contact`` counts once
@@ -23,23 +35,18 @@ def close_pairs_run(positions, box, contact):
     K1, N, _ = positions.shape
     periodic = box > 0.0
     c2 = contact * contact
-    cap = 8 * N
-    idx = np.empty(cap, np.int64)
-    d2 = np.empty(cap)
-    keys = np.empty(cap, np.int64)
+    idx = np.empty(8 * N, np.int64)
+    d2 = np.empty(8 * N)
+    keys = np.empty(8 * N, np.int64)
     prev = np.empty(0, np.int64)
     best2 = np.inf
     hits = 0
     for k in range(K1):
         P = positions[k] - box * np.floor(positions[k] / box) if periodic else positions[k]
-        # min_d2 < 0: coincident agents are neighbours (a contact at distance 0); rows hold self
-        order, start, end, total = neighbour_csr(P, contact, box, periodic, idx, d2, -1.0)
-        if total > cap:
-            cap = 2 * total
-            idx = np.empty(cap, np.int64)
-            d2 = np.empty(cap)
-            keys = np.empty(cap, np.int64)
-            order, start, end, total = neighbour_csr(P, contact, box, periodic, idx, d2, -1.0)
+        # coincident agents are neighbours: a contact at distance 0
+        order, start, end, idx, d2 = _neighbours(P, contact, box, periodic, idx, d2)
+        if keys.shape[0] < idx.shape[0]:
+            keys = np.empty(idx.shape[0], np.int64)
         n = 0
         for i in range(N):
             for e in range(start[i], end[i]):
@@ -67,24 +74,18 @@ def min_pair_run(positions, box, r0):
     Needs N >= 2."""
     K1, N, _ = positions.shape
     periodic = box > 0.0
-    cap = 8 * N
-    idx = np.empty(cap, np.int64)
-    d2 = np.empty(cap)
+    idx = np.empty(8 * N, np.int64)
+    d2 = np.empty(8 * N)
     best2 = np.inf
     for k in range(K1):
         P = positions[k] - box * np.floor(positions[k] / box) if periodic else positions[k]
         r = r0
         while True:
-            order, start, end, total = neighbour_csr(P, r, box, periodic, idx, d2, -1.0)
-            if total > cap:
-                cap = 2 * total
-                idx = np.empty(cap, np.int64)
-                d2 = np.empty(cap)
-                order, start, end, total = neighbour_csr(P, r, box, periodic, idx, d2, -1.0)
+            order, start, end, idx, d2 = _neighbours(P, r, box, periodic, idx, d2)
             found = False
             for i in range(N):
                 for e in range(start[i], end[i]):
-                    if idx[e] != i:
+                    if idx[e] > i:  # each pair once, never the agent itself
                         found = True
                         best2 = min(best2, d2[e])
             if found:
