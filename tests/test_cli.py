@@ -58,7 +58,7 @@ def test_scenario_file_and_plot(tmp_path):
     (["run", "--method", "nope", "--scenario", "default_corridor", "--out", "X"], "unknown method"),
     (["run", "--method", "apf", "--out", "X"], "exactly one of --scenario"),
     (["run", "--method", "apf", "--scenario", "default_corridor", "--steps", "0", "--out", "X"], "--steps must be >= 1"),
-    (["run", "--method", "apf", "--scenario", "default_corridor", "--seed", "-1", "--out", "X"], "--seed must be >= 0"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--seed", "-1", "--out", "X"], "seed must be an integer >= 0"),
     (["experiment", "apf-scenes", "--seeds=-3", "--out", "X"], "seeds must be >= 0"),
     (["run", "--method", "apf", "--scenario", "default_corridor", "--set", "n=2.5", "--out", "X"], "--set n: expected an integer"),
     (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "F/sub"], "cannot create the directory"),

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Sequence
 
 from swarmnav.errors import ConfigError, SwarmnavError
+from swarmnav.params import coerce
 
 EXIT_USAGE = 2
 
@@ -124,16 +125,9 @@ def _cmd_run(args) -> int:
         raise ConfigError("run: give exactly one of --scenario NAME or --scenario-file PATH")
     if args.steps < 1:
         raise ConfigError(f"run: --steps must be >= 1, got {args.steps}")
-    if args.seed < 0:
-        raise ConfigError(f"run: --seed must be >= 0, got {args.seed}")
     params = _llm_sets(args, _parse_sets(args.set))
     n = params.pop("n", None)
-    if n is not None:
-        try:
-            n = int(n)
-        except ValueError:
-            raise ConfigError(f"--set n: expected an integer, got {n!r}") from None
-    scn = load_scenario(args.scenario_file or args.scenario, n=n)
+    scn = load_scenario(args.scenario_file or args.scenario, n=None if n is None else coerce(n, int, "--set n"))
     _writable_dir(args.out, "--out")
     progress = sys.stderr.isatty() and not args.quiet
     res = run(args.method, scn, seed=args.seed, steps=args.steps, progress=progress, **params)

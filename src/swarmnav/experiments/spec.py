@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmnav.errors import ConfigError
+from swarmnav.params import coerce
 
 _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "seeds", "n", "params", "variants",
               "matrix",
@@ -190,10 +191,7 @@ def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: 
                 if k in svars:
                     values[k] = val
                 elif k in ("steps", "n"):
-                    try:
-                        cfg[k] = int(val)
-                    except ValueError:
-                        raise ConfigError(f"--set {k}: expected an integer, got {val!r}") from None
+                    cfg[k] = coerce(val, int, f"--set {k}")
                 elif k in ("method", "scenario"):
                     cfg[k] = val
                 else:
