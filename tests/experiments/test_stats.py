@@ -45,3 +45,18 @@ def test_summary_of_runs_that_never_converge_is_quiet():
         (s,) = summarize(rows, [{"name": "v", "columns": {"variant": "v"}}])
     assert s["k_con_mean"] == np.inf and np.isnan(s["k_con_std"])
     assert (s["k_con_p25"], s["k_con_p50"], s["k_con_p75"]) == (6.5, np.inf, np.inf)
+
+
+def test_report_figures_draw_variants_with_infinite_runs_without_warnings():
+    from swarmnav.experiments.report import _cell, figures
+
+    t = {"title": "t", "metrics": ["k_con"], "variants": [
+        {"name": "some never converge", "values": {"k_con": np.array([1.0, np.inf])}},
+        {"name": "all converge", "values": {"k_con": np.array([2.0, 3.0])}},
+        {"name": "none converges", "values": {"k_con": np.array([np.inf, np.inf])}}]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pngs = dict(figures(t))
+    assert set(pngs) == {"bars.png", "boxes.png"} and all(b[:4] == b"\x89PNG" for b in pngs.values())
+    assert _cell(np.array([1.0, np.inf])) == "inf"  # no undefined ± spread
+    assert _cell(np.array([2.0, 3.0])) == "2.500 ± 0.500"

@@ -167,7 +167,7 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
     fig = Figure(figsize=(width * ncol, (3.4 if many else 3.0) * nrow), layout="constrained")
     for k, m in enumerate(metrics):
         ax = fig.add_subplot(nrow, ncol, k + 1)
-        means = [stats.mean(v["values"][m]) for v in t["variants"]]
+        means = [np.nan if np.isinf(mu := stats.mean(v["values"][m])) else mu for v in t["variants"]]  # no bar
         stds = [np.nan_to_num(stats.std(v["values"][m])) for v in t["variants"]]
         x = np.arange(len(names))
         ax.bar(x, means, yerr=stds, capsize=3, color=[f"C{i % 10}" for i in range(len(names))], alpha=0.85)
@@ -181,7 +181,9 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
     fig = Figure(figsize=(width * shape[1], 3.4 * shape[0]), layout="constrained")
     for k, m in enumerate(box_metrics):
         ax = fig.add_subplot(*shape, k + 1)
-        data = [v["values"][m] if len(v["values"][m]) else np.array([np.nan]) for v in t["variants"]]
+        # runs that never get there (k_con = inf) are in the table's mean, not drawable on an axis
+        data = [d if len(d := v["values"][m][np.isfinite(v["values"][m])]) else np.array([np.nan])
+                for v in t["variants"]]
         ax.boxplot(data, showmeans=True, widths=0.6)
         rng = np.random.default_rng(0)  # fixed jitter: the figure is reproducible
         for i, d in enumerate(data):  # the seeds as dots; a fixed subsample of 200 for big sweeps
