@@ -69,9 +69,10 @@ def close_pairs_run(positions, box, contact):
 
 @njit(cache=True)
 def min_pair_run(positions, box, r0):
-    """Smallest distance between two agents over the run [m] (minimum image when ``box > 0``):
-    per step the cell-list radius starts at ``r0`` and doubles until some pair lies within it.
-    Needs N >= 2."""
+    """Smallest distance between two agents over the run [m] (minimum image when ``box > 0``).
+    Until a pair is found the cell-list radius starts at ``r0`` each step and doubles until some
+    pair lies within it; after that each step needs one search within the best distance so far
+    (a farther pair cannot lower it). Needs N >= 2."""
     K1, N, _ = positions.shape
     periodic = box > 0.0
     idx = np.empty(8 * N, np.int64)
@@ -79,7 +80,7 @@ def min_pair_run(positions, box, r0):
     best2 = np.inf
     for k in range(K1):
         P = positions[k] - box * np.floor(positions[k] / box) if periodic else positions[k]
-        r = r0
+        r = r0 if best2 == np.inf else np.sqrt(best2)
         while True:
             order, start, end, idx, d2 = _neighbours(P, r, box, periodic, idx, d2)
             found = False
@@ -88,7 +89,7 @@ def min_pair_run(positions, box, r0):
                     if idx[e] > i:  # each pair once, never the agent itself
                         found = True
                         best2 = min(best2, d2[e])
-            if found:
+            if found or best2 < np.inf:
                 break
             r *= 2.0
     return np.sqrt(best2)
