@@ -1,7 +1,7 @@
 """HES acceptance grid: scenes x seeds 1-10 (N = 20, K = 1000), rule decisions, next to the paper.
 
 Runs every (scene, seed) on a 2-process pool and prints one row per scene with the mean (and
-worst case where it matters) of Y, R_goal, E_mean, R_unsafe, d_clr_min, N_swarm, N_event and
+worst case where it matters) of Y, R_goal, E_mean, R_unsafe (and per agent), d_clr_min, N_swarm, N_event and
 S_scene, beside the paper's Table 5 values; then the acceptance checks of issue 3.
 
     PYTHONPATH=src python benchmarks/hes_acceptance.py                 # the four benchmark scenes
@@ -23,7 +23,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ["default_corridor", "narrow_alternating_gates", "dense_cross_blocks", "off_axis_goal"]
-COLS = ["Y", "R_goal", "E_mean", "R_unsafe", "d_clr_min", "N_swarm", "N_event", "S_scene", "L_mean", "collisions"]
+COLS = ["Y", "R_goal", "E_mean", "R_unsafe", "R_unsafe_agent", "d_clr_min", "N_swarm", "N_event", "S_scene", "L_mean", "collisions"]
+W = {c: max(10, len(c) + 1) for c in COLS}  # column widths
 
 
 def one(job):
@@ -58,7 +59,7 @@ def main(argv=None) -> int:
         res = list(pool.map(one, jobs))
     ref = paper_table5()
     print(f"HES rule, seeds {a.seeds}, N=20, K=1000{'  set ' + str(sets) if sets else ''}")
-    head = f"{'scene':28s}" + "".join(f"{c:>10s}" for c in COLS)
+    head = f"{'scene':28s}" + "".join(f"{c:>{W[c]}s}" for c in COLS)
     print(head)
     ok = True
     for sc in a.scenes:
@@ -66,14 +67,14 @@ def main(argv=None) -> int:
         if a.per_seed:
             for (s, seed, m, w) in res:
                 if s == sc:
-                    print(f"  seed {seed:2d}{'':18s}" + "".join(f"{m[c]:10.3f}" for c in COLS) + f"  ({w:.2f} s)")
+                    print(f"  seed {seed:2d}{'':18s}" + "".join(f"{m[c]:{W[c]}.3f}" for c in COLS) + f"  ({w:.2f} s)")
         mean = {c: float(np.mean([m[c] for m in rows])) for c in COLS}
-        print(f"{Path(sc).stem:28s}" + "".join(f"{mean[c]:10.3f}" for c in COLS))
+        print(f"{Path(sc).stem:28s}" + "".join(f"{mean[c]:{W[c]}.3f}" for c in COLS))
         name = Path(sc).stem
         if name in ref:
             r = ref[name]
             print(f"{'  paper (rule)':28s}" + "".join(
-                f"{r[c][0]:10.3f}" if c in r else f"{'':10s}" for c in COLS))
+                f"{r[c][0]:{W[c]}.3f}" if c in r else " " * W[c] for c in COLS))
         ymin = min(m["Y"] for m in rows)
         if name == "default_corridor":
             chk = (ymin == 1 and min(m["R_goal"] for m in rows) == 1 and mean["R_unsafe"] <= 0.117

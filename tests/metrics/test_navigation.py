@@ -42,6 +42,8 @@ def test_clearance_ratios_use_inner_steps_only():
     assert m["R_below_0_75"] == pytest.approx(2 / 9)
     assert m["R_below_0_30"] == pytest.approx(1 / 9)
     assert m["d_clr_min"] == pytest.approx(0.2)
+    # per agent: agent 0 unsafe at k = 4 only, agent 1 at k = 3 and 5 -> (1/9 + 2/9) / 2
+    assert m["R_unsafe_agent"] == pytest.approx(1.5 / 9)
     # S_scene = 0.4 Y + 0.3 R_goal + 0.15 (1 - R_unsafe) + 0.15 clip(d_clr_min / 1.5)
     assert m["S_scene"] == pytest.approx(0.4 + 0.3 + 0.15 * (6 / 9) + 0.15 * (0.2 / 1.5))
 
@@ -138,3 +140,16 @@ def test_coincident_agents_are_a_contact_at_distance_zero():
     P[1, 1] = P[1, 0]  # ... agent 1 sits on agent 0 at step 1 only
     assert inter_agent(P, 0.4, None) == (0.0, 1)
     assert inter_agent(P, 0.4, 500.0) == (0.0, 1)
+
+
+def test_per_agent_unsafe_ratio_is_the_plain_mean_and_never_above_the_swarm_ratio():
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        K, N = int(rng.integers(2, 30)), int(rng.integers(1, 8))
+        C = rng.uniform(0.0, 3.0, (K + 1, N))
+        m = navigation_metrics(np.zeros((K + 1, N, 2)), C, np.ones(2))
+        own = [sum(C[k, i] < 1.5 for k in range(1, K)) / (K - 1) for i in range(N)]  # per-agent loop
+        assert m["R_unsafe_agent"] == pytest.approx(sum(own) / N)
+        assert m["R_unsafe_agent"] <= m["R_unsafe"] + 1e-12
+        if N == 1:
+            assert m["R_unsafe_agent"] == pytest.approx(m["R_unsafe"])

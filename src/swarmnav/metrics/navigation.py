@@ -53,6 +53,9 @@ def navigation_metrics(
     frac = (lambda thr: float(np.mean(inner < thr))) if len(inner) else (lambda thr: 0.0)
     d_clr_min = float(inner.min()) if len(inner) else float(d_min.min())
     R_unsafe = frac(p.d_safe)
+    # per agent (ours, beyond the paper): each agent's own share of steps 1..K-1 within d_safe,
+    # averaged over agents; <= R_unsafe, which counts a step if *any* agent is within d_safe
+    R_unsafe_agent = float(np.mean(clearance[1:K] < p.d_safe)) if K >= 2 else 0.0
     steps = np.linalg.norm(np.diff(positions[:K], axis=0), axis=2) if K >= 2 else np.zeros((0, N))
     if periodic_box is not None:  # minimum-image displacement on the torus
         d = np.diff(positions[:K], axis=0)
@@ -73,6 +76,7 @@ def navigation_metrics(
         "R_goal": R_goal,
         "Y": Y,
         "R_unsafe": R_unsafe,
+        "R_unsafe_agent": R_unsafe_agent,
         "d_clr_min": d_clr_min,
         "R_below_0_75": frac(0.75),
         "R_below_0_30": frac(0.30),
