@@ -439,6 +439,7 @@ class Hes:
         sub.mode = mode
         if mode == ENCIRCLE:
             sub.waypoint = self.goal.copy()
+            sub.prog_step = None  # stall planner: progress is counted in navigate mode only
             for q in sub.passages:  # passage mode: members still crossing keep their queue until through
                 q.crossed |= (x - q.throat.mid) @ q.throat.normal > 0.0
             return
@@ -517,7 +518,8 @@ class Hes:
         one becomes a passage (passage mode) and the members thread it as they thread a gate."""
         p = self.params
         dmin = float(np.min(np.hypot(*(x[rep.pack.members] - self.goal).T)))
-        if sub.prog_step is None or dmin < sub.prog_d - p.plan_progress:
+        # a member within r_out of the goal has arrived (it cannot come closer than the ring): no stall
+        if sub.prog_step is None or dmin < sub.prog_d - p.plan_progress or dmin <= p.r_out:
             sub.prog_d, sub.prog_step = min(dmin, sub.prog_d), k
         if not sub.planned:
             if (k - sub.prog_step) * p.dt < p.plan_stall:
