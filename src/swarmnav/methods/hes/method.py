@@ -120,6 +120,8 @@ class SubSwarm:
     path: np.ndarray | None = None  # stall planner: (K, 2) planned path [m] ...
     path_clr: np.ndarray | None = None  # ... and its clearance from the returns seen [m]
     path_step: int = _NEVER  # stall planner: step of the last plan
+    tail_d: float = math.inf  # stall planner, encircle mode: farthest member's goal distance [m] ...
+    tail_step: int | None = None  # ... and the step it last improved by plan_progress
 
 
 class Hes:
@@ -439,10 +441,13 @@ class Hes:
         sub.mode = mode
         if mode == ENCIRCLE:
             sub.waypoint = self.goal.copy()
-            sub.prog_step = None  # stall planner: progress is counted in navigate mode only
+            sub.prog_step = None  # stall planner: the head's progress is counted in navigate mode only ...
+            if p.stall_plan:  # ... in encircle mode, the tail's
+                self._tail_stall(sub, rep, x, k)
             for q in sub.passages:  # passage mode: members still crossing keep their queue until through
                 q.crossed |= (x - q.throat.mid) @ q.throat.normal > 0.0
             return
+        sub.tail_step = None  # stall planner: the tail's progress is counted in encircle mode only
         planned = self._planned(sub, rep, x, k, cent) if p.stall_plan else None
         route = self._choose_route(sub, rep, x, k) if planned is None else planned[0]
         sub.route = route
@@ -518,8 +523,7 @@ class Hes:
         one becomes a passage (passage mode) and the members thread it as they thread a gate."""
         p = self.params
         dmin = float(np.min(np.hypot(*(x[rep.pack.members] - self.goal).T)))
-        # a member within r_out of the goal has arrived (it cannot come closer than the ring): no stall
-        if sub.prog_step is None or dmin < sub.prog_d - p.plan_progress or dmin <= p.r_out:
+        if sub.prog_step is None or dmin < sub.prog_d - p.plan_progress:
             sub.prog_d, sub.prog_step = min(dmin, sub.prog_d), k
         if not sub.planned:
             if (k - sub.prog_step) * p.dt < p.plan_stall:
@@ -546,16 +550,38 @@ class Hes:
                          cost=float(arc[-1] - arc[i0]))
         return route, path[it].copy()
 
+    def _tail_stall(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int) -> None:
+        """Stall planner in encircle mode: the head is at the goal, but a member farther than
+        ``r_out`` from it has not come ``plan_progress`` closer for ``plan_stall`` s (a tail left
+        behind a gap): engage, so that the members cut off from their ring slots follow the
+        planned field (``_follow_path``)."""
+        p = self.params
+        dmax = float(np.max(np.hypot(*(x[rep.pack.members] - self.goal).T)))
+        if sub.tail_step is None or dmax <= p.r_out or dmax < sub.tail_d - p.plan_progress:
+            sub.tail_d, sub.tail_step = dmax, k
+        if not sub.planned and (k - sub.tail_step) * p.dt >= p.plan_stall:
+            sub.planned = True
+            self.stats["plan_engaged"] += 1
+        if sub.planned:
+            self._field(k)
+
+    def _field(self, k: int, now: bool = False) -> None:
+        """Stall planner: the clearance and cost-to-go fields of the map, recomputed at most once a
+        step, and otherwise every ``plan_every`` s (or at once with ``now``)."""
+        p = self.params
+        if self._ctg_step == k or (not now and (k - self._ctg_step) * p.dt < p.plan_every - 1e-9):
+            return
+        self._clr = clearance(self._occ, p.plan_cell)
+        g = np.floor((self.goal - self._map0) / p.plan_cell).astype(int)
+        self._ctg = cost_to_go(self._clr, int(g[1]), int(g[0]), p.plan_cell, p.plan_clear, p.d_safe,
+                               p.plan_weight)
+        self._ctg_step = k
+
     def _replan(self, sub: SubSwarm, k: int, start: np.ndarray) -> None:
         """Stall planner: the path from ``start`` to the goal on the map of returns (plan.py); the
         cost-to-go field is computed once per step for all sub-swarms."""
         p = self.params
-        if self._ctg_step != k:
-            self._clr = clearance(self._occ, p.plan_cell)
-            g = np.floor((self.goal - self._map0) / p.plan_cell).astype(int)
-            self._ctg = cost_to_go(self._clr, int(g[1]), int(g[0]), p.plan_cell, p.plan_clear, p.d_safe,
-                                   p.plan_weight)
-            self._ctg_step = k
+        self._field(k, now=True)
         sub.path_step = k
         ny, nx = self._ctg.shape
         c = np.floor((start - self._map0) / p.plan_cell).astype(int)
