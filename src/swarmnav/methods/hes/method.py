@@ -515,12 +515,13 @@ class Hes:
         on the map of returns, or None while the sub-swarm makes progress (the reactive choice).
 
         Progress: the member nearest the goal comes ``plan_progress`` closer than ever before. With
-        none for ``plan_stall`` s the planner engages for good (until encircle mode). The path
-        (``plan.cost_to_go`` from the goal, descended from the cell of ``cent``) is replanned every
-        ``plan_every`` s; the target is the path point ``plan_look`` past the path point nearest
-        ``cent`` (at least ``through`` past the narrow place below, if narrow); the route is the narrowest place of the next ``lead + plan_look`` m of path as a
+        none for ``plan_stall`` s the planner engages for good (for this sub-swarm; a split makes
+        new ones). The path (``plan.cost_to_go`` from the goal, descended from the cell of
+        ``cent``) is replanned every ``plan_every`` s; the target is the path point ``plan_look``
+        past the path point nearest ``cent`` (at least ``through`` past the narrow place below, if
+        narrow); the route is the narrowest place of the next ``lead + plan_look`` m of path as a
         throat (mid, exit direction = path direction, width = twice its clearance), so a narrow
-        one becomes a passage (passage mode) and the members thread it as they thread a gate."""
+        one becomes a passage (passage mode) at once and its tube applies as at a gate."""
         p = self.params
         dmin = float(np.min(np.hypot(*(x[rep.pack.members] - self.goal).T)))
         if sub.prog_step is None or dmin < sub.prog_d - p.plan_progress:
