@@ -62,6 +62,7 @@ from swarmnav.methods.hes.hierarchy import (
 )
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.passage import passage_dsafe
+from swarmnav.methods.hes.plan import clearance, cost_to_go, descend, lookahead, mark_hits, nearest_reachable
 from swarmnav.params import build
 from swarmnav.sensing import PreparedGeometry
 from swarmnav.sensing.lidar import _ray_table
@@ -79,6 +80,8 @@ _TRAIL_EVERY = 10  # steps between two samples of the members' trail (ours: 1 s)
 _TRAIL_LEN = 200  # trail samples kept (ours: 200 s, longer than a run)
 _TRAIL_REACH = 10.0  # [m] a cut-off member looks for trail points this close (ours: half R_L)
 _CUT_S = 2.0  # [s] a member cut off from its sub-swarm this long follows the trail (ours: not a member briefly behind a corner)
+_MAP_EVERY = 5  # stall planner: steps between two updates of the map of returns (ours: 0.5 s; every step while engaged)
+_MAP_MARGIN = 20.0  # [m] stall planner: the map covers the box of the start and the goal plus R_L (ours)
 
 
 @dataclass(slots=True)
@@ -111,6 +114,14 @@ class SubSwarm:
     passages: list = field(default_factory=list)  # passage mode: list[Passage], oldest first
     narrow_steps: int = 0  # passage mode: consecutive steps the route was a narrow throat with no wider candidate
     chained: bool = False  # passage mode: the sub-swarm has been routed through a passage
+    prog_d: float = math.inf  # stall planner: closest approach of any member to the goal so far [m] ...
+    prog_step: int | None = None  # ... and the step it last improved by plan_progress
+    planned: bool = False  # stall planner: engaged (the route follows the planned path)
+    path: np.ndarray | None = None  # stall planner: (K, 2) planned path [m] ...
+    path_clr: np.ndarray | None = None  # ... and its clearance from the returns seen [m]
+    path_step: int = _NEVER  # stall planner: step of the last plan
+    tail_d: float = math.inf  # stall planner, encircle mode: farthest member's goal distance [m] ...
+    tail_step: int | None = None  # ... and the step it last improved by plan_progress
 
 
 class Hes:
@@ -156,7 +167,7 @@ class Hes:
         self.last_move = np.full(n, _NEVER, dtype=np.int64)
         self._cd_steps = int(round(p.t_cd / p.dt))
         self._ra_steps = int(round(p.tau_ra / p.dt))
-        self.stats = {"splits": 0, "merges": 0, "reassigned": 0, "projected_to_keep": 0}
+        self.stats = {"splits": 0, "merges": 0, "reassigned": 0, "projected_to_keep": 0, "plan_engaged": 0}
         self.last_z: DecisionState | None = None
         self.last_reports: dict[int, Report] = {}
         self._qidx = np.full(n, -1, dtype=np.int64)  # passage mode: queued members (see _queue)
@@ -166,6 +177,13 @@ class Hes:
         self._blocked = np.zeros((n, 4), dtype=np.bool_)  # segment to slot / nn / subleader / centroid blocked
         self.last_cut = np.zeros(n, dtype=np.bool_)  # trail_follow: members following the trail this step
         self._cut_steps = np.zeros(n, dtype=np.int64)  # trail_follow: consecutive steps cut off from the sub-swarm
+        if p.stall_plan:  # stall planner: map of the returns every ring has seen, over start/goal box + margin
+            lo = np.minimum(positions.min(axis=0), self.goal) - _MAP_MARGIN
+            hi = np.maximum(positions.max(axis=0), self.goal) + _MAP_MARGIN
+            shape = np.ceil((hi - lo) / p.plan_cell).astype(int)
+            self._map0 = lo
+            self._occ = np.zeros((int(shape[1]), int(shape[0])), dtype=np.bool_)
+            self._ctg_step = _NEVER
 
     def summary(self) -> dict[str, float]:
         out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}
@@ -193,6 +211,9 @@ class Hes:
             self._trail[self._trail_n] = x
             self._trail_n += 1
         events: list[dict] = []
+        if p.stall_plan and (k % _MAP_EVERY == 0 or any(sub.planned for sub in self.subs.values())):
+            mark_hits(self._occ, ring, x, self._cos, self._sin, p.lidar_range, self._map0[0], self._map0[1],
+                      p.plan_cell)
 
         self._reelect(x)
         # 2. reports from subleaders, 3. decision through Pi_feas
@@ -420,14 +441,21 @@ class Hes:
         sub.mode = mode
         if mode == ENCIRCLE:
             sub.waypoint = self.goal.copy()
+            sub.prog_step = None  # stall planner: the head's progress is counted in navigate mode only ...
+            if p.stall_plan:  # ... in encircle mode, the tail's
+                self._tail_stall(sub, rep, x, k)
             for q in sub.passages:  # passage mode: members still crossing keep their queue until through
                 q.crossed |= (x - q.throat.mid) @ q.throat.normal > 0.0
             return
-        route = self._choose_route(sub, rep, x, k)
+        sub.tail_step = None  # stall planner: the tail's progress is counted in encircle mode only
+        planned = self._planned(sub, rep, x, k, cent) if p.stall_plan else None
+        route = self._choose_route(sub, rep, x, k) if planned is None else planned[0]
         sub.route = route
         if p.passage_mode:
             self._remember_passage(sub, route, rep, x, k)
-        if route is None:
+        if planned is not None:
+            target = planned[1]
+        elif route is None:
             target = self.goal
         elif route.direct:
             target = route.target
@@ -480,6 +508,94 @@ class Hes:
         w_iso = float(np.ptp(hex_template(m)[:, 1])) * p.spacing + p.spacing if m > 1 else p.spacing
         lam = float(np.clip((w - 2 * p.lane_margin) / w_iso, 1 / math.sqrt(p.aspect_max), 1.0)) if math.isfinite(w) else 1.0
         sub.squeeze += float(np.clip(lam - sub.squeeze, -0.05, 0.05))
+
+    def _planned(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int,
+                 cent: np.ndarray) -> tuple[Corridor, np.ndarray] | None:
+        """Stall planner (ours, ``stall_plan``): the route and corridor target from the path planned
+        on the map of returns, or None while the sub-swarm makes progress (the reactive choice).
+
+        Progress: the member nearest the goal comes ``plan_progress`` closer than ever before. With
+        none for ``plan_stall`` s the planner engages for good (for this sub-swarm; a split makes
+        new ones). The path (``plan.cost_to_go`` from the goal, descended from the cell of
+        ``cent``) is replanned every ``plan_every`` s; the target is the path point ``plan_look``
+        past the path point nearest ``cent`` (at least ``through`` past the narrow place below, if
+        narrow); the route is the narrowest place of the next ``lead + plan_look`` m of path as a
+        throat (mid, exit direction = path direction, width = twice its clearance), so a narrow
+        one becomes a passage (passage mode) at once and its tube applies as at a gate."""
+        p = self.params
+        dmin = float(np.min(np.hypot(*(x[rep.pack.members] - self.goal).T)))
+        if sub.prog_step is None or dmin < sub.prog_d - p.plan_progress:
+            sub.prog_d, sub.prog_step = min(dmin, sub.prog_d), k
+        if not sub.planned:
+            if (k - sub.prog_step) * p.dt < p.plan_stall:
+                return None
+            sub.planned = True
+            self.stats["plan_engaged"] += 1
+        if sub.path is None or (k - sub.path_step) * p.dt >= p.plan_every - 1e-9:
+            self._replan(sub, k, cent)
+        if sub.path is None or len(sub.path) < 2:
+            return None
+        path, clr = sub.path, sub.path_clr
+        seg = np.hypot(*np.diff(path, axis=0).T)
+        arc = np.concatenate([[0.0], np.cumsum(seg)])
+        i0 = int(np.argmin(np.sum((path - cent) ** 2, axis=1)))
+        ie = min(int(np.searchsorted(arc, arc[i0] + p.plan_look + p.lead)), len(path) - 1)
+        ib = i0 + int(np.argmin(clr[i0:ie + 1]))
+        d = path[min(ib + 2, len(path) - 1)] - path[max(ib - 2, 0)]
+        nrm = d / max(math.hypot(d[0], d[1]), 1e-9)
+        w = 2.0 * float(clr[ib])
+        # the target leads `through` past a narrow place ahead, as the reactive target leads past a throat
+        look = max(arc[i0] + p.plan_look, arc[ib] + p.through if w < self._w_passage else 0.0)
+        it = min(int(np.searchsorted(arc, look)), len(path) - 1)
+        route = Corridor(mid=path[ib].copy(), normal=nrm, width=w, target=path[ib] + p.through * nrm,
+                         cost=float(arc[-1] - arc[i0]))
+        return route, path[it].copy()
+
+    def _tail_stall(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int) -> None:
+        """Stall planner in encircle mode: the head is at the goal, but a member farther than
+        ``r_out`` from it has not come ``plan_progress`` closer for ``plan_stall`` s (a tail left
+        behind a gap): engage, so that the members cut off from their ring slots follow the
+        planned field (``_follow_path``)."""
+        p = self.params
+        dmax = float(np.max(np.hypot(*(x[rep.pack.members] - self.goal).T)))
+        if sub.tail_step is None or dmax <= p.r_out or dmax < sub.tail_d - p.plan_progress:
+            sub.tail_d, sub.tail_step = dmax, k
+        if not sub.planned and (k - sub.tail_step) * p.dt >= p.plan_stall:
+            sub.planned = True
+            self.stats["plan_engaged"] += 1
+        if sub.planned:
+            self._field(k)
+
+    def _field(self, k: int, now: bool = False) -> None:
+        """Stall planner: the clearance and cost-to-go fields of the map, recomputed at most once a
+        step, and otherwise every ``plan_every`` s (or at once with ``now``)."""
+        p = self.params
+        if self._ctg_step == k or (not now and (k - self._ctg_step) * p.dt < p.plan_every - 1e-9):
+            return
+        self._clr = clearance(self._occ, p.plan_cell)
+        g = np.floor((self.goal - self._map0) / p.plan_cell).astype(int)
+        self._ctg = cost_to_go(self._clr, int(g[1]), int(g[0]), p.plan_cell, p.plan_clear, p.d_safe,
+                               p.plan_weight)
+        self._ctg_step = k
+
+    def _replan(self, sub: SubSwarm, k: int, start: np.ndarray) -> None:
+        """Stall planner: the path from ``start`` to the goal on the map of returns (plan.py); the
+        cost-to-go field is computed once per step for all sub-swarms."""
+        p = self.params
+        self._field(k, now=True)
+        sub.path_step = k
+        ny, nx = self._ctg.shape
+        c = np.floor((start - self._map0) / p.plan_cell).astype(int)
+        si, sj = int(np.clip(c[1], 0, ny - 1)), int(np.clip(c[0], 0, nx - 1))
+        if not np.isfinite(self._ctg[si, sj]):
+            near = nearest_reachable(self._ctg, si, sj, int(round(p.d_safe / p.plan_cell)), p.plan_cell)
+            if near is None:
+                sub.path = sub.path_clr = None
+                return
+            si, sj = near
+        cells = descend(self._ctg, si, sj, nx * ny)
+        sub.path = self._map0 + (cells[:, ::-1] + 0.5) * p.plan_cell
+        sub.path_clr = self._clr[cells[:, 0], cells[:, 1]]
 
     def _choose_route(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int) -> Corridor | None:
         """The corridor this sub-swarm follows: the direct route if the goal is in clear view,
@@ -693,8 +809,10 @@ class Hes:
         sig = self._occlusion(x, slot, nn, sl_idx, cent)
         if p.trail_follow:
             self._follow_trail(x, slot, wp, sig, cent, sl_idx, queued | chained)
-        vslot = F.slot_velocity(x, slot, speed, p.eps_v)
         dsafe = self._dsafe(x)
+        if p.stall_plan:
+            self._follow_path(x, slot, wp, sig, dsafe)
+        vslot = F.slot_velocity(x, slot, speed, p.eps_v)
         args = (x, v, self.labels, x[sl_idx], v[sl_idx], follower, cent, wp, nav, slot, vslot, nn, sig, ring,
                 self._cos, self._sin, self._gains, dsafe)
         if p.passage_mode and (dsafe < p.d_safe).any():
@@ -706,7 +824,7 @@ class Hes:
             # barrier still stops it short of any return. (For every tube member, not only queued
             # ones, the gates' R_unsafe falls further but random-forest contacts rise: docs.)
             t = F.force_terms(*args)
-            nrm = np.where((self._qidx >= 0)[:, None], self._tube_normal, 0.0)
+            nrm = np.where(((self._qidx >= 0) | self._pushfree)[:, None], self._tube_normal, 0.0)
             back = np.minimum(np.sum(t[7] * nrm, axis=1), 0.0)
             t[7] -= back[:, None] * nrm
             a = t.sum(axis=0)
@@ -748,11 +866,12 @@ class Hes:
             members & ~q.crossed & (np.hypot(*(x - q.throat.mid).T) <= p.passage_queue)))]
         narrow = route is not None and not route.direct and route.width < w_wide
         same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
-        only = narrow and all(c.width < w_wide for c in rep.corridors)
+        # a narrow throat on the stall planner's path is its committed choice: confirmed at once
+        only = narrow and (sub.planned or all(c.width < w_wide for c in rep.corridors))
         sub.narrow_steps = sub.narrow_steps + 1 if only else 0
         # in a chain of narrow throats (a passage is remembered) the next narrow route is confirmed at once
         chain = narrow and only and bool(keep)
-        if narrow and (same or chain or sub.narrow_steps * p.dt >= p.passage_confirm):
+        if narrow and (same or chain or sub.planned or sub.narrow_steps * p.dt >= p.passage_confirm):
             keep = [q for q in keep if not any(q is r for r in same)]
             crossed = same[-1].crossed if same else np.zeros(self.n, dtype=bool)
             keep.append(Passage(route, k, crossed))
@@ -774,6 +893,8 @@ class Hes:
         if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return q_idx, q_tgt
         for s, sub in self.subs.items():  # few sub-swarms x at most _PASSAGES throats
+            if sub.planned:
+                continue  # stall planner: each member follows its own way down the planned field (_follow_path)
             members = self.labels == s
             for j, q in enumerate(sub.passages):
                 c = q.throat
@@ -796,6 +917,7 @@ class Hes:
         self.last_dsafe = out
         # exit direction of the tube each member is in and lined up with (0: none)
         self._tube_normal = np.zeros((self.n, 2))
+        self._pushfree = np.zeros(self.n, dtype=np.bool_)  # stall planner: members threading a narrow place
         if not p.passage_mode or not any(sub.passages for sub in self.subs.values()):
             return out
         for s, sub in self.subs.items():  # a loop over (at most a few) sub-swarms and throats, not agents
@@ -814,6 +936,49 @@ class Hes:
                 out[members] = np.minimum(out[members], eff)
         self.last_dsafe = out
         return out
+
+    def _follow_path(self, x, slot, wp, sig, dsafe) -> None:
+        """Stall planner, per member (ours, ``stall_plan``): a member of an engaged sub-swarm whose
+        slot is out of sight (segment blocked) or which is in or entering a narrow place of its own
+        way down the planned cost-to-go field (half-width below w_passage / 2 within
+        ``passage_len``) takes as slot and centering target the point ``plan_look`` down that
+        field, with its blocked couplings off; in a narrow place it uses the passage-mode safety
+        distance min(d_safe - passage_relief, half-width - passage_margin) of eq. (36). Modifies
+        ``slot``, ``wp``, ``sig`` and ``dsafe`` in place.
+
+        Why: a formation slot, the subleader and the centroid pull a member straight at them,
+        through the discs between; in a forest the members that had not followed the head
+        through the first gap stayed in pockets (density 0.25, seed 2)."""
+        p = self.params
+        act = np.zeros(self.n, dtype=np.bool_)
+        for s, sub in self.subs.items():
+            if sub.planned and self._ctg_step > _NEVER:
+                act |= self.labels == s
+        if not act.any():
+            return
+        idx = np.flatnonzero(act)
+        pt, half = lookahead(self._ctg, self._clr, np.ascontiguousarray(x[idx]), self._map0[0], self._map0[1],
+                             p.plan_cell, p.plan_look, p.passage_len)
+        narrow = 2.0 * half < self._w_passage
+        b = self._blocked[idx]
+        use = (b[:, F.SIG_SLOT] | narrow) & np.isfinite(half)
+        i = idx[use]
+        slot[i] = wp[i] = pt[use]
+        sig[i, F.SIG_SLOT] = 1.0
+        sig[i, F.SIG_SL] = np.where(b[use, F.SIG_SL], 0.0, sig[i, F.SIG_SL])
+        sig[i, F.SIG_CENT] = np.where(b[use, F.SIG_CENT], 0.0, sig[i, F.SIG_CENT])
+        if p.passage_mode:
+            j = idx[use & narrow]
+            eff = np.minimum(p.d_safe - p.passage_relief, half[use & narrow] - p.passage_margin)
+            dsafe[j] = np.minimum(dsafe[j], np.maximum(eff, 0.0))
+            # and, like a queued member lined up with a gate (passage mode item 6), no push back
+            # against its way: the LiDAR repulsion keeps its part across the way (wall barrier intact)
+            u = pt[use & narrow] - x[j]
+            un = np.hypot(*u.T)
+            ok = un > 1e-6
+            self._tube_normal[j[ok]] = u[ok] / un[ok, None]
+            self._pushfree[j[ok]] = True
+        self.last_dsafe = dsafe
 
     def _follow_trail(self, x, slot, wp, sig, cent, sl_idx, routed) -> None:
         """Trail following (ours, ``trail_follow``): a member cut off from its sub-swarm -- the

@@ -109,6 +109,16 @@ class HesParams:
     passage_head: int = 2  # ours [-] once this many members have crossed the route's passage they are the head (waypoint, subleader) and the rest queue for it: the head moves on while the tail streams through (1 jams the mouth; 3 leaves the whole sub-swarm in formation at the mouth longer, gates seed 4 fails)
     passage_reach: float = 1.5  # ours [m] tube half-width beyond w/2: an agent approaching within d_safe of the throat's corners is inside
 
+    # ---------------------------------------------------------------- stall planner (ours, beyond the paper; docs "Stall planner")
+    stall_plan: bool = True  # ours: a sub-swarm whose most advanced member has not come plan_progress closer to the goal for plan_stall s follows a path planned on the map of its rings' returns (plan.py) instead of the reactive corridor choice; False = the reactive choice always
+    plan_stall: float = 10.0  # ours [s] no progress this long engages the planner (a queue streaming through a gate, or a formation squeezing round a block, advances its head well within it)
+    plan_progress: float = 1.0  # ours [m] progress = the most advanced member comes this much closer to the goal than ever before
+    plan_cell: float = 0.2  # ours [m] map cell (half the 0.4 m body)
+    plan_clear: float = 0.6  # ours [m] a path keeps this from every return seen: > brake_margin (0.5 m), where the wall braking barrier stops an agent dead (0.4: four agents froze in the middle of a 0.98 m gap); gaps from ~1.2 m up are passable
+    plan_weight: float = 1.0  # ours [-] path cost per metre is 1 + plan_weight (d_safe - clearance) / clearance below d_safe: a squeeze at 0.5 m clearance costs 3 m per metre, at 0.75 m (a 1.5 m gap) 2 m, so wider ways round win unless much shorter and a path keeps to the middle of a gap
+    plan_look: float = 2.0  # ours [m] the corridor target is the path point this far (arc length) past the centroid's nearest path point
+    plan_every: float = 1.0  # ours [s] replanning interval while engaged (the map grows as the swarm moves)
+
     # ---------------------------------------------------------------- ablations (Simulation 2)
     safety_stack_off: bool = False  # True: waypoint regulation (rate limit, leash, clearance), adaptive cruise and safety filter off; a_max -> a_max_relaxed
     occlusion_attenuation: bool = True  # False: sigma_occ = 1 (Table 4 "w/o occ. attenuation")
@@ -141,9 +151,13 @@ class HesParams:
         if self.max_subswarms < 1 or self.min_size < 1 or self.n_move_max < 0:
             raise ConfigError("hes: max_subswarms and min_size must be >= 1, n_move_max >= 0")
         for name in ("passage_margin", "passage_len", "passage_reach", "passage_band", "passage_relief", "agent_brake",
-                     "agent_margin", "guard_brake", "guard_margin", "a_brake", "brake_margin", "w_split"):
+                     "agent_margin", "guard_brake", "guard_margin", "a_brake", "brake_margin", "w_split",
+                     "plan_stall", "plan_progress", "plan_clear", "plan_weight", "plan_look"):
             if not getattr(self, name) >= 0:  # our safety-stack and passage-mode lengths [m] and decelerations [m/s^2]
                 raise ConfigError(f"hes: {name} must be >= 0, got {getattr(self, name)}")
+        for name in ("plan_cell", "plan_every"):
+            if not getattr(self, name) > 0:
+                raise ConfigError(f"hes: {name} must be > 0, got {getattr(self, name)}")
         if not self.passage_relief < self.d_safe:
             raise ConfigError(f"hes: passage_relief must be < d_safe ({self.d_safe} m), got {self.passage_relief}")
 
