@@ -10,13 +10,13 @@ the first row. This module gives the planner a memory of the returns instead:
    ``cell`` m cells; unseen cells count as free).
 2. :func:`cost_to_go` runs Dijkstra from the goal over the 8-connected grid: a cell closer than
    ``clear_min`` to a return is blocked, a step costs its length times
-   ``1 + weight * max(0, d_pref - clearance) / clearance`` (narrow places cost more, so a wide way
+   ``1 + weight * max(0, d_pref - clearance) / max(clearance, clear_min)`` (narrow places cost more, so a wide way
    round wins over a short squeeze unless the squeeze is much shorter, and a path through a gap
    keeps to its middle, where the cost is lowest).
 3. :func:`descend` follows the cost-to-go field down from a start cell: the path.
 
 All three are plain array functions (numba); the method calls them only while a sub-swarm has
-stalled (see ``Hes._plan``).
+stalled (see ``Hes._planned``).
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ def cost_to_go(clr, gi, gj, cell, clear_min, d_pref, weight):
     """Dijkstra from the goal cell ``(gi, gj)`` (row, column) over the 8-connected grid.
 
     A cell with ``clr < clear_min`` is blocked (cost inf); a step between cells a and b costs
-    ``length * (c(a) + c(b)) / 2`` with ``c = 1 + weight * max(0, d_pref - clr) / d_pref``.
+    ``length * (c(a) + c(b)) / 2`` with ``c = 1 + weight * max(0, d_pref - clr) / max(clr, clear_min)``.
     Returns the (ny, nx) cost-to-go [m-equivalent]; inf where the goal cannot be reached."""
     ny, nx = clr.shape
     dist = np.full((ny, nx), np.inf)
