@@ -1,4 +1,4 @@
-"""Scene generators: random 2-D forests (SPH paper, Table II) and periodic boxes (HWVEM).
+"""Scene generators: random 2-D forests (SPH paper, Table II), periodic boxes and the mission-scene family (HWVEM).
 
 Generators are addressable by a spec string ``NAME:key=value,...`` so the CLI and experiment
 specs can name a generated scene exactly like a built-in one; the same spec and seed always
@@ -15,7 +15,7 @@ from scipy import ndimage
 
 from swarmnav.errors import ScenarioError
 from swarmnav.world.obstacles import Box, Circle
-from swarmnav.world.scenario import Scenario, Swarm, validate
+from swarmnav.world.scenario import Scenario, Swarm, from_dict, validate
 
 
 def random_forest(
@@ -150,9 +150,65 @@ def periodic_box(n: int = 100, rho: float = 4.102, seed: int = 0) -> Scenario:
     return validate(scn)
 
 
+def hwvem_mission_family(tiny_offset: float = 1.45, rect_offset: float = 1.3, passage_width: float = 2.4,
+                         turn_scale: float = 1.0, n: int = 20) -> Scenario:
+    """The HWVEM Section 3.2 mission scene as a family of our layouts (Figure 7 gives no coordinates).
+
+    One layout, four free numbers (the defaults are the v1 scene, ``hwvem_mission_v1``; the
+    shipped ``hwvem_mission`` is ``rect_offset = 0.6``, fitted to the paper's baselines, see
+    docs/methods/vicsek.md). Along a 70 m path (at ``turn_scale = 1``) the swarm meets two tiny
+    circles (r = 0.25 m), a 6 m passage with funnel entrance faces, a huge circle (r = 3 m) and
+    a diamond either side of the high leg, a triangle above the descending leg, a rectangle
+    (2 m x 1 m) and a small circle either side of the low leg, and a triangle-diamond passage
+    on the last leg. The swarm starts at rho = 3.265 /m^2 centred on the path start.
+
+    Args:
+        tiny_offset: [m] lateral offset of the tiny circles from the path (+y at x = 7, -y at x = 10).
+        rect_offset: [m] gap between the low leg and the rectangle's near face.
+        passage_width: [m] width of the first passage; the second passage's gap is 0.2 m wider.
+        turn_scale: [-] multiplies the y of every path waypoint (steeper turns); the obstacles
+            beside a leg move with it, so their distance to that leg is kept.
+        n: swarm size.
+    """
+    s, h, g = turn_scale, passage_width / 2, (passage_width + 0.2) / 2
+    hi, lo = 3.0 * s, -3.5 * s  # [m] y of the high and the low leg
+    dy = -2.1875 * (s - 1.0)  # [m] shift of the descending leg at x = 45 (the triangle moves with it)
+
+    def poly(*pts):
+        return {"type": "polygon", "points": [list(p) for p in pts]}
+
+    obstacles = [
+        {"type": "circle", "center": [7.0, tiny_offset], "radius": 0.25},
+        {"type": "circle", "center": [10.0, -tiny_offset], "radius": 0.25},
+        poly((12, 7), (16, h), (22, h), (22, 7)),  # passage 1, upper wall (funnel face)
+        poly((12, -7), (22, -7), (22, -h), (16, -h)),  # passage 1, lower wall
+        {"type": "circle", "center": [32.0, hi - 4.5], "radius": 3.0},  # huge circle under the high leg
+        poly((32, hi + 1.5), (34, hi + 3.5), (32, hi + 5.5), (30, hi + 3.5)),  # diamond over it (3 m gap)
+        poly((43, 0.5 + dy), (47, 0.5 + dy), (45, 3 + dy)),  # triangle above the descending leg
+        {"type": "box", "min": [51.0, round(lo + rect_offset, 9)], "max": [53.0, round(lo + rect_offset + 1.0, 9)]},
+        {"type": "circle", "center": [53.5, lo - 2.1], "radius": 0.6},  # small circle below the low leg
+        poly((61, -3.5), (65, -3.5), (63, -g)),  # passage 2, triangle below the last leg
+        poly((63, g), (64.2, g + 1.2), (63, g + 2.4), (61.8, g + 1.2)),  # passage 2, diamond above it
+    ]
+    spec = (f"hwvem_mission_family:tiny_offset={tiny_offset:g},rect_offset={rect_offset:g},"
+            f"passage_width={passage_width:g},turn_scale={turn_scale:g}")
+    data = {
+        "name": spec,
+        "description": "HWVEM Sec. 3.2 mission family: narrow passages, tiny and huge circles, rectangles, "
+                       "diamonds, triangles.",
+        "world": {"bounds": [-6.0, min(-10.0, lo - 4.0), 70.0, max(12.0, hi + 7.0)]},
+        "swarm": {"n": n, "spawn": [0.0, 0.0, 0.0, 0.0], "density": 3.265, "min_spacing": 0.0, "clearance": 0.3},
+        "goal": {"position": [66.0, 0.0], "path": [[0.0, 0.0], [24.0, 0.0], [28.0, hi], [36.0, hi], [40.0, 0.0],
+                                                   [48.0, lo], [56.0, lo], [60.0, 0.0], [66.0, 0.0]]},
+        "obstacles": obstacles,
+    }
+    return from_dict(data, source=spec)
+
+
 GENERATORS: dict[str, Callable[..., Scenario]] = {
     "random_forest": random_forest,
     "periodic_box": periodic_box,
+    "hwvem_mission_family": hwvem_mission_family,
 }
 
 

@@ -289,12 +289,13 @@ def test_mission_success_counts_agents_that_never_join():
     assert s["D_ind"] == pytest.approx(0.4, abs=0.1) and s["D_obs"] > 1.0
 
 
-def test_mission_scene_has_the_paper_ingredients():
+@pytest.mark.parametrize("scene, clearance", [("hwvem_mission", 0.6), ("hwvem_mission_v1", 1.2)])
+def test_mission_scene_has_the_paper_ingredients(scene, clearance):
     from swarmnav.sensing import signed_distance
     from swarmnav.world.scenario import load_scenario
 
     for n, side in ((5, 1.2375), (20, 2.4749), (50, 3.9132)):  # HWVEM Sec. 3.2 initial squares
-        s = load_scenario("hwvem_mission", n=n)
+        s = load_scenario(scene, n=n)
         x0, y0, x1, y1 = s.swarm.region
         assert x1 - x0 == pytest.approx(side, abs=1e-3) and y1 - y0 == pytest.approx(side, abs=1e-3)
     kinds = [type(o).__name__ for o in s.obstacles]
@@ -302,7 +303,24 @@ def test_mission_scene_has_the_paper_ingredients():
     sizes = sorted(len(o.points) for o in s.obstacles if type(o).__name__ == "Polygon")
     assert 3 in sizes and 4 in sizes  # triangles and diamonds
     path = Polyline.of(s.path)
-    assert signed_distance(s.geometry, path.at(np.linspace(0, path.length, 4000))).min() >= 1.2 - 1e-9
+    # the information UAV's path stays outside every obstacle's avoidance band (r_avoid = 0.5 m)
+    d = signed_distance(s.geometry, path.at(np.linspace(0, path.length, 4000)))
+    assert d.min() == pytest.approx(clearance, abs=1e-3) and d.min() > VicsekFamily("hwvem").params.r_avoid
+
+
+@pytest.mark.parametrize("scene, params", [("hwvem_mission", "rect_offset=0.6"), ("hwvem_mission_v1", "")])
+def test_shipped_mission_scenes_are_members_of_the_family(scene, params):
+    """The scene files are the fitted / the default member of hwvem_mission_family (the geometry
+    the calibration in benchmarks/hwvem_scene_fit.py ran on), at every Table 2 size."""
+    from swarmnav.world.scenario import load_scenario
+
+    def geometry(s):
+        d = s.to_dict()
+        return {k: v for k, v in d.items() if k not in ("name", "description")}
+
+    for n in (5, 20, 50):
+        assert geometry(load_scenario(scene, n=n)) == geometry(load_scenario(f"hwvem_mission_family:{params}", n=n))
+    assert geometry(load_scenario("hwvem_mission")) != geometry(load_scenario("hwvem_mission_v1"))
 
 
 def test_experiment_specs_resize_the_periodic_box():
