@@ -57,6 +57,31 @@ def test_cost_to_go_matches_scipy_dijkstra(seed):
     np.testing.assert_allclose(got[fin], ref[fin], rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_cost_to_go_stopped_early_is_exact_where_it_is_finite_and_near_the_needed_cells(seed):
+    rng = np.random.default_rng(10 + seed)
+    occ = rng.random((60, 80)) < 0.05
+    gi, gj = 30, 75
+    occ[gi - 2:gi + 3, gj - 2:] = False
+    clr = clearance(occ, 0.2)
+    full = cost_to_go(clr, gi, gj, 0.2, 0.3, 1.5, 1.0)
+    need = np.array([[30, 40], [35, 38], [28, 44]])
+    need = need[np.isfinite(full[need[:, 0], need[:, 1]])]
+    slack = 2.0
+    part = cost_to_go(clr, gi, gj, 0.2, 0.3, 1.5, 1.0, need, slack)
+    fin = np.isfinite(part)
+    np.testing.assert_array_equal(part[fin], full[fin])  # every value it keeps is the full field's
+    top = full[need[:, 0], need[:, 1]].max()
+    np.testing.assert_array_equal(part[full <= top + slack], full[full <= top + slack])  # all within slack
+    assert (np.isfinite(full) & ~fin).sum() > 0  # and it did stop early
+    # a descent from a needed cell is the same path on either field
+    for i, j in need:
+        np.testing.assert_array_equal(descend(part, i, j, 10_000), descend(full, i, j, 10_000))
+    # nothing open needed (or nothing reachable): the whole field
+    blocked = np.argwhere(clr < 0.3)[:1]
+    np.testing.assert_array_equal(cost_to_go(clr, gi, gj, 0.2, 0.3, 1.5, 1.0, blocked, slack), full)
+
+
 def test_descend_and_lookahead_follow_the_field_to_the_goal_through_the_wide_gap():
     # a wall at x = 5 m with a 0.8 m gap (below clear_min 2 x 0.6 m) and a 2 m gap
     cell = 0.2

@@ -203,7 +203,7 @@ class Hes:
         x = np.ascontiguousarray(obs.positions, dtype=np.float64)
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         ring = self._sense(x)
-        self._k = k
+        self._k, self._x = k, x
         if p.trail_follow and k % _TRAIL_EVERY == 0:
             if self._trail_n == _TRAIL_LEN:
                 self._trail[:-1] = self._trail[1:]
@@ -574,8 +574,14 @@ class Hes:
             return
         self._clr = clearance(self._occ, p.plan_cell)
         g = np.floor((self.goal - self._map0) / p.plan_cell).astype(int)
+        # the field is read at the agents' cells (and descended from there) until the next update:
+        # Dijkstra stops once it is exact for every cell an agent can reach before then, plus the
+        # look-ahead and the start search of a blocked centroid (d_safe), at the dearest cost per metre
+        need = np.floor((self._x - self._map0) / p.plan_cell).astype(np.int64)[:, ::-1].copy()
+        c_max = 1.0 + p.plan_weight * max(p.d_safe - p.plan_clear, 0.0) / p.plan_clear
+        slack = c_max * (p.v_cap_frac * p.v_s * p.plan_every + p.plan_look + p.d_safe)
         self._ctg = cost_to_go(self._clr, int(g[1]), int(g[0]), p.plan_cell, p.plan_clear, p.d_safe,
-                               p.plan_weight)
+                               p.plan_weight, need, slack)
         self._ctg_step = k
 
     def _replan(self, sub: SubSwarm, k: int, start: np.ndarray) -> None:

@@ -152,10 +152,10 @@ class HesParams:
             raise ConfigError("hes: max_subswarms and min_size must be >= 1, n_move_max >= 0")
         for name in ("passage_margin", "passage_len", "passage_reach", "passage_band", "passage_relief", "agent_brake",
                      "agent_margin", "guard_brake", "guard_margin", "a_brake", "brake_margin", "w_split",
-                     "plan_stall", "plan_progress", "plan_clear", "plan_weight", "plan_look"):
+                     "plan_stall", "plan_progress", "plan_weight", "plan_look"):
             if not getattr(self, name) >= 0:  # our safety-stack and passage-mode lengths [m] and decelerations [m/s^2]
                 raise ConfigError(f"hes: {name} must be >= 0, got {getattr(self, name)}")
-        for name in ("plan_cell", "plan_every"):
+        for name in ("plan_cell", "plan_every", "plan_clear"):  # plan_clear divides the path cost
             if not getattr(self, name) > 0:
                 raise ConfigError(f"hes: {name} must be > 0, got {getattr(self, name)}")
         if not self.passage_relief < self.d_safe:
