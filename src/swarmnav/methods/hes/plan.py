@@ -150,21 +150,28 @@ def cost_to_go(clr, gi, gj, cell, clear_min, d_pref, weight, need=np.empty((0, 2
 
 
 @njit(cache=True)
+def _down(dist, i, j):
+    """The 8-neighbour of cell (i, j) with the lowest ``dist`` below ``dist[i, j]``, or (-1, -1)."""
+    ny, nx = dist.shape
+    bi, bj, bd = -1, -1, dist[i, j]
+    for m in range(8):
+        a, b = i + _DI[m], j + _DJ[m]
+        if 0 <= a < ny and 0 <= b < nx and dist[a, b] < bd:
+            bi, bj, bd = a, b, dist[a, b]
+    return bi, bj
+
+
+@njit(cache=True)
 def descend(dist, si, sj, max_cells):
     """Cells (K, 2) (row, column) from ``(si, sj)`` down the cost-to-go ``dist`` to its minimum
     (steepest descent over the 8 neighbours; stops at a cell with no lower neighbour)."""
-    ny, nx = dist.shape
     out = np.empty((max_cells, 2), dtype=np.int64)
     i, j = si, sj
     k = 0
     while k < max_cells:
         out[k, 0], out[k, 1] = i, j
         k += 1
-        bi, bj, bd = -1, -1, dist[i, j]
-        for m in range(8):
-            a, b = i + _DI[m], j + _DJ[m]
-            if 0 <= a < ny and 0 <= b < nx and dist[a, b] < bd:
-                bi, bj, bd = a, b, dist[a, b]
+        bi, bj = _down(dist, i, j)
         if bi < 0:
             break
         i, j = bi, bj
@@ -206,11 +213,7 @@ def lookahead(dist, clr, pts, x0, y0, cell, look, near):
         arc = 0.0
         h = clr[i, j]
         while arc < look:
-            bi, bj, bd = -1, -1, dist[i, j]
-            for q in range(8):
-                a, b = i + _DI[q], j + _DJ[q]
-                if 0 <= a < ny and 0 <= b < nx and dist[a, b] < bd:
-                    bi, bj, bd = a, b, dist[a, b]
+            bi, bj = _down(dist, i, j)
             if bi < 0:
                 break
             arc += cell * (_SQ2 if bi != i and bj != j else 1.0)
