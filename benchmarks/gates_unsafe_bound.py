@@ -43,9 +43,9 @@ A_MAX = 2.6  # [m/s^2] Table A1
 K, DT = 1000, 0.1  # paper Sec. 5.1: R_unsafe over steps 1 .. K-1
 
 
-def gaps(scn) -> tuple[list[tuple[float, float, int]], float, float]:
+def gaps(scn) -> list[tuple[float, float, int]]:
     """(x_gate [m], y of the channel wall face the gap lies against [m], side +1 top / -1 bottom)
-    for each gate, and the lower / upper channel wall faces [m]."""
+    for each gate, sorted along x."""
     boxes = [(o.min, o.max) for o in scn.obstacles if isinstance(o, Box)]
     span = max(b[1][0] - b[0][0] for b in boxes)
     walls = sorted((b for b in boxes if b[1][0] - b[0][0] >= 0.9 * span), key=lambda b: b[0][1])
@@ -56,7 +56,7 @@ def gaps(scn) -> tuple[list[tuple[float, float, int]], float, float]:
             continue
         top = bmin[1] <= lo + 1e-9  # hangs from the lower wall: the gap is at the top
         out.append((0.5 * (bmin[0] + bmax[0]), hi if top else lo, 1 if top else -1))
-    return sorted(out), lo, hi
+    return sorted(out)
 
 
 def _arc_line(p, h, turns, ds):
@@ -98,7 +98,7 @@ def s_curve(p0, p1, radius, ds):
 def convoy_path(scn, c: float, half: float, radius: float, ds: float = 0.01) -> np.ndarray:
     """Open bay -> a horizontal crossing of every gap at clearance ``c`` from the channel wall
     (``half`` m either side of the gate's centre) -> the goal, joined by S-curves; (M, 2) [m]."""
-    g, _, _ = gaps(scn)
+    g = gaps(scn)
     x0 = float(np.mean([scn.swarm.spawn[0], scn.swarm.spawn[2]]))
     pts, prev, _ = _arc_line((x0 - 30.0, 0.0), 0.0, [(0.0, 30.0)], ds)
     for xg, face, side in g:

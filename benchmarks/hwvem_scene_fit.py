@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import inspect
 import itertools
 import json
 import sys
@@ -27,12 +28,13 @@ from pathlib import Path
 
 from swarmnav.experiments import load_experiment, run_experiment
 from swarmnav.experiments.report import paper_results
+from swarmnav.world.generators import hwvem_mission_family
 
 BASELINES = ("VEM-A", "IVEM-A", "WVEM")
 SIZES = (5, 20, 50)
 
-# The family is swarmnav.world.generators.hwvem_mission_family; its defaults are the v1 scene.
-DEFAULTS = {"tiny_offset": 1.45, "rect_offset": 1.3, "passage_width": 2.4, "turn_scale": 1.0}
+# The family's free numbers and their defaults (the v1 scene), read off the generator itself.
+DEFAULTS = {k: float(v.default) for k, v in inspect.signature(hwvem_mission_family).parameters.items() if k != "n"}
 
 
 def scene_spec(p: dict[str, float]) -> str:

@@ -61,7 +61,7 @@ from swarmnav.methods.hes.hierarchy import (
     split_members,
 )
 from swarmnav.methods.hes.params import HesParams
-from swarmnav.methods.hes.passage import passage_dsafe
+from swarmnav.methods.hes.passage import passage_dsafe, throat_dsafe
 from swarmnav.methods.hes.plan import clearance, cost_to_go, descend, lookahead, mark_hits, nearest_reachable
 from swarmnav.params import build
 from swarmnav.sensing import PreparedGeometry
@@ -118,7 +118,8 @@ class SubSwarm:
     prog_step: int | None = None  # ... and the step it last improved by plan_progress
     planned: bool = False  # stall planner: engaged (the route follows the planned path)
     path: np.ndarray | None = None  # stall planner: (K, 2) planned path [m] ...
-    path_clr: np.ndarray | None = None  # ... and its clearance from the returns seen [m]
+    path_clr: np.ndarray | None = None  # ... its clearance from the returns seen [m] ...
+    path_arc: np.ndarray | None = None  # ... and its arc length from its start [m]
     path_step: int = _NEVER  # stall planner: step of the last plan
     tail_d: float = math.inf  # stall planner, encircle mode: farthest member's goal distance [m] ...
     tail_step: int | None = None  # ... and the step it last improved by plan_progress
@@ -184,6 +185,11 @@ class Hes:
             self._map0 = lo
             self._occ = np.zeros((int(shape[1]), int(shape[0])), dtype=np.bool_)
             self._ctg_step = _NEVER
+            # the field is read at the agents' cells (and descended from there) until its next update:
+            # Dijkstra stops once it is exact for every cell an agent can reach before then, plus the
+            # look-ahead and the start search of a blocked centroid (d_safe), at the dearest cost per metre
+            c_max = 1.0 + p.plan_weight * max(p.d_safe - p.plan_clear, 0.0) / p.plan_clear
+            self._slack = c_max * (p.v_cap_frac * p.v_s * p.plan_every + p.plan_look + p.d_safe)
 
     def summary(self) -> dict[str, float]:
         out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}
@@ -203,7 +209,7 @@ class Hes:
         x = np.ascontiguousarray(obs.positions, dtype=np.float64)
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         ring = self._sense(x)
-        self._k, self._x = k, x
+        self._k = k
         if p.trail_follow and k % _TRAIL_EVERY == 0:
             if self._trail_n == _TRAIL_LEN:
                 self._trail[:-1] = self._trail[1:]
@@ -532,12 +538,10 @@ class Hes:
             sub.planned = True
             self.stats["plan_engaged"] += 1
         if sub.path is None or (k - sub.path_step) * p.dt >= p.plan_every - 1e-9:
-            self._replan(sub, k, cent)
+            self._replan(sub, k, x, cent)
         if sub.path is None or len(sub.path) < 2:
             return None
-        path, clr = sub.path, sub.path_clr
-        seg = np.hypot(*np.diff(path, axis=0).T)
-        arc = np.concatenate([[0.0], np.cumsum(seg)])
+        path, clr, arc = sub.path, sub.path_clr, sub.path_arc
         i0 = int(np.argmin(np.sum((path - cent) ** 2, axis=1)))
         ie = min(int(np.searchsorted(arc, arc[i0] + p.plan_look + p.lead)), len(path) - 1)
         ib = i0 + int(np.argmin(clr[i0:ie + 1]))
@@ -564,31 +568,27 @@ class Hes:
             sub.planned = True
             self.stats["plan_engaged"] += 1
         if sub.planned:
-            self._field(k)
+            self._field(k, x)
 
-    def _field(self, k: int, now: bool = False) -> None:
+    def _field(self, k: int, x: np.ndarray, now: bool = False) -> None:
         """Stall planner: the clearance and cost-to-go fields of the map, recomputed at most once a
-        step, and otherwise every ``plan_every`` s (or at once with ``now``)."""
+        step, and otherwise every ``plan_every`` s (or at once with ``now``); exact wherever the
+        agents at ``x`` can read it before the next update (``self._slack``)."""
         p = self.params
         if self._ctg_step == k or (not now and (k - self._ctg_step) * p.dt < p.plan_every - 1e-9):
             return
         self._clr = clearance(self._occ, p.plan_cell)
         g = np.floor((self.goal - self._map0) / p.plan_cell).astype(int)
-        # the field is read at the agents' cells (and descended from there) until the next update:
-        # Dijkstra stops once it is exact for every cell an agent can reach before then, plus the
-        # look-ahead and the start search of a blocked centroid (d_safe), at the dearest cost per metre
-        need = np.floor((self._x - self._map0) / p.plan_cell).astype(np.int64)[:, ::-1].copy()
-        c_max = 1.0 + p.plan_weight * max(p.d_safe - p.plan_clear, 0.0) / p.plan_clear
-        slack = c_max * (p.v_cap_frac * p.v_s * p.plan_every + p.plan_look + p.d_safe)
+        need = np.floor((x - self._map0) / p.plan_cell).astype(np.int64)[:, ::-1].copy()
         self._ctg = cost_to_go(self._clr, int(g[1]), int(g[0]), p.plan_cell, p.plan_clear, p.d_safe,
-                               p.plan_weight, need, slack)
+                               p.plan_weight, need, self._slack)
         self._ctg_step = k
 
-    def _replan(self, sub: SubSwarm, k: int, start: np.ndarray) -> None:
-        """Stall planner: the path from ``start`` to the goal on the map of returns (plan.py); the
-        cost-to-go field is computed once per step for all sub-swarms."""
+    def _replan(self, sub: SubSwarm, k: int, x: np.ndarray, start: np.ndarray) -> None:
+        """Stall planner: the path from ``start`` to the goal on the map of returns (plan.py), its
+        clearance and arc length; the cost-to-go field is computed once per step for all sub-swarms."""
         p = self.params
-        self._field(k, now=True)
+        self._field(k, x, now=True)
         sub.path_step = k
         ny, nx = self._ctg.shape
         c = np.floor((start - self._map0) / p.plan_cell).astype(int)
@@ -602,6 +602,7 @@ class Hes:
         cells = descend(self._ctg, si, sj, nx * ny)
         sub.path = self._map0 + (cells[:, ::-1] + 0.5) * p.plan_cell
         sub.path_clr = self._clr[cells[:, 0], cells[:, 1]]
+        sub.path_arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(sub.path, axis=0).T))])
 
     def _choose_route(self, sub: SubSwarm, rep: Report, x: np.ndarray, k: int) -> Corridor | None:
         """The corridor this sub-swarm follows: the direct route if the goal is in clear view,
@@ -950,7 +951,7 @@ class Hes:
         ``passage_len``) takes as slot and centering target the point ``plan_look`` down that
         field, with its blocked couplings off; in a narrow place it uses the passage-mode safety
         distance min(d_safe - passage_relief, half-width - passage_margin) of eq. (36). Modifies
-        ``slot``, ``wp``, ``sig`` and ``dsafe`` in place.
+        ``slot``, ``wp``, ``sig`` and ``dsafe`` (the array ``last_dsafe`` holds) in place.
 
         Why: a formation slot, the subleader and the centroid pull a member straight at them,
         through the discs between; in a forest the members that had not followed the head
@@ -975,8 +976,8 @@ class Hes:
         sig[i, F.SIG_CENT] = np.where(b[use, F.SIG_CENT], 0.0, sig[i, F.SIG_CENT])
         if p.passage_mode:
             j = idx[use & narrow]
-            eff = np.minimum(p.d_safe - p.passage_relief, half[use & narrow] - p.passage_margin)
-            dsafe[j] = np.minimum(dsafe[j], np.maximum(eff, 0.0))
+            dsafe[j] = np.minimum(dsafe[j], throat_dsafe(half[use & narrow], p.d_safe, p.passage_margin,
+                                                         p.passage_relief))
             # and, like a queued member lined up with a gate (passage mode item 6), no push back
             # against its way: the LiDAR repulsion keeps its part across the way (wall barrier intact)
             u = pt[use & narrow] - x[j]
@@ -984,7 +985,6 @@ class Hes:
             ok = un > 1e-6
             self._tube_normal[j[ok]] = u[ok] / un[ok, None]
             self._pushfree[j[ok]] = True
-        self.last_dsafe = dsafe
 
     def _follow_trail(self, x, slot, wp, sig, cent, sl_idx, routed) -> None:
         """Trail following (ours, ``trail_follow``): a member cut off from its sub-swarm -- the

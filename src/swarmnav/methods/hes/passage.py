@@ -25,6 +25,13 @@ from __future__ import annotations
 import numpy as np
 
 
+def throat_dsafe(half_width, d_safe: float, margin: float, relief: float = 0.0):
+    """d_safe_eff [m] in a throat of half-width ``half_width`` [m] (scalar or array):
+    min(d_safe - relief, max(w/2 - margin, 0)). Passage mode's tubes and the stall planner's
+    narrow places both use it."""
+    return np.minimum(d_safe - relief, np.maximum(np.asarray(half_width, dtype=float) - margin, 0.0))
+
+
 def passage_dsafe(x: np.ndarray, mid: np.ndarray, normal: np.ndarray, width: float, d_safe: float,
                   margin: float, half_len: float, reach: float, relief: float = 0.0) -> np.ndarray:
     """Per-agent safety distance [m] for agents at ``x`` (M, 2) following a throat.
@@ -44,5 +51,4 @@ def passage_dsafe(x: np.ndarray, mid: np.ndarray, normal: np.ndarray, width: flo
     along = rel @ normal
     across = np.abs(rel @ np.array([-normal[1], normal[0]]))
     inside = (np.abs(along) <= half_len) & (across <= 0.5 * width + reach)
-    eff = min(d_safe - relief, max(0.5 * width - margin, 0.0))
-    return np.where(inside, eff, d_safe)
+    return np.where(inside, throat_dsafe(0.5 * width, d_safe, margin, relief), d_safe)
