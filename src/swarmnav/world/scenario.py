@@ -17,7 +17,17 @@ from typing import Any
 import numpy as np
 
 from swarmnav.errors import ScenarioError
-from swarmnav.world.obstacles import Box, Circle, Geometry, Obstacle, Polygon, polygon_is_simple
+from swarmnav.world.obstacles import (
+    Box,
+    Circle,
+    Cylinder,
+    Geometry,
+    Obstacle,
+    Polygon,
+    Sphere,
+    polygon_is_simple,
+    slice_at,
+)
 
 #: Smallest distance [m] a spawned agent keeps from any obstacle (our choice: a UAV body of
 #: ~0.3 m radius plus margin; the papers spawn in open space and do not state a value).
@@ -28,7 +38,8 @@ DEFAULT_MIN_SPACING = 0.6
 
 @dataclass(frozen=True, slots=True)
 class Swarm:
-    """Swarm size and its uniform random spawn rectangle ``[xmin, ymin, xmax, ymax]`` [m].
+    """Swarm size and its uniform random spawn rectangle ``[xmin, ymin, xmax, ymax]`` [m]
+    (in a 3-D world the box ``[xmin, ymin, zmin, xmax, ymax, zmax]``).
 
     With ``density`` [1/m^2] set, agents spawn instead in the square of side
     ``sqrt(n / density)`` centred on the spawn rectangle, so resizing the swarm keeps its
@@ -36,15 +47,15 @@ class Swarm:
     """
 
     n: int
-    spawn: tuple[float, float, float, float]
+    spawn: tuple[float, ...]
     min_spacing: float = DEFAULT_MIN_SPACING
     clearance: float = DEFAULT_SPAWN_CLEARANCE
     density: float | None = None
 
     @property
-    def region(self) -> tuple[float, float, float, float]:
-        """The rectangle agents are drawn from [m]."""
-        if self.density is None:
+    def region(self) -> tuple[float, ...]:
+        """The rectangle (3-D: box) agents are drawn from [m]."""
+        if self.density is None or len(self.spawn) == 6:
             return self.spawn
         x0, y0, x1, y1 = self.spawn
         cx, cy, h = (x0 + x1) / 2, (y0 + y1) / 2, math.sqrt(self.n / self.density) / 2
@@ -57,9 +68,10 @@ class Scenario:
 
     Attributes:
         name: scene name.
-        bounds: drawing/validity extent ``(xmin, ymin, xmax, ymax)`` [m]; not an obstacle.
+        bounds: drawing/validity extent ``(xmin, ymin, xmax, ymax)`` [m], or
+            ``(xmin, ymin, zmin, xmax, ymax, zmax)`` in a 3-D world; not an obstacle.
         swarm: size and spawn region.
-        goal: goal position [m].
+        goal: goal position [m] (two or three numbers: the world's dimension).
         obstacles: the obstacles; walls are obstacles too.
         periodic: True for a periodic (toroidal) box; then ``bounds`` is the period cell.
         path: optional predetermined polyline [m] from start to goal (information UAV of the
@@ -69,22 +81,70 @@ class Scenario:
     """
 
     name: str
-    bounds: tuple[float, float, float, float]
+    bounds: tuple[float, ...]
     swarm: Swarm
-    goal: tuple[float, float]
+    goal: tuple[float, ...]
     obstacles: tuple[Obstacle, ...] = ()
     periodic: bool = False
-    path: tuple[tuple[float, float], ...] = ()
+    path: tuple[tuple[float, ...], ...] = ()
     description: str = ""
     source: str = "<dict>"
     geometry: Geometry = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "geometry", Geometry.from_obstacles(self.obstacles))
+        object.__setattr__(self, "geometry", Geometry.from_obstacles(self.obstacles, dim=len(self.goal)))
 
     @property
     def n(self) -> int:
         return self.swarm.n
+
+    @property
+    def dim(self) -> int:
+        """2 for a planar world, 3 for a 3-D one (the length of ``goal``)."""
+        return len(self.goal)
+
+    @property
+    def lower(self) -> np.ndarray:
+        """(dim,) lower corner of ``bounds`` [m]."""
+        return np.asarray(self.bounds[: self.dim], dtype=np.float64)
+
+    @property
+    def upper(self) -> np.ndarray:
+        """(dim,) upper corner of ``bounds`` [m]."""
+        return np.asarray(self.bounds[self.dim :], dtype=np.float64)
+
+    def default_altitude(self) -> float:
+        """The middle of the spawn box's z range [m] (3-D only): where planar methods fly."""
+        if self.dim != 3:
+            raise ScenarioError(f"{self.source}: a planar scene has no altitude")
+        return 0.5 * (self.swarm.spawn[2] + self.swarm.spawn[5])
+
+    def planar_slice(self, z: float) -> Scenario:
+        """The horizontal slice of a 3-D scene at altitude ``z`` [m], as a planar scene.
+
+        Obstacles become what the plane cuts from them (:func:`swarmnav.world.obstacles.slice_at`);
+        bounds, spawn, goal and path keep their x and y. Planar methods (HES, the Vicsek family)
+        fly 3-D scenes in this slice.
+        """
+        if self.dim != 3:
+            raise ScenarioError(f"{self.source}: planar_slice needs a 3-D scene")
+        z = float(z)
+        x0, y0, z0, x1, y1, z1 = self.bounds
+        if not (math.isfinite(z) and z0 <= z <= z1):
+            raise ScenarioError(f"{self.source}: z_fly = {z} m lies outside world.bounds z [{z0}, {z1}]")
+        sx0, sy0, _, sx1, sy1, _ = self.swarm.spawn
+        scn = Scenario(
+            name=f"{self.name}@z={z:g}",
+            bounds=(x0, y0, x1, y1),
+            swarm=replace(self.swarm, spawn=(sx0, sy0, sx1, sy1)),
+            goal=tuple(self.goal[:2]),
+            obstacles=slice_at(self.obstacles, z),
+            periodic=self.periodic,
+            path=tuple(tuple(p[:2]) for p in self.path),
+            description=f"{self.description} (horizontal slice at z = {z:g} m)".strip(),
+            source=f"{self.source}@z={z:g}",
+        )
+        return validate(scn)
 
     @property
     def goal_array(self) -> np.ndarray:
@@ -95,7 +155,7 @@ class Scenario:
         return validate(replace(self, swarm=replace(self.swarm, n=int(n))))
 
     def spawn_positions(self, rng: np.random.Generator) -> np.ndarray:
-        """Draw (N, 2) start positions [m], uniform in the spawn rectangle, rejecting points
+        """Draw (N, dim) start positions [m], uniform in the spawn region, rejecting points
         closer than ``swarm.clearance`` to an obstacle or ``swarm.min_spacing`` to an agent."""
         pos = _sample_spawn(self, rng)
         if pos is None:
@@ -134,11 +194,21 @@ _WORLD_KEYS = {"bounds", "periodic"}
 _SWARM_KEYS = {"n", "spawn", "min_spacing", "clearance", "density"}
 _GOAL_KEYS = {"position", "path"}
 _OBSTACLE_KEYS = {"box": {"type", "min", "max"}, "circle": {"type", "center", "radius"},
-                  "polygon": {"type", "points"}}
+                  "polygon": {"type", "points"}, "cylinder": {"type", "center", "radius", "z"},
+                  "sphere": {"type", "center", "radius"}}
+#: Obstacle types of each world dimension.
+_TYPES = {2: ("box", "circle", "polygon"), 3: ("box", "cylinder", "sphere", "polygon")}
+#: Largest swarm a scene may ask for (our choice: far above any experiment, small enough that
+#: a typo such as n = 10**12 fails at once instead of exhausting memory in the spawn sampler).
+MAX_AGENTS = 1_000_000
 
 
 def from_dict(data: dict, source: str = "<dict>") -> Scenario:
-    """Build and validate a :class:`Scenario` from a scene-file dictionary."""
+    """Build and validate a :class:`Scenario` from a scene-file dictionary.
+
+    The world's dimension is read from ``world.bounds`` (four numbers: planar, six: 3-D) or,
+    without bounds, from ``swarm.spawn``; every other coordinate must then have that dimension.
+    """
     ctx = _Ctx(source)
     if not isinstance(data, dict):
         raise ctx.err("", "a scene must be a table")
@@ -165,13 +235,20 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
         raise ctx.err("swarm.n", f"must be an integer, got {n!r}")
     if n < 1:
         raise ctx.err("swarm.n", f"must be >= 1, got {n}")
+    if n > MAX_AGENTS:
+        raise ctx.err("swarm.n", f"must be <= {MAX_AGENTS}, got {n}")
     if "spawn" not in swarm_t:
         raise ctx.err("swarm.spawn", "is required ([xmin, ymin, xmax, ymax])")
-    spawn = ctx.rect(swarm_t["spawn"], "swarm.spawn", allow_degenerate=True)
+    dim = ctx.dimension(world, swarm_t)
+    if periodic and dim == 3:
+        raise ctx.err("world.periodic", "is planar only (a 3-D world cannot be periodic)")
+    spawn = ctx.rect(swarm_t["spawn"], "swarm.spawn", dim, allow_degenerate=True)
     min_spacing = ctx.nonneg(swarm_t.get("min_spacing", DEFAULT_MIN_SPACING), "swarm.min_spacing")
     clearance = ctx.nonneg(swarm_t.get("clearance", DEFAULT_SPAWN_CLEARANCE), "swarm.clearance")
     density = None
     if "density" in swarm_t:
+        if dim == 3:
+            raise ctx.err("swarm.density", "is planar only (agents per m^2)")
         density = ctx.number(swarm_t["density"], "swarm.density")
         if density <= 0:
             raise ctx.err("swarm.density", f"must be > 0, got {density}")
@@ -179,22 +256,22 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     goal_t = ctx.table(data, "goal", required=True)
     ctx.keys(goal_t, _GOAL_KEYS, "goal")
     if "position" not in goal_t:
-        raise ctx.err("goal.position", "is required ([x, y])")
-    goal = ctx.point(goal_t["position"], "goal.position")
+        raise ctx.err("goal.position", "is required ([x, y])" if dim == 2 else "is required ([x, y, z])")
+    goal = ctx.point(goal_t["position"], "goal.position", dim)
     path: tuple = ()
     if "path" in goal_t:
         pts = goal_t["path"]
         if not isinstance(pts, list) or len(pts) < 2:
-            raise ctx.err("goal.path", "must be a list of at least two [x, y] points")
-        path = tuple(ctx.point(p, f"goal.path[{k}]") for k, p in enumerate(pts))
+            raise ctx.err("goal.path", f"must be a list of at least two {_POINT[dim]} points")
+        path = tuple(ctx.point(p, f"goal.path[{k}]", dim) for k, p in enumerate(pts))
 
     obstacles_raw = data.get("obstacles", [])
     if not isinstance(obstacles_raw, list):
         raise ctx.err("obstacles", "must be an array of tables ([[obstacles]])")
-    obstacles = tuple(ctx.obstacle(o, k) for k, o in enumerate(obstacles_raw))
+    obstacles = tuple(ctx.obstacle(o, k, dim) for k, o in enumerate(obstacles_raw))
 
     if "bounds" in world:
-        bounds = ctx.rect(world["bounds"], "world.bounds")
+        bounds = ctx.rect(world["bounds"], "world.bounds", dim)
     else:
         bounds = _default_bounds(spawn, goal, obstacles)
 
@@ -223,11 +300,13 @@ def validate(scn: Scenario) -> Scenario:
             raise ScenarioError(f"{src}: a periodic world cannot have obstacles")
         if not math.isclose(x1 - x0, y1 - y0):
             raise ScenarioError(f"{src}: world.bounds of a periodic world must be a square")
+    if scn.n > MAX_AGENTS:
+        raise ScenarioError(f"{src}: swarm.n must be <= {MAX_AGENTS}, got {scn.n}")
     geom = scn.geometry
     goal = scn.goal_array[None, :]
     if not geom.is_empty and bool(points_inside(geom, goal)[0]):
         raise ScenarioError(f"{src}: goal.position {list(scn.goal)} lies inside an obstacle")
-    if _sample_spawn(scn, np.random.default_rng(0)) is None:
+    if not _may_hold(scn) or _sample_spawn(scn, np.random.default_rng(0)) is None:
         raise ScenarioError(
             f"{src}: swarm.spawn {list(scn.swarm.spawn)} cannot hold n={scn.n} agents "
             f"{scn.swarm.min_spacing} m apart and {scn.swarm.clearance} m clear of obstacles"
@@ -235,17 +314,34 @@ def validate(scn: Scenario) -> Scenario:
     return scn
 
 
+def _may_hold(scn: Scenario) -> bool:
+    """A necessary condition for the spawn region to hold the swarm: balls of diameter
+    ``min_spacing`` around the agents are disjoint and lie in the region grown by half a
+    spacing, so their total volume cannot exceed that region's. Rejects a hopeless ``n`` at
+    once instead of after the sampler's rounds."""
+    s = scn.swarm.min_spacing
+    if s <= 0:
+        return True
+    d = scn.dim
+    region = np.asarray(scn.swarm.region, dtype=float)
+    extent = np.prod(region[d:] - region[:d] + s)
+    ball = math.pi * (s / 2) ** 2 if d == 2 else 4.0 / 3.0 * math.pi * (s / 2) ** 3
+    return scn.n * ball <= extent
+
+
 def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60) -> np.ndarray | None:
     """Rejection sampling in batches (vectorised); None if the region cannot hold the swarm."""
     from swarmnav.sensing import signed_distance
 
-    x0, y0, x1, y1 = scn.swarm.region
+    region = scn.swarm.region
+    d = scn.dim
     n, spacing, clear = scn.n, scn.swarm.min_spacing, scn.swarm.clearance
     geom = scn.geometry
-    kept = np.zeros((0, 2))
+    kept = np.zeros((0, d))
     batch = max(64, 4 * n)
     for _ in range(max_rounds):
-        cand = np.column_stack([rng.uniform(x0, x1, batch), rng.uniform(y0, y1, batch)])
+        # one uniform draw per axis, x then y (then z): the planar draw order is unchanged
+        cand = np.column_stack([rng.uniform(region[a], region[d + a], batch) for a in range(d)])
         if not geom.is_empty:
             cand = cand[signed_distance(geom, cand) >= clear]
         for p in cand:  # sequential acceptance keeps the spacing rule exact; n is small here
@@ -258,14 +354,21 @@ def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60)
     return None
 
 
-def _default_bounds(spawn, goal, obstacles, pad: float = 2.0) -> tuple[float, float, float, float]:
-    pts = [np.array(spawn[:2]), np.array(spawn[2:]), np.array(goal)]
-    g = Geometry.from_obstacles(obstacles)
+def _default_bounds(spawn, goal, obstacles, pad: float = 2.0) -> tuple[float, ...]:
+    d = len(goal)
+    pts = [np.array(spawn[:d]), np.array(spawn[d:]), np.array(goal)]
+    g = Geometry.from_obstacles(obstacles, dim=d)
     if len(g.bbox_lo):
         pts += [g.bbox_lo.min(axis=0), g.bbox_hi.max(axis=0)]
     allp = np.vstack(pts)
     lo, hi = allp.min(axis=0) - pad, allp.max(axis=0) + pad
-    return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+    return tuple(float(c) for c in lo) + tuple(float(c) for c in hi)
+
+
+_POINT = {2: "[x, y]", 3: "[x, y, z]"}
+_RECT = {2: "[xmin, ymin, xmax, ymax]", 3: "[xmin, ymin, zmin, xmax, ymax, zmax]"}
+_WORLD = {2: "the world is planar (world.bounds has four numbers)",
+          3: "the world is 3-D (world.bounds has six numbers)"}
 
 
 class _Ctx:
@@ -294,6 +397,13 @@ class _Ctx:
             raise self.err(key, "must be a table")
         return t
 
+    def dimension(self, world: dict, swarm: dict) -> int:
+        """2 or 3: the length of ``world.bounds`` (4 or 6), else of ``swarm.spawn``."""
+        key, v = ("world.bounds", world["bounds"]) if "bounds" in world else ("swarm.spawn", swarm["spawn"])
+        if isinstance(v, list) and len(v) in (4, 6):
+            return 2 if len(v) == 4 else 3
+        raise self.err(key, f"must be {_RECT[2]} (planar) or {_RECT[3]} (3-D), got {v!r}")
+
     def number(self, v: Any, key: str) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise self.err(key, f"must be a number, got {v!r}")
@@ -307,48 +417,77 @@ class _Ctx:
             raise self.err(key, f"must be >= 0, got {x}")
         return x
 
-    def point(self, v: Any, key: str) -> tuple[float, float]:
+    def positive(self, v: Any, key: str) -> float:
+        x = self.number(v, key)
+        if x <= 0:
+            raise self.err(key, f"must be > 0, got {x}")
+        return x
+
+    def point(self, v: Any, key: str, dim: int = 2) -> tuple[float, ...]:
+        if not isinstance(v, list) or len(v) != dim:
+            if isinstance(v, list) and len(v) in (2, 3):
+                raise self.err(key, f"must be {_POINT[dim]} because {_WORLD[dim]}, got {v!r}")
+            raise self.err(key, f"must be {_POINT[dim]}, got {v!r}")
+        return tuple(self.number(c, key) for c in v)
+
+    def rect(self, v: Any, key: str, dim: int = 2, allow_degenerate: bool = False) -> tuple[float, ...]:
+        if not isinstance(v, list) or len(v) != 2 * dim:
+            if isinstance(v, list) and len(v) in (4, 6):
+                raise self.err(key, f"must be {_RECT[dim]} because {_WORLD[dim]}, got {v!r}")
+            raise self.err(key, f"must be {_RECT[dim]}, got {v!r}")
+        c = tuple(self.number(x, key) for x in v)
+        lo, hi = c[:dim], c[dim:]
+        bad = any((b < a) if allow_degenerate else (b <= a) for a, b in zip(lo, hi))
+        if bad:
+            axes = "xmax > xmin and ymax > ymin" + (" and zmax > zmin" if dim == 3 else "")
+            raise self.err(key, f"must have {axes}, got {v!r}")
+        return c
+
+    def zrange(self, v: Any, key: str) -> tuple[float, float]:
         if not isinstance(v, list) or len(v) != 2:
-            raise self.err(key, f"must be [x, y], got {v!r}")
-        return (self.number(v[0], key), self.number(v[1], key))
+            raise self.err(key, f"must be [z0, z1], got {v!r}")
+        z0, z1 = self.number(v[0], key), self.number(v[1], key)
+        if z1 <= z0:
+            raise self.err(key, f"must have z1 > z0, got {v!r}")
+        return (z0, z1)
 
-    def rect(self, v: Any, key: str, allow_degenerate: bool = False) -> tuple[float, float, float, float]:
-        if not isinstance(v, list) or len(v) != 4:
-            raise self.err(key, f"must be [xmin, ymin, xmax, ymax], got {v!r}")
-        x0, y0, x1, y1 = (self.number(c, key) for c in v)
-        if (x1 < x0 or y1 < y0) if allow_degenerate else (x1 <= x0 or y1 <= y0):
-            raise self.err(key, f"must have xmax > xmin and ymax > ymin, got {v!r}")
-        return (x0, y0, x1, y1)
-
-    def obstacle(self, o: Any, k: int) -> Obstacle:
+    def obstacle(self, o: Any, k: int, dim: int = 2) -> Obstacle:
         key = f"obstacles[{k}]"
         if not isinstance(o, dict):
             raise self.err(key, "must be a table")
         kind = o.get("type")
-        if kind not in _OBSTACLE_KEYS:
-            raise self.err(f"{key}.type", f"unknown obstacle type {kind!r} (box, circle, polygon)")
-        self.keys(o, _OBSTACLE_KEYS[kind], key)
-        for req in _OBSTACLE_KEYS[kind]:
+        if not isinstance(kind, str) or kind not in _OBSTACLE_KEYS:
+            raise self.err(f"{key}.type", f"unknown obstacle type {kind!r} ({', '.join(_TYPES[dim])})")
+        if kind not in _TYPES[dim]:
+            hint = " (use cylinder)" if kind == "circle" else ""
+            raise self.err(f"{key}.type", f"{kind!r} is not an obstacle of this world: {_WORLD[dim]}; "
+                                          f"types here: {', '.join(_TYPES[dim])}{hint}")
+        allowed = _OBSTACLE_KEYS[kind] | ({"z"} if kind == "polygon" and dim == 3 else set())
+        self.keys(o, allowed, key)
+        for req in sorted(allowed):
             if req not in o:
                 raise self.err(f"{key}.{req}", "is required")
         if kind == "box":
-            lo, hi = self.point(o["min"], f"{key}.min"), self.point(o["max"], f"{key}.max")
-            if hi[0] <= lo[0] or hi[1] <= lo[1]:
-                raise self.err(key, f"box needs max > min in x and y (size must be positive), got min={list(lo)} max={list(hi)}")
+            lo, hi = self.point(o["min"], f"{key}.min", dim), self.point(o["max"], f"{key}.max", dim)
+            if any(b <= a for a, b in zip(lo, hi)):
+                axes = "x and y" if dim == 2 else "x, y and z"
+                raise self.err(key, f"box needs max > min in {axes} (size must be positive), got min={list(lo)} max={list(hi)}")
             return Box(lo, hi)
-        if kind == "circle":
-            c = self.point(o["center"], f"{key}.center")
-            r = self.number(o["radius"], f"{key}.radius")
-            if r <= 0:
-                raise self.err(f"{key}.radius", f"must be > 0, got {r}")
-            return Circle(c, r)
+        if kind in ("circle", "cylinder", "sphere"):
+            c = self.point(o["center"], f"{key}.center", 3 if kind == "sphere" else 2)
+            r = self.positive(o["radius"], f"{key}.radius")
+            if kind == "circle":
+                return Circle(c, r)
+            if kind == "sphere":
+                return Sphere(c, r)
+            return Cylinder(c, r, self.zrange(o["z"], f"{key}.z"))
         pts = o["points"]
         if not isinstance(pts, list) or len(pts) < 3:
             raise self.err(f"{key}.points", "needs at least 3 [x, y] vertices")
-        poly = tuple(self.point(p, f"{key}.points[{j}]") for j, p in enumerate(pts))
+        poly = tuple(self.point(p, f"{key}.points[{j}]", 2) for j, p in enumerate(pts))
         if not polygon_is_simple(np.asarray(poly)):
             raise self.err(f"{key}.points", "must form a simple polygon (no self-intersection, non-zero area)")
-        return Polygon(poly)
+        return Polygon(poly, self.zrange(o["z"], f"{key}.z") if dim == 3 else None)
 
 
 # --------------------------------------------------------------------------- loading
