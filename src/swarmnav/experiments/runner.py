@@ -57,12 +57,15 @@ def plan(exp: Experiment) -> list[Job]:
     """
     from swarmnav.methods import registry
     from swarmnav.params import as_dict
+    from swarmnav.sim.rollout import RUN_OPTIONS
     from swarmnav.world.scenario import load_scenario
 
     jobs = []
     for v in exp.variants:
         try:
-            params = as_dict(registry.make(v.method, **v.params).params)
+            method_params = {k: x for k, x in v.params.items() if k not in RUN_OPTIONS}
+            params = as_dict(registry.make(v.method, **method_params).params)
+            params.update({k: v.params[k] for k in RUN_OPTIONS if k in v.params})
             load_scenario(v.scenario.replace("{seed}", str(exp.seeds[0])), n=v.n)
         except SwarmnavError as e:
             raise ConfigError(f"{exp.name} variant '{v.name}': {e}") from None

@@ -212,7 +212,9 @@ def steps_for(method: str, params: dict[str, Any], horizon: float) -> int:
 
     if not horizon > 0:
         raise ConfigError(f"horizon must be > 0 s, got {horizon}")
-    dt = float(registry.make(method, **params).dt)
+    from swarmnav.sim.rollout import RUN_OPTIONS
+
+    dt = float(registry.make(method, **{k: v for k, v in params.items() if k not in RUN_OPTIONS}).dt)
     return max(1, int(round(horizon / dt)))
 
 

@@ -30,8 +30,8 @@ class Observation:
 
     step: int
     time: float  # [s]
-    positions: np.ndarray  # (N, 2) [m]
-    velocities: np.ndarray  # (N, 2) [m/s]
+    positions: np.ndarray  # (N, d) [m], d = the world's dimension
+    velocities: np.ndarray  # (N, d) [m/s]
 
 
 class Dynamics(Protocol):

@@ -60,9 +60,9 @@ def flight_metrics(
     """Table II metrics of one run (see the module docstring).
 
     Args:
-        positions, velocities: (K + 1, N, 2) [m], [m/s].
+        positions, velocities: (K + 1, N, d) [m], [m/s], d = 2 or 3.
         clearance: (K + 1, N) signed distance to the nearest obstacle [m] (+inf: none).
-        goal: (2,) goal [m]; dt: step of the recorded states [s].
+        goal: (d,) goal [m]; dt: step of the recorded states [s].
         min_pair: the smallest robot-robot distance of the run [m] if already known (the rollout
             passes navigation_metrics' ``min_inter_agent_distance``: one pass over the run, not two).
     """
@@ -76,7 +76,7 @@ def flight_metrics(
     cum = np.vstack([np.zeros((1, n)), np.cumsum(steps, axis=0)])
     L = cum[arrival, np.arange(n)]
     T = arrival * dt
-    jerk = np.diff(positions, n=3, axis=0) / dt**3 if K >= 3 else np.zeros((0, n, 2))
+    jerk = np.diff(positions, n=3, axis=0) / dt**3 if K >= 3 else np.zeros((0, n, positions.shape[2]))
     j2 = np.einsum("knd,knd->kn", jerk, jerk) * dt
     cj = np.vstack([np.zeros((1, n)), np.cumsum(j2, axis=0)])
     E = cj[np.clip(arrival - 2, 0, len(j2)), np.arange(n)]  # jerk samples 0 .. a_i - 3

@@ -36,10 +36,10 @@ def navigation_metrics(
     """All scalar run metrics.
 
     Args:
-        positions: (K + 1, N, 2) positions [m].
+        positions: (K + 1, N, d) positions [m], d = 2 or 3.
         clearance: (K + 1, N) signed distance of every agent to the nearest obstacle [m]
             (+inf in an obstacle-free world).
-        goal: (2,) goal position [m].
+        goal: (d,) goal position [m].
         n_subswarms: (K + 1,) sub-swarm count per step (None: one swarm throughout).
         n_events: number of structural (split / merge) events.
     """

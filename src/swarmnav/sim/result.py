@@ -20,8 +20,8 @@ class RunResult:
     Attributes:
         config: what reproduces the run: version, method, params, scene (as a dict), seed,
             steps, dt.
-        positions: (K + 1, N, 2) [m].
-        velocities: (K + 1, N, 2) [m/s].
+        positions: (K + 1, N, d) [m], d = the scene's dimension (2 or 3).
+        velocities: (K + 1, N, d) [m/s].
         clearance: (K + 1, N) signed distance to the nearest obstacle [m] (+inf: none).
         labels: (K + 1, N) sub-swarm id of each agent.
         events: structural events, dicts with ``step``, ``action``, ``source``, ``reason``.

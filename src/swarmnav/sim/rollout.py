@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav._version import __version__
-from swarmnav.errors import ConfigError
+from swarmnav.errors import ConfigError, ScenarioError
 from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
 from swarmnav.metrics.flight import flight_metrics
@@ -19,6 +19,11 @@ from swarmnav.sim.result import RunResult
 from swarmnav.world.scenario import Scenario, load_scenario
 
 
+#: Options of the run itself, accepted by :func:`run` beside the method's parameters (and by
+#: ``--set`` on the command line and in experiment specs).
+RUN_OPTIONS = ("z_fly",)
+
+
 def run(
     method: str | Method,
     scenario: str | Scenario,
@@ -26,9 +31,16 @@ def run(
     seed: int,
     steps: int,
     progress: bool | Any = False,
+    z_fly: float | str | None = None,
     **params: Any,
 ) -> RunResult:
     """Simulate ``method`` on ``scenario`` for ``steps`` steps from a seeded start.
+
+    Positions, velocities and commands are (N, d) arrays, d the scene's dimension. A planar
+    method (registered with ``dims=(2,)``: HES, the Vicsek family) keeps its paper's plane on
+    a 3-D scene: it flies the scene's horizontal slice at altitude ``z_fly`` (spawned, sensing
+    and acting in that slice), while the run is recorded in 3-D at that altitude and its
+    clearance and metrics are measured against the 3-D world; ``config["plane"]`` says so.
 
     Args:
         method: a registered method name or a Method instance.
@@ -37,6 +49,8 @@ def run(
         steps: number of integration steps K (K + 1 states are recorded); at most K if the
             method ends the run early with ``info["done"] = True``.
         progress: True for a tqdm bar, or a callable ``f(done_steps)``.
+        z_fly: altitude [m] of a planar method on a 3-D scene (default: the middle of the
+            spawn box's z range); an error anywhere else.
         **params: method parameters (unknown names raise ConfigError).
 
     The same (method, params, scene, seed, steps) always gives identical arrays.
@@ -47,31 +61,41 @@ def run(
         raise ConfigError(f"steps must be >= 1, got {steps}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
+    dims = registry.spec(method).dims if isinstance(method, str) else tuple(getattr(m, "dims", (2,)))
+    world, plane_z = _world_of(scn, dims, z_fly, m.name)
     rng = np.random.default_rng(seed)
-    pos = scn.spawn_positions(rng)
+    pos = world.spawn_positions(rng)
     vel = np.zeros_like(pos)
-    m.reset(scn, pos.copy(), vel.copy(), rng)
+    m.reset(world, pos.copy(), vel.copy(), rng)
     dt = float(m.dt)
     N = scn.n
-    P = np.empty((steps + 1, N, 2))
-    V = np.empty((steps + 1, N, 2))
+    d = scn.dim
+    P = np.empty((steps + 1, N, d))
+    V = np.empty((steps + 1, N, d))
     C = np.empty((steps + 1, N))
     lab = np.zeros((steps + 1, N), dtype=np.int32)
     geom = scn.geometry
     no_obstacles = geom.is_empty
     clear = (lambda x: np.full(len(x), np.inf)) if no_obstacles else (lambda x: signed_distance(geom, x))
-    P[0], V[0], C[0] = pos, vel, clear(pos)
+    if plane_z is None:
+        lift = _identity
+    else:  # the slice's (N, 2) state at altitude plane_z; velocity has no vertical part
+        lift = lambda x, z=plane_z: np.column_stack([x, np.full(len(x), z)])  # noqa: E731
+        vlift = lambda x: np.column_stack([x, np.zeros(len(x))])  # noqa: E731
+        clear = (lambda x, c=clear: c(lift(x)))
+    vrec = lift if plane_z is None else vlift
+    P[0], V[0], C[0] = lift(pos), vrec(vel), clear(pos)
     events: list[dict] = []
     bar = _progress(progress, steps)
     t0 = time.perf_counter()
-    lo = np.array(scn.bounds[:2])
-    period = scn.bounds[2] - scn.bounds[0] if scn.periodic else None
+    lo = np.array(world.bounds[:2])
+    period = world.bounds[2] - world.bounds[0] if world.periodic else None
     for k in range(steps):
         cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
         if period is not None:  # the world is a torus whatever the method's dynamics
             pos = lo + np.mod(pos - lo, period)
-        P[k + 1], V[k + 1], C[k + 1] = pos, vel, clear(pos)
+        P[k + 1], V[k + 1], C[k + 1] = lift(pos), vrec(vel), clear(pos)
         labels = info.get("labels")
         lab[k + 1] = lab[k] if labels is None else labels
         for ev in info.get("events", ()):
@@ -94,6 +118,8 @@ def run(
             "seed": int(seed),
             "steps": int(steps),
             "dt": dt,
+            **({"plane": {"z_fly": plane_z, "reason": f"{m.name} is planar: it flew the scene's "
+                          f"horizontal slice at z = {plane_z:g} m"}} if plane_z is not None else {}),
         },
         positions=P, velocities=V, clearance=C, labels=lab, events=events, wall_time=wall,
     )
@@ -114,6 +140,32 @@ def run(
     if callable(artifacts):
         result.artifacts = dict(artifacts())
     return result
+
+
+def _identity(x: np.ndarray) -> np.ndarray:
+    return x
+
+
+def _world_of(scn: Scenario, dims: tuple[int, ...], z_fly: Any, name: str) -> tuple[Scenario, float | None]:
+    """The scene the method flies and the altitude of its plane (None: the scene itself)."""
+    if scn.dim in dims:
+        if z_fly is not None:
+            raise ConfigError(f"z_fly applies only to a planar method on a 3-D scene ({name} flies "
+                              f"this {scn.dim}-D scene as it is)")
+        return scn, None
+    if scn.dim == 2:
+        raise ConfigError(f"{name} flies 3-D scenes only; {scn.name} is planar")
+    if z_fly is None:
+        z = scn.default_altitude()
+    else:
+        try:
+            z = float(z_fly)
+        except (TypeError, ValueError):
+            raise ConfigError(f"z_fly must be a number [m], got {z_fly!r}") from None
+    try:
+        return scn.planar_slice(z), z
+    except ScenarioError as e:
+        raise ConfigError(str(e)) from None
 
 
 def _progress(progress, steps):
