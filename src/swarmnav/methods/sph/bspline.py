@@ -4,7 +4,8 @@ A trajectory is ``K + 1`` control points ``C_0 .. C_K`` (rows of a (K + 1, D) ar
 span ``dt_knot`` [s] (``beta = 1 / dt_knot`` in eq. 12). The first and last three control points
 are fixed by the boundary states (eq. 12); the interior ones ``C_3 .. C_{K-3}`` are optimised
 with L-BFGS (compiled) on ``lambda_s J_s + lambda_c J_c + lambda_f J_f`` (eq. 8), every term with its
-analytic gradient. Everything is vectorised over control points and works in any dimension D.
+analytic gradient. Everything works in any dimension D; the compiled cost reads a 2-D ESDF
+(bilinear) or a 3-D one (trilinear), chosen by the dimension of the field's value array.
 """
 
 from __future__ import annotations
@@ -162,11 +163,12 @@ def optimize(
     w: SplineCosts,
     max_iter: int = 200,
 ) -> SplinePlan:
-    """Optimise the interior control points of a 2-D spline between two boundary states.
+    """Optimise the interior control points of a D-dimensional spline (D = 2 or 3, the ESDF's)
+    between two boundary states.
 
     Args:
         start, end: ``(q, v, a)`` boundary states (eq. 12).
-        guide: (M, 2) initial interior control points ``C_3 .. C_{K-3}`` (the grid-search
+        guide: (M, D) initial interior control points ``C_3 .. C_{K-3}`` (the grid-search
             path resampled at the control-point spacing); M may be 0.
         dt_knot: knot span [s].
         esdf: the distance field of eq. (10).
@@ -182,15 +184,58 @@ def optimize(
     if len(guide) == 0:
         return SplinePlan(ctrl, dt_knot, 0)
     nit = _lbfgs_spline(ctrl, dt_knot, w.lambda_s, w.lambda_c, w.lambda_f, w.d_thr, w.v_max, w.a_max,
-                        np.ascontiguousarray(esdf.values), float(esdf.origin[0]), float(esdf.origin[1]),
+                        np.ascontiguousarray(esdf.values), np.asarray(esdf.origin, dtype=np.float64),
                         float(esdf.resolution), int(max_iter))
     return SplinePlan(ctrl, dt_knot, int(nit))
 
 
 @njit(cache=True)
-def _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, ox, oy, res, pts, dist, dgrad, grad):
+def _esdf_query3(values, ox, oy, oz, res, points, out_v, out_g):
+    """Trilinear interpolation of a 3-D ESDF and its analytic gradient, clamped to the grid: node
+    ``values[iz, iy, ix]`` sits at ``origin + res * (ix, iy, iz)`` (the convention of
+    ``Esdf.query`` in 3-D). Cells with a non-finite corner give the smallest corner value and a
+    zero gradient, as the planar kernel."""
+    nz, ny, nx = values.shape
+    inv = 1.0 / res
+    for m in range(points.shape[0]):
+        fx = min(max((points[m, 0] - ox) * inv, 0.0), nx - 1.0)
+        fy = min(max((points[m, 1] - oy) * inv, 0.0), ny - 1.0)
+        fz = min(max((points[m, 2] - oz) * inv, 0.0), nz - 1.0)
+        ix = min(int(math.floor(fx)), nx - 2)
+        iy = min(int(math.floor(fy)), ny - 2)
+        iz = min(int(math.floor(fz)), nz - 2)
+        u, v, w = fx - ix, fy - iy, fz - iz
+        c000, c100 = values[iz, iy, ix], values[iz, iy, ix + 1]
+        c010, c110 = values[iz, iy + 1, ix], values[iz, iy + 1, ix + 1]
+        c001, c101 = values[iz + 1, iy, ix], values[iz + 1, iy, ix + 1]
+        c011, c111 = values[iz + 1, iy + 1, ix], values[iz + 1, iy + 1, ix + 1]
+        lo = min(min(min(c000, c100), min(c010, c110)), min(min(c001, c101), min(c011, c111)))
+        if not math.isfinite(c000 + c100 + c010 + c110 + c001 + c101 + c011 + c111):
+            out_v[m] = lo
+            out_g[m, 0] = 0.0
+            out_g[m, 1] = 0.0
+            out_g[m, 2] = 0.0
+            continue
+        # along x first, then y, then z
+        c00 = c000 + u * (c100 - c000)
+        c10 = c010 + u * (c110 - c010)
+        c01 = c001 + u * (c101 - c001)
+        c11 = c011 + u * (c111 - c011)
+        c0 = c00 + v * (c10 - c00)
+        c1 = c01 + v * (c11 - c01)
+        out_v[m] = c0 + w * (c1 - c0)
+        gx0 = (1.0 - v) * (c100 - c000) + v * (c110 - c010)
+        gx1 = (1.0 - v) * (c101 - c001) + v * (c111 - c011)
+        out_g[m, 0] = ((1.0 - w) * gx0 + w * gx1) * inv
+        out_g[m, 1] = ((1.0 - w) * (c10 - c00) + w * (c11 - c01)) * inv
+        out_g[m, 2] = (c1 - c0) * inv
+
+
+@njit(cache=True)
+def _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origin, res, pts, dist, dgrad, grad):
     """Eq. (8) = lambda_s (9) + lambda_c (10) + lambda_f (11) and its gradient (into ``grad``),
-    the loop form of :func:`total_cost` for 2-D control points."""
+    the loop form of :func:`total_cost`; ``values`` is a (ny, nx) or (nz, ny, nx) ESDF whose node
+    0 sits at ``origin``."""
     n, dim = ctrl.shape
     grad[:, :] = 0.0
     js = 0.0
@@ -229,20 +274,23 @@ def _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, ox, o
     m = n - 6
     if m > 0:
         for k in range(m):
-            pts[k, 0] = ctrl[k + 3, 0]
-            pts[k, 1] = ctrl[k + 3, 1]
-        esdf_query_kernel(values, ox, oy, res, pts, dist, dgrad)
+            for d in range(dim):
+                pts[k, d] = ctrl[k + 3, d]
+        if values.ndim == 2:  # resolved at compile time: one specialisation per dimension
+            esdf_query_kernel(values, origin[0], origin[1], res, pts, dist, dgrad)
+        else:
+            _esdf_query3(values, origin[0], origin[1], origin[2], res, pts, dist, dgrad)
         for k in range(m):
             e = dist[k] - d_thr
             if e < 0.0 and math.isfinite(e):
                 jc += e * e
-                grad[k + 3, 0] += 2.0 * lam_c * e * dgrad[k, 0]
-                grad[k + 3, 1] += 2.0 * lam_c * e * dgrad[k, 1]
+                for d in range(dim):
+                    grad[k + 3, d] += 2.0 * lam_c * e * dgrad[k, d]
     return lam_s * js + lam_c * jc + lam_f * jf
 
 
 @njit(cache=True)
-def _lbfgs_spline(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, ox, oy, res, max_iter):
+def _lbfgs_spline(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origin, res, max_iter):
     """L-BFGS (Nocedal & Wright, Alg. 7.4/7.5) on the interior rows ``ctrl[3:-3]``, in place.
 
     Two-loop recursion over the last 10 curvature pairs with the ``s'y / y'y`` initial
@@ -262,14 +310,14 @@ def _lbfgs_spline(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, ox
     Y = np.zeros((mem, nv))
     rho = np.zeros(mem)
     alpha = np.zeros(mem)
-    pts = np.empty((m, 2))
+    pts = np.empty((m, dim))
     dist = np.empty(m)
-    dgrad = np.empty((m, 2))
+    dgrad = np.empty((m, dim))
     G = np.empty((n, dim))
     x = np.empty(nv)
     for k in range(nv):
         x[k] = ctrl[3 + k // dim, k % dim]
-    f = _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, ox, oy, res, pts, dist, dgrad, G)
+    f = _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origin, res, pts, dist, dgrad, G)
     g = np.empty(nv)
     for k in range(nv):
         g[k] = G[3 + k // dim, k % dim]
@@ -311,7 +359,7 @@ def _lbfgs_spline(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, ox
             for k in range(nv):
                 x_new[k] = x[k] - step * q[k]
                 ctrl[3 + k // dim, k % dim] = x_new[k]
-            f_new = _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, ox, oy, res,
+            f_new = _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origin, res,
                                pts, dist, dgrad, G)
             if f_new <= f + 1e-4 * step * slope:
                 accepted = True
