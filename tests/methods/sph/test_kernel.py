@@ -93,3 +93,41 @@ def test_environment_force_pushes_away_inside_the_threshold_only():
     grad = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 0.0]])  # ESDF gradient: away from the obstacle
     f = environment_force(np.array([0.2, 0.7, np.inf]), grad, k_env=10.0, d_thr=0.5)
     np.testing.assert_allclose(f, [[2 * 10 * 0.3, 0.0], [0.0, 0.0], [0.0, 0.0]])
+
+
+def test_paper_kernel_is_the_3d_normalised_cubic_spline_scaled_by_c():
+    """Eq. (4)'s c / (pi h^3) is the 3-D normalisation of the cubic spline: the kernel integrates
+    to c over space (numerical quadrature, relative error 1e-9), at any h. Over the plane the
+    same printed kernel integrates to 7 c / (10 h), not c (the 2-D normalisation is
+    10 / (7 pi h^2)); both are checked so a change of either normalisation is seen."""
+    from scipy.integrate import quad
+
+    for h in (0.5, 10.0):
+        w = lambda r: float(kernel_value(np.array([r]), h, C)[0])  # noqa: E731
+        vol = sum(quad(lambda r: 4 * math.pi * r * r * w(r), a, b, epsabs=0, epsrel=1e-12)[0]
+                  for a, b in ((0, h), (h, 2 * h)))
+        area = sum(quad(lambda r: 2 * math.pi * r * w(r), a, b, epsabs=0, epsrel=1e-12)[0]
+                   for a, b in ((0, h), (h, 2 * h)))
+        assert vol / C == pytest.approx(1.0, rel=1e-9)
+        assert area == pytest.approx(7 * C / (10 * h), rel=1e-9)
+
+
+def test_forces_in_3d_are_the_planar_forces_of_a_planar_swarm_and_rotate_with_it():
+    """Algorithm 1 is written once for (N, d): a swarm in the plane z = 1.3 gets the planar
+    forces with zero z component, and rotating a 3-D swarm rotates its forces."""
+    rng = np.random.default_rng(7)
+    x2, v2 = rng.uniform(-3, 3, (9, 2)), rng.normal(size=(9, 2))
+    i, j = np.triu_indices(9, 1)
+    kw = dict(h=H, c=C, m=1.0, k_den=1.0, k_rep=1.0, k_vis=1.5, rho0=1e6, gamma=7.0)
+    f2, rho2, _ = sph_forces(x2, v2, i, j, **kw)
+    x3 = np.column_stack([x2, np.full(9, 1.3)])
+    v3 = np.column_stack([v2, np.zeros(9)])
+    f3, rho3, _ = sph_forces(x3, v3, i, j, **kw)
+    np.testing.assert_allclose(f3[:, :2], f2, rtol=1e-12, atol=1e-12)
+    assert np.all(f3[:, 2] == 0.0)
+    np.testing.assert_allclose(rho3, rho2, rtol=1e-12)
+    x, v = rng.uniform(-3, 3, (9, 3)), rng.normal(size=(9, 3))
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    f, _, _ = sph_forces(x, v, i, j, **kw)
+    fr, _, _ = sph_forces(x @ q.T, v @ q.T, i, j, **kw)
+    np.testing.assert_allclose(fr, f @ q.T, rtol=1e-9, atol=1e-9)

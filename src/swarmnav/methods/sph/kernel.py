@@ -11,6 +11,13 @@ Two kernel evaluations are offered:
 
     grad_i W(q_ij) = c / (pi h^3) * f'(k) / h * q_ij / r,   q_ij = q_i - q_j.
 
+``1 / (pi h^3)`` is the three-dimensional normalisation of this cubic spline (Monaghan &
+Lattanzio 1985): over space the printed kernel integrates to exactly ``c``, so in 3-D eq. (4)
+is used as printed. Over the plane it integrates to ``7 c / (10 h)`` (the 2-D normalisation
+would be ``10 / (7 pi h^2)``); 2-D flights keep the printed form too. The normalisation is a
+constant factor on every W, and with ``rho << rho0`` line 8 reads
+``k_den sum grad W / sum W``, in which it cancels: it does not change a flight.
+
 ``"released"``: what the authors' C++ (``water_swarm/src/sph_zhang_3d.cpp``,
 ``SPHSystem::parallelDensityAndPressures``) computes. Its literals are integer divisions, so
 ``3/2 -> 1``, ``3/4 -> 0``, ``1/4 -> 0``, ``9/4 -> 2`` and ``-3/4 -> 0``; the normalisation is
