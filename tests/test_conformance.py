@@ -27,7 +27,11 @@ def test_method_on_scene(method, scene):
     a = swarmnav.run(method, scene, seed=7, steps=steps)
     b = swarmnav.run(method, scene, seed=7, steps=steps)
     n = a.config["scenario"]["swarm"]["n"]
-    assert a.positions.shape == (steps + 1, n, 2)
+    dim = len(a.config["scenario"]["goal"]["position"])
+    assert a.positions.shape == (steps + 1, n, dim)
+    if dim == 3 and 3 not in registry.spec(method).dims:  # a planar method keeps its altitude
+        z = a.config["plane"]["z_fly"]
+        assert np.all(a.positions[:, :, 2] == z) and np.all(a.velocities[:, :, 2] == 0.0)
     assert np.all(np.isfinite(a.positions)) and np.all(np.isfinite(a.velocities))
     np.testing.assert_array_equal(a.positions, b.positions)
     np.testing.assert_array_equal(a.labels, b.labels)
