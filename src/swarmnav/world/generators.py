@@ -1,4 +1,5 @@
-"""Scene generators: random 2-D forests (SPH paper, Table II), periodic boxes and the mission-scene family (HWVEM).
+"""Scene generators: random 2-D and 3-D forests (SPH paper, Table II and Fig. 3 (D)), periodic
+boxes and the mission-scene family (HWVEM).
 
 Generators are addressable by a spec string ``NAME:key=value,...`` so the CLI and experiment
 specs can name a generated scene exactly like a built-in one; the same spec and seed always
@@ -14,7 +15,7 @@ import numpy as np
 from scipy import ndimage
 
 from swarmnav.errors import ScenarioError
-from swarmnav.world.obstacles import Box, Circle
+from swarmnav.world.obstacles import Box, Circle, Cylinder
 from swarmnav.world.scenario import Scenario, Swarm, from_dict, validate
 
 
@@ -127,6 +128,131 @@ def _crossable(centers: np.ndarray, radii: np.ndarray, length: float, width: flo
     return any(lab in left for lab in labels[:, -1][labels[:, -1] > 0].tolist())
 
 
+def random_forest_3d(
+    density: float = 0.15,
+    seed: int = 0,
+    n: int = 30,
+    length: float = 26.0,
+    width: float = 18.0,
+    height: float = 6.0,
+    d_min: float = 0.6,
+    d_max: float = 1.5,
+    h_min: float = 0.1,
+    box_share: float = 0.0,
+    min_gap: float = 0.0,
+    altitude: float = 1.5,
+    max_tries: int = 200_000,
+) -> Scenario:
+    """A 3-D forest of vertical trunks filling the volume fraction ``density`` of a box (SPH Fig. 3 (D)).
+
+    The forest fills ``x in [0, length]``, ``y in [-width/2, width/2]``, ``z in [0, height]`` [m]
+    and ``density`` is the SPH paper's ``d_obs = V_obs / V_total`` of that box. The world is
+    closed (side walls, a ground slab under ``z = 0`` and a ceiling slab over ``z = height``) so
+    the swarm must cross the forest, not fly round or over it. ``n`` robots (the paper's
+    M = 30) spawn in a 4 m x 6 m x 1 m box centred at ``altitude`` [m], 3-7 m before the forest;
+    the goal lies 4 m beyond it at the same altitude.
+
+    Trunks follow the authors' released random map (mockamap, ``randomMapGenerate``) where the
+    paper is silent: width (diameter) uniform in ``[d_min, d_max]`` = [0.6, 1.5] m, height
+    uniform from the ground up to the map height (``[h_min, height]``; ``h_min`` = 0.1 m, one
+    voxel of that map, the shortest post it draws). A trunk is a vertical cylinder (a forest),
+    or with probability ``box_share`` the released generator's square post of side ``w``.
+    Unlike the released generator trunks never overlap (footprints at least ``min_gap`` [m]
+    apart, a square post counted by its circumscribed disc), so ``V_obs`` is the plain sum of
+    trunk volumes; trunks are added by random sequential addition until ``V_obs`` reaches the
+    target, and the last trunk is shortened to meet it (never below ``h_min``), so the density
+    is exact up to ``d_max^2 h_min / V_total`` (8e-5 at the defaults).
+    """
+    for key, v in (("length", length), ("width", width), ("height", height)):
+        if not (v > 0 and math.isfinite(v)):
+            raise ScenarioError(f"random_forest_3d: {key} must be finite and > 0, got {v}")
+    if not (0 < d_min <= d_max < min(length, width)):
+        raise ScenarioError(f"random_forest_3d: need 0 < d_min <= d_max < the forest's length and width, "
+                            f"got {d_min}, {d_max}")
+    if not (0 < h_min <= height):
+        raise ScenarioError(f"random_forest_3d: need 0 < h_min <= height, got h_min={h_min}, height={height}")
+    if not 0.0 <= box_share <= 1.0:
+        raise ScenarioError(f"random_forest_3d: box_share must be in [0, 1], got {box_share}")
+    if not min_gap >= 0.0:
+        raise ScenarioError(f"random_forest_3d: min_gap must be >= 0, got {min_gap}")
+    if not 1.0 <= altitude <= height - 1.0:
+        raise ScenarioError(f"random_forest_3d: altitude must be in [1, height - 1] = [1, {height - 1:g}] m "
+                            f"(the 1 m spawn box keeps 0.5 m from ground and ceiling), got {altitude}")
+    # random sequential addition of footprints fills at most ~0.55 of the floor; trunks reach
+    # on average (h_min + height) / 2
+    limit = 0.5 * (h_min + height) / (2 * height)
+    if not 0.0 <= density <= limit:
+        raise ScenarioError(f"random_forest_3d: density must be in [0, {limit:.3g}] with trunks "
+                            f"{h_min:g}-{height:g} m tall (raise h_min for more), got {density}")
+    rng = np.random.default_rng(seed)
+    trunks = _place_trunks(rng, density, length, width, height, d_min, d_max, h_min, box_share, min_gap, max_tries)
+    wall, x0, x1 = 0.5, -8.0, length + 6.0
+    yw = width / 2 + wall
+    obstacles: list = [
+        Box((x0, width / 2, -wall), (x1, yw, height + wall)),  # side walls
+        Box((x0, -yw, -wall), (x1, -width / 2, height + wall)),
+        Box((x0, -yw, -wall), (x1, yw, 0.0)),  # ground
+        Box((x0, -yw, height), (x1, yw, height + wall)),  # ceiling
+    ]
+    for x, y, w, h, square in trunks:
+        if square:
+            obstacles.append(Box((x - w / 2, y - w / 2, 0.0), (x + w / 2, y + w / 2, h)))
+        else:
+            obstacles.append(Cylinder((x, y), w / 2, (0.0, h)))
+    z0, z1 = altitude - 0.5, altitude + 0.5
+    scn = Scenario(
+        name=f"random_forest_3d:density={density:g},seed={seed}",
+        bounds=(x0, -yw, 0.0, x1, yw, height),
+        swarm=Swarm(n=n, spawn=(-7.0, -3.0, z0, -3.0, 3.0, z1)),
+        goal=(length + 4.0, 0.0, altitude),
+        obstacles=tuple(obstacles),
+        description=f"Random 3-D forest, obstacle volume density {density:g}, seed {seed}",
+        source=f"random_forest_3d(density={density:g}, seed={seed})",
+    )
+    return validate(scn)
+
+
+def _place_trunks(rng, density, length, width, height, d_min, d_max, h_min, box_share, min_gap, max_tries):
+    """Random sequential addition of non-overlapping trunks up to the volume fraction ``density``.
+
+    Returns a list of ``(x, y, w, h, square)``: footprint centre [m], width [m], height [m] and
+    whether the trunk is a square post.
+    """
+    target = density * length * width * height
+    xy = np.zeros((0, 2))
+    reach = np.zeros(0)  # footprint radius used by the overlap test [m]
+    trunks: list[tuple[float, float, float, float, bool]] = []
+    volume, tries = 0.0, 0
+    while volume < target:
+        if tries >= max_tries:
+            raise ScenarioError(
+                f"random_forest_3d: could not reach density {density} ({volume / (length * width * height):.3f} "
+                f"placed after {max_tries} tries); lower density or d_max, or raise h_min"
+            )
+        w = rng.uniform(d_min, d_max, 256)
+        h = rng.uniform(h_min, height, 256)
+        square = rng.uniform(0.0, 1.0, 256) < box_share
+        x = rng.uniform(w / 2, length - w / 2)
+        y = rng.uniform(-width / 2 + w / 2, width / 2 - w / 2)
+        tries += 256
+        for k in range(256):
+            r = w[k] / math.sqrt(2.0) if square[k] else w[k] / 2
+            c = np.array([x[k], y[k]])
+            if len(reach) and np.any(np.sqrt(np.sum((xy - c) ** 2, axis=1)) < reach + r + min_gap):
+                continue
+            area = w[k] ** 2 if square[k] else math.pi * (w[k] / 2) ** 2
+            hk = float(h[k])
+            if volume + area * hk >= target:  # the last trunk: shortened to meet the target
+                hk = max(h_min, (target - volume) / area)
+            xy = np.vstack([xy, c])
+            reach = np.append(reach, r)
+            trunks.append((float(x[k]), float(y[k]), float(w[k]), hk, bool(square[k])))
+            volume += area * hk
+            if volume >= target:
+                break
+    return trunks
+
+
 def periodic_box(n: int = 100, rho: float = 4.102, seed: int = 0) -> Scenario:
     """An obstacle-free periodic square of side ``D = sqrt(n / rho)`` [m] (HWVEM Section 3.1).
 
@@ -207,6 +333,7 @@ def hwvem_mission_family(tiny_offset: float = 1.45, rect_offset: float = 1.3, pa
 
 GENERATORS: dict[str, Callable[..., Scenario]] = {
     "random_forest": random_forest,
+    "random_forest_3d": random_forest_3d,
     "periodic_box": periodic_box,
     "hwvem_mission_family": hwvem_mission_family,
 }
