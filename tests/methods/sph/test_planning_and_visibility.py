@@ -103,3 +103,60 @@ def test_split_and_merge_events_and_pair_transitions():
     in_range = np.array([0 * n + 1, 0 * n + 2, 2 * n + 3])
     vis = np.array([True, False, True])  # 0-2 now occluded, 2-3 newly visible
     assert link_changes(prev, in_range, vis) == (1, 1)
+
+
+# ----------------------------------------------------------------------------- 3-D
+
+BOUNDS3 = (-5.0, -5.0, 0.0, 15.0, 5.0, 6.0)
+# a wall across the whole world at x in [4, 5] with one window, y in [1, 5], z in [2, 3.5]
+WALL3 = (
+    Box((4.0, -5.0, 0.0), (5.0, 5.0, 2.0)),
+    Box((4.0, -5.0, 3.5), (5.0, 5.0, 6.0)),
+    Box((4.0, -5.0, 2.0), (5.0, 1.0, 3.5)),
+)
+
+
+def test_3d_astar_is_octile_optimal_in_free_space():
+    maps = OccupancyMaps((), BOUNDS3, 1, 0.1, 0.3, 100.0, margin=0.5)
+    start, goal = np.array([0.0, 0.0, 1.0]), np.array([3.0, 2.0, 2.0])
+    path = maps.search(0, start, goal, 10**6)
+    np.testing.assert_allclose(path[[0, -1]], [start, goal])
+    s, g = np.array(maps.cell(start)), np.array(maps.cell(goal))
+    path[0], path[-1] = maps.center(*s[:, None]), maps.center(*g[:, None])  # the cell path itself
+    length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
+    d3, d2, d1 = np.sort(np.abs(g - s))  # the 26-connected optimum: body, face, then straight steps
+    octile = 0.1 * (math.sqrt(3) * d3 + math.sqrt(2) * (d2 - d3) + (d1 - d2))
+    assert length == pytest.approx(octile, rel=1e-9)
+    assert octile == pytest.approx(1.0 + math.sqrt(2) + math.sqrt(3), abs=0.1)
+
+
+def test_3d_astar_goes_through_the_window_and_never_through_an_obstacle():
+    from swarmnav.sensing import segments_blocked, signed_distance
+
+    g = Geometry.from_obstacles(list(WALL3), dim=3)
+    start, goal = np.array([0.0, 0.0, 1.0]), np.array([10.0, 0.0, 1.0])
+    assert segments_blocked(g, start[None], goal[None])[0]  # the straight line is blocked
+    maps = OccupancyMaps(WALL3, BOUNDS3, 1, 0.1, 0.3, 100.0, margin=0.5, wide=0.9, wide_cost=2.0)
+    assert maps.search(0, start, goal, 10**6)[:, 0].max() == pytest.approx(10.0)  # unseen wall: straight
+    assert maps.observe(0, start) == 3
+    path = maps.search(0, start, goal, 10**6)
+    np.testing.assert_allclose(path[[0, -1]], [start, goal])
+    # every cell centre keeps the d_thr tier (0.5 m less half a cell diagonal) ...
+    assert signed_distance(g, path).min() >= 0.5 - 0.09
+    # ... and no step of the path crosses an obstacle
+    assert not segments_blocked(g, path[:-1], path[1:]).any()
+    at_wall = path[(path[:, 0] > 3.9) & (path[:, 0] < 5.1)]
+    assert at_wall[:, 1].min() > 1.0 and 2.0 < at_wall[:, 2].min() and at_wall[:, 2].max() < 3.5  # the window
+
+
+def test_3d_map_holds_only_seen_obstacles_and_has_the_2d_classes():
+    """A vertical prism seen from the side: its voxel classes at one altitude are the planar
+    map's classes of its footprint (the same clearance bands in 2-D and 3-D)."""
+    post3 = Box((4.0, -0.5, 0.0), (5.0, 0.5, 6.0))
+    maps3 = OccupancyMaps((post3,), BOUNDS3, 2, 0.1, 0.3, 5.0, margin=0.5, wide=0.9)
+    maps2 = OccupancyMaps((Box((4.0, -0.5), (5.0, 0.5)),), BOUNDS3[:2] + BOUNDS3[3:5], 1, 0.1, 0.3, 5.0,
+                          margin=0.5, wide=0.9)
+    assert maps3.observe(0, np.array([0.0, 0.0, 3.0])) == 1 and maps3.observe(1, np.array([-5.0, 4.0, 3.0])) == 0
+    maps2.observe(0, np.zeros(2))
+    assert maps3.grids[1].max() == 0
+    np.testing.assert_array_equal(maps3.grids[0][30], maps2.grids[0])  # z = 3.05 m, far from the ends

@@ -10,8 +10,13 @@ free. Each cell stores a clearance class: the number of clearances it is inside,
 within ``wide``, 0 free. The search first looks for a path that keeps d_thr (classes 0-1,
 class 1 costing ``1 + wide_cost`` per metre, so the path keeps the wide clearance unless that
 costs a long detour), and falls back to the body clearance. It is A* on the 8-connected grid
-(no corner
-cutting), compiled with numba.
+(no corner cutting), compiled with numba.
+
+The dimension is the scene's: on a 3-D scene (six bounds) the maps are voxel grids
+(nz, ny, nx) and the search is A* on the 26-connected grid, the same classes and tiers, no
+corner cutting (a diagonal step needs every cell it grazes free), the 3-D octile heuristic.
+Its per-cell work arrays are kept between searches and marked by a search number, so a search
+costs what it expands, not the size of the grid (millions of voxels at 0.1 m).
 """
 
 from __future__ import annotations
@@ -26,26 +31,32 @@ from swarmnav.world.obstacles import Geometry, Obstacle
 
 _SQRT2 = math.sqrt(2.0)
 
+#: the 26 neighbour offsets (dz, dy, dx) of a voxel, z outermost
+_STEPS3 = np.array([(dz, dy, dx) for dz in (-1, 0, 1) for dy in (-1, 0, 1) for dx in (-1, 0, 1)
+                    if (dz, dy, dx) != (0, 0, 0)], dtype=np.int64)
+
 
 class OccupancyMaps:
     """Per-robot occupancy grids over the scene bounds, grown from what each robot has seen.
 
     Attributes:
-        origin: (2,) centre of cell (0, 0) [m]; resolution: cell size [m];
-        shape: (ny, nx); grids: (N, ny, nx) uint8, 1 = occupied for that robot.
+        dim: 2 or 3, from ``bounds`` (four or six numbers, as the scene's).
+        origin: (dim,) centre of cell 0 [m] (x, y[, z]); resolution: cell size [m];
+        shape: (ny, nx) or (nz, ny, nx); grids: (N, *shape) uint8 clearance classes of each robot.
     """
 
     def __init__(self, obstacles: tuple[Obstacle, ...], bounds, n_robots: int, resolution: float,
                  inflation: float, sensing_range: float, margin: float | None = None, wide: float = 0.0,
                  wide_cost: float = 0.0):
-        x0, y0, x1, y1 = bounds
+        dim = len(bounds) // 2
+        lo_b, hi_b = np.asarray(bounds[:dim], dtype=float), np.asarray(bounds[dim:], dtype=float)
+        self.dim = dim
         self.resolution = float(resolution)
-        self.origin = np.array([x0, y0], dtype=float) + 0.5 * self.resolution
-        nx = max(int(math.ceil((x1 - x0) / resolution)), 2)
-        ny = max(int(math.ceil((y1 - y0) / resolution)), 2)
-        self.shape = (ny, nx)
+        self.origin = lo_b + 0.5 * self.resolution
+        counts = [max(int(math.ceil((hi_b[k] - lo_b[k]) / resolution)), 2) for k in range(dim)]  # nx, ny[, nz]
+        self.shape = tuple(reversed(counts))
         self.sensing_range = float(sensing_range)
-        self.grids = np.zeros((n_robots, ny, nx), dtype=np.uint8)
+        self.grids = np.zeros((n_robots, *self.shape), dtype=np.uint8)
         self.known = np.zeros((n_robots, len(obstacles)), dtype=bool)
         self.levels = sorted({m for m in (margin or 0.0, wide) if m > inflation})  # clearances beyond the body's [m]
         margin = max([inflation, *self.levels])
@@ -54,32 +65,38 @@ class OccupancyMaps:
         self.cost = np.array([1.0] + [1.0 + wide_cost] * max(top - 2, 0) + [1.0, 1.0])[: top + 1]
         lo, hi, cells = [], [], []
         for o in obstacles:
-            g = Geometry.from_obstacles([o])
+            g = Geometry.from_obstacles([o], dim=dim)
             blo, bhi = g.bbox_lo.min(axis=0), g.bbox_hi.max(axis=0)
             lo.append(blo)
             hi.append(bhi)
             cells.append(self._footprint(g, blo - margin, bhi + margin, inflation))
-        self.bbox_lo = np.array(lo).reshape(-1, 2)
-        self.bbox_hi = np.array(hi).reshape(-1, 2)
+        self.bbox_lo = np.array(lo).reshape(-1, dim)
+        self.bbox_hi = np.array(hi).reshape(-1, dim)
         self.footprints = cells
+        if dim == 3:  # the 3-D search's work arrays, reused by every search (see the module docstring)
+            n = int(np.prod(self.shape))
+            self._work = (np.empty(n), np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.int32),
+                          np.zeros(n, dtype=np.int32), np.empty(1024), np.empty(1024, dtype=np.int64))
+            self._searches = 0
 
     def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
         """Flat indices and clearance classes (see the module docstring) of the cells around
         one obstacle."""
-        ny, nx = self.shape
-        ix0, iy0 = np.maximum(np.floor((lo - self.origin) / self.resolution).astype(int), 0)
-        ix1, iy1 = np.minimum(np.ceil((hi - self.origin) / self.resolution).astype(int), [nx - 1, ny - 1])
-        if ix1 < ix0 or iy1 < iy0:
+        i0 = np.maximum(np.floor((lo - self.origin) / self.resolution).astype(int), 0)  # (x, y[, z])
+        i1 = np.minimum(np.ceil((hi - self.origin) / self.resolution).astype(int), np.array(self.shape[::-1]) - 1)
+        if np.any(i1 < i0):
             return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.uint8)
-        iy, ix = np.mgrid[iy0:iy1 + 1, ix0:ix1 + 1]
-        pts = self.origin + self.resolution * np.column_stack([ix.ravel(), iy.ravel()])
+        # cell index arrays in grid order ((iy, ix) or (iz, iy, ix)), row-major
+        index = [a.ravel() for a in np.mgrid[tuple(slice(i0[k], i1[k] + 1) for k in reversed(range(self.dim)))]]
+        pts = self.origin + self.resolution * np.column_stack(index[::-1])
         d = signed_distance(g, pts)
         top = len(self.levels) + 1
         near = d < (self.levels[-1] if self.levels else inflation)
         dn = d[near]
         level = sum((dn < m).astype(np.uint8) for m in self.levels) if self.levels else np.zeros(len(dn), np.uint8)
         level = np.where(dn < inflation, top, level).astype(np.uint8)
-        return (iy.ravel()[near] * nx + ix.ravel()[near]).astype(np.int64), level
+        flat = np.ravel_multi_index(tuple(a[near] for a in index), self.shape)
+        return flat.astype(np.int64), level
 
     def observe(self, robot: int, position: np.ndarray) -> int:
         """Add to ``robot``'s map every obstacle whose bounding box is within the sensing
@@ -96,20 +113,22 @@ class OccupancyMaps:
         self.known[robot, new] = True
         return len(new)
 
-    def cell(self, p: np.ndarray) -> tuple[int, int]:
-        ny, nx = self.shape
-        ix = int(np.clip(round((p[0] - self.origin[0]) / self.resolution), 0, nx - 1))
-        iy = int(np.clip(round((p[1] - self.origin[1]) / self.resolution), 0, ny - 1))
-        return iy, ix
+    def cell(self, p: np.ndarray) -> tuple[int, ...]:
+        """Grid index ``(iy, ix)`` or ``(iz, iy, ix)`` of the cell holding ``p`` [m], clamped."""
+        return tuple(int(np.clip(round((p[k] - self.origin[k]) / self.resolution), 0, self.shape[-1 - k] - 1))
+                     for k in reversed(range(self.dim)))
 
-    def center(self, iy: np.ndarray, ix: np.ndarray) -> np.ndarray:
-        return self.origin + self.resolution * np.column_stack([ix, iy])
+    def center(self, *index: np.ndarray) -> np.ndarray:
+        """Cell centres [m] (M, dim) of grid indices given as ``(iy, ix)`` or ``(iz, iy, ix)``."""
+        return self.origin + self.resolution * np.column_stack(index[::-1])
 
     def search(self, robot: int, start: np.ndarray, goal: np.ndarray, max_expand: int,
                others: np.ndarray | None = None, others_radius: float = 0.0) -> np.ndarray | None:
-        """A* path from ``start`` to ``goal`` [m] on ``robot``'s map: (P, 2) cell centres, the
+        """A* path from ``start`` to ``goal`` [m] on ``robot``'s map: (P, dim) cell centres, the
         first replaced by ``start`` itself; None if no path. A start or goal inside an
         inflated obstacle is moved to the nearest free cell (as the released planner does)."""
+        if self.dim == 3:
+            return self._search3(robot, start, goal, max_expand, others, others_radius)
         occ = self.grids[robot]
         if others is not None and len(others) and others_radius > 0 and len(self.levels) > 1:
             occ = occ.copy()  # neighbours: cells within others_radius join the wide (costly) band
@@ -133,6 +152,34 @@ class OccupancyMaps:
             path[-1] = goal
         return path
 
+    def _search3(self, robot, start, goal, max_expand, others, others_radius):
+        """:meth:`search` on the voxel grid (26-connected A*)."""
+        occ = self.grids[robot]
+        if others is not None and len(others) and others_radius > 0 and len(self.levels) > 1:
+            occ = occ.copy()  # neighbours: voxels within others_radius join the wide (costly) band
+            _mark_balls(occ, (np.asarray(others) - self.origin) / self.resolution, others_radius / self.resolution)
+        idx = np.zeros(0, dtype=np.int64)
+        gc = self.cell(goal)
+        top = len(self.levels) + 1
+        for blocked in (top - 1, top) if top > 1 else (1,):  # keep d_thr if possible, else the body clearance
+            s = _nearest_free3(occ, *self.cell(start), 40, blocked)
+            g = _nearest_free3(occ, *gc, 40, blocked)
+            if s[0] >= 0 and g[0] >= 0:
+                self._searches += 1
+                gcost, parent, seen, closed, keys, vals = self._work
+                idx, keys, vals = _astar3(occ, s, g, max_expand, blocked, self.cost, _STEPS3, self._searches,
+                                          gcost, parent, seen, closed, keys, vals)
+                self._work = (gcost, parent, seen, closed, keys, vals)
+                if len(idx):
+                    break
+        if len(idx) == 0:
+            return None
+        path = self.center(*np.unravel_index(idx, self.shape))
+        path[0] = start
+        if g == gc:
+            path[-1] = goal
+        return path
+
 
 @njit(cache=True)
 def _mark_discs(occ, centres, radius):
@@ -145,6 +192,45 @@ def _mark_discs(occ, centres, radius):
             for x in range(max(int(cx) - r, 0), min(int(cx) + r + 2, nx)):
                 if (x - cx) ** 2 + (y - cy) ** 2 <= radius * radius and occ[y, x] == 0:
                     occ[y, x] = 1
+
+
+@njit(cache=True)
+def _mark_balls(occ, centres, radius):
+    """Raise voxels within ``radius`` [cells] of each centre [cells, (x, y, z)] to at least class 1."""
+    nz, ny, nx = occ.shape
+    r = int(radius) + 1
+    for k in range(centres.shape[0]):
+        cx, cy, cz = centres[k, 0], centres[k, 1], centres[k, 2]
+        for z in range(max(int(cz) - r, 0), min(int(cz) + r + 2, nz)):
+            for y in range(max(int(cy) - r, 0), min(int(cy) + r + 2, ny)):
+                for x in range(max(int(cx) - r, 0), min(int(cx) + r + 2, nx)):
+                    if (x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2 <= radius * radius and occ[z, y, x] == 0:
+                        occ[z, y, x] = 1
+
+
+@njit(cache=True)
+def _nearest_free3(occ, iz, iy, ix, max_r, blocked):
+    """Nearest voxel with ``occ < blocked`` (Chebyshev shells, Euclidean within a shell) to
+    (iz, iy, ix); (-1, -1, -1) if none within ``max_r`` cells."""
+    nz, ny, nx = occ.shape
+    if occ[iz, iy, ix] < blocked:
+        return iz, iy, ix
+    for r in range(1, max_r + 1):
+        best = 1e18
+        bz, by, bx = -1, -1, -1
+        for dz in range(-r, r + 1):
+            for dy in range(-r, r + 1):
+                for dx in range(-r, r + 1):
+                    if max(abs(dz), max(abs(dy), abs(dx))) != r:
+                        continue
+                    z, y, x = iz + dz, iy + dy, ix + dx
+                    if 0 <= z < nz and 0 <= y < ny and 0 <= x < nx and occ[z, y, x] < blocked:
+                        d = dz * dz + dy * dy + dx * dx
+                        if d < best:
+                            best, bz, by, bx = d, z, y, x
+        if bz >= 0:
+            return bz, by, bx
+    return -1, -1, -1
 
 
 @njit(cache=True)
@@ -280,6 +366,88 @@ def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost):
         out[k] = c
         c = parent[c]
     return out
+
+
+@njit(cache=True)
+def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen, closed, keys, vals):
+    """A* over the voxels with ``occ < blocked`` of the 26-connected grid: step length 1,
+    sqrt(2) or sqrt(3) times ``cost[occ]`` of the entered voxel, no corner cutting (every voxel
+    a diagonal step grazes, i.e. each partial step of its offsets, must be passable), 3-D octile
+    heuristic ``d1 + (sqrt2 - 1) d2 + (sqrt3 - sqrt2) d3`` (d1 >= d2 >= d3, ties towards larger
+    g as the planar search). ``g, parent`` hold values for voxels whose ``seen == sid`` (this
+    search's number), ``closed == sid`` marks expanded ones, so nothing is cleared between
+    searches. Returns ``(flat voxel indices start -> goal or empty, keys, vals)`` (the heap
+    arrays, possibly grown)."""
+    nz, ny, nx = occ.shape
+    plane = ny * nx
+    s = (s3[0] * ny + s3[1]) * nx + s3[2]
+    goal = (g3[0] * ny + g3[1]) * nx + g3[2]
+    gz, gy, gx = g3[0], g3[1], g3[2]
+    g[s] = 0.0
+    seen[s] = sid
+    parent[s] = -1
+    keys, vals, size = _heap_push(keys, vals, 0, 0.0, s)
+    r2, r3 = 1.4142135623730951, 1.7320508075688772
+    expanded = 0
+    found = False
+    while size > 0:
+        cur, size = _heap_pop(keys, vals, size)
+        if closed[cur] == sid:
+            continue
+        if cur == goal:
+            found = True
+            break
+        closed[cur] = sid
+        expanded += 1
+        if expanded > max_expand:
+            break
+        cz = cur // plane
+        cy = (cur - cz * plane) // nx
+        cx = cur - cz * plane - cy * nx
+        for k in range(steps.shape[0]):
+            dz, dy, dx = steps[k, 0], steps[k, 1], steps[k, 2]
+            z, y, x = cz + dz, cy + dy, cx + dx
+            if z < 0 or z >= nz or y < 0 or y >= ny or x < 0 or x >= nx or occ[z, y, x] >= blocked:
+                continue
+            axes = abs(dz) + abs(dy) + abs(dx)
+            if axes > 1:  # every partial step (a proper subset of the offsets) must be passable
+                grazed = False
+                for mask in range(1, 7):
+                    pz, py, px = dz * (mask >> 2), dy * ((mask >> 1) & 1), dx * (mask & 1)
+                    part = abs(pz) + abs(py) + abs(px)
+                    if 0 < part < axes and occ[cz + pz, cy + py, cx + px] >= blocked:
+                        grazed = True
+                        break
+                if grazed:
+                    continue
+            nb = (z * ny + y) * nx + x
+            if closed[nb] == sid:
+                continue
+            step = 1.0 if axes == 1 else (r2 if axes == 2 else r3)
+            ng = g[cur] + step * cost[occ[z, y, x]]
+            if seen[nb] != sid or ng < g[nb]:
+                seen[nb] = sid
+                g[nb] = ng
+                parent[nb] = cur
+                a, b, c = abs(gz - z), abs(gy - y), abs(gx - x)
+                d1 = max(a, max(b, c))
+                d3 = min(a, min(b, c))
+                d2 = a + b + c - d1 - d3
+                h = d1 + (r2 - 1.0) * d2 + (r3 - r2) * d3
+                keys, vals, size = _heap_push(keys, vals, size, ng + h * 1.001, nb)
+    if not found:
+        return np.zeros(0, dtype=np.int64), keys, vals
+    count = 1
+    c = goal
+    while c != s:
+        c = parent[c]
+        count += 1
+    out = np.empty(count, dtype=np.int64)
+    c = goal
+    for k in range(count - 1, -1, -1):
+        out[k] = c
+        c = parent[c]
+    return out, keys, vals
 
 
 def resample(path: np.ndarray, spacing: float) -> np.ndarray:
