@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from swarmnav.sensing import signed_distance
-from swarmnav.world.esdf import Esdf
+from swarmnav.sensing.esdf import Esdf
 from swarmnav.world.obstacles import Box, Circle, Geometry, Polygon
 
 

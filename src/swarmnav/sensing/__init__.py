@@ -1,14 +1,18 @@
 """Sensing: LiDAR ring, point/segment queries against obstacles, and neighbour search.
 
-All functions take flat arrays (a ``Geometry`` and (N, 2) positions) and return arrays.
+All functions take flat arrays (a ``Geometry`` and (N, d) positions, ``d = geom.dim``) and
+return arrays; the ESDF is a grid of the same signed distance with an interpolating query.
 """
 
+from swarmnav.sensing.esdf import Esdf
 from swarmnav.sensing.geometry import nearest_obstacle, points_inside, segments_blocked, signed_distance
 from swarmnav.sensing.lidar import lidar_ring
 from swarmnav.sensing.neighbors import neighbor_lists, neighbor_pairs, pairwise_min_distance
 from swarmnav.sensing.prepared import PreparedGeometry
+from swarmnav.sensing.scan import range_scan
 
 __all__ = [
+    "Esdf",
     "PreparedGeometry",
     "lidar_ring",
     "nearest_obstacle",
@@ -16,6 +20,7 @@ __all__ = [
     "neighbor_pairs",
     "pairwise_min_distance",
     "points_inside",
+    "range_scan",
     "segments_blocked",
     "signed_distance",
 ]

@@ -2,7 +2,10 @@
 inside test and line-of-sight blocking.
 
 Obstacles are closed sets: a point on a boundary is in collision and a segment that only
-touches a boundary is blocked. Kernels live in :mod:`swarmnav.sensing._kernels`.
+touches a boundary is blocked. Every function takes points of shape (M, d) with ``d =
+geom.dim``: planar worlds use the kernels of :mod:`swarmnav.sensing._kernels` (unchanged), 3-D
+worlds (boxes, vertical prisms and cylinders, spheres) those of
+:mod:`swarmnav.sensing._kernels3d`.
 """
 
 from __future__ import annotations
@@ -18,11 +21,26 @@ from swarmnav.sensing._kernels import (
     points_inside_kernel,
     segments_blocked_kernel,
 )
+from swarmnav.sensing._kernels3d import (
+    geom_arrays3d,
+    nearest3d_kernel,
+    points_inside3d_kernel,
+    segments_blocked3d_kernel,
+)
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
 
 _NO_DIR = np.zeros((0, 2))
+_NO_DIR3 = np.zeros((0, 3))
+
+
+def as_points_nd(x, dim: int, name: str = "points") -> np.ndarray:
+    """``x`` as a contiguous float64 (M, dim) array, or ValueError naming ``name`` and the shape."""
+    a = np.ascontiguousarray(x, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != dim:
+        raise ValueError(f"{name} must have shape (M, {dim}) for a {dim}-D world, got {a.shape}")
+    return a
 
 
 def signed_distance(geom: Geometry, points: np.ndarray) -> np.ndarray:
@@ -32,13 +50,22 @@ def signed_distance(geom: Geometry, points: np.ndarray) -> np.ndarray:
     boundary, negative inside: minus the depth in the containing obstacle (the deepest one if
     obstacles overlap, which then is a lower bound of the depth in their union).
 
+    In 3-D each obstacle's signed distance is exact: a footprint (signed planar distance ``d2``)
+    extruded over ``[z0, z1]`` has, with ``dz = max(z0 - z, z - z1)``,
+    ``sqrt(max(d2, 0)^2 + max(dz, 0)^2)`` if ``d2 > 0`` or ``dz > 0``, else ``max(d2, dz)``.
+
     Args:
         geom: obstacles of the world.
-        points: (M, 2) query points [m].
+        points: (M, d) query points [m], ``d = geom.dim``.
 
     Returns:
         (M,) float64; ``+inf`` everywhere for an empty geometry.
     """
+    if geom.dim == 3:
+        pts = as_points_nd(points, 3)
+        d = np.empty(pts.shape[0])
+        nearest3d_kernel(*geom_arrays3d(geom), pts, d, _NO_DIR3, False)
+        return d
     pts = as_points(points)
     d = np.empty(pts.shape[0])
     nearest_kernel(*geom_arrays(geom), pts, d, _NO_DIR, False)
@@ -50,14 +77,20 @@ def nearest_obstacle(geom: Geometry, points: np.ndarray) -> tuple[np.ndarray, np
 
     Args:
         geom: obstacles of the world.
-        points: (M, 2) query points [m].
+        points: (M, d) query points [m], ``d = geom.dim``.
 
     Returns:
-        ``(dist, direction)``: ``dist`` (M,) as :func:`signed_distance`; ``direction`` (M, 2)
+        ``(dist, direction)``: ``dist`` (M,) as :func:`signed_distance`; ``direction`` (M, d)
         unit vector from the point toward its nearest boundary point (outward for a point
-        inside an obstacle, toward +x at a circle's centre), zeros where the geometry is
-        empty or the distance is exactly 0.
+        inside an obstacle, toward +x at a circle's centre, a cylinder's axis or a sphere's
+        centre), zeros where the geometry is empty or the distance is exactly 0.
     """
+    if geom.dim == 3:
+        pts = as_points_nd(points, 3)
+        d = np.empty(pts.shape[0])
+        v = np.empty((pts.shape[0], 3))
+        nearest3d_kernel(*geom_arrays3d(geom), pts, d, v, True)
+        return d, v
     pts = as_points(points)
     d = np.empty(pts.shape[0])
     v = np.empty((pts.shape[0], 2))
@@ -66,8 +99,14 @@ def nearest_obstacle(geom: Geometry, points: np.ndarray) -> tuple[np.ndarray, np
 
 
 def points_inside(geom: Geometry, points: np.ndarray) -> np.ndarray:
-    """(M,) bool: the point is in collision, i.e. strictly inside a polygon (even-odd rule),
-    inside a circle, or on any boundary."""
+    """(M,) bool: the point (M, d) [m], ``d = geom.dim``, is in collision, i.e. strictly inside a
+    polygon (even-odd rule) or a circle, or on any boundary; in 3-D inside or on a prism, a
+    cylinder or a sphere."""
+    if geom.dim == 3:
+        pts = as_points_nd(points, 3)
+        out = np.empty(pts.shape[0], dtype=np.bool_)
+        points_inside3d_kernel(*geom_arrays3d(geom), pts, out)
+        return out
     pts = as_points(points)
     out = np.empty(pts.shape[0], dtype=np.bool_)
     points_inside_kernel(*geom_arrays(geom), pts, out)
@@ -79,13 +118,23 @@ def segments_blocked(geom: Geometry, p: np.ndarray, q: np.ndarray) -> np.ndarray
 
     True if the segment crosses or touches a polygon edge, comes within a circle's radius of
     its centre (touching included), or lies inside an obstacle. A zero-length segment is a
-    point test.
+    point test. In 3-D the test is exact per primitive: the part of the segment inside a
+    prism's or cylinder's z range is clipped and tested against the footprint in the plane;
+    a sphere is met when the segment's nearest point to its centre is within the radius.
 
     Args:
         geom: obstacles of the world.
-        p: (M, 2) segment start points [m].
-        q: (M, 2) segment end points [m].
+        p: (M, d) segment start points [m], ``d = geom.dim``.
+        q: (M, d) segment end points [m].
     """
+    if geom.dim == 3:
+        a = as_points_nd(p, 3, "p")
+        b = as_points_nd(q, 3, "q")
+        if a.shape != b.shape:
+            raise ValueError(f"p and q must have the same shape, got {a.shape} and {b.shape}")
+        out = np.empty(a.shape[0], dtype=np.bool_)
+        segments_blocked3d_kernel(*geom_arrays3d(geom), a, b, out)
+        return out
     a = as_points(p, "p")
     b = as_points(q, "q")
     if a.shape != b.shape:

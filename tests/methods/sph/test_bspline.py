@@ -9,7 +9,7 @@ from swarmnav.methods.sph.bspline import (
     SplineCosts, _cost_grad, _esdf_query3, boundary_matrix, boundary_points, evaluate, optimize, total_cost,
 )
 from swarmnav.world import Circle, Geometry
-from swarmnav.world.esdf import Esdf
+from swarmnav.sensing.esdf import Esdf
 
 W = SplineCosts(lambda_s=5.0, lambda_c=1000.0, lambda_f=1.0, d_thr=0.5, v_max=1.0, a_max=1.5)
 DT = 0.5

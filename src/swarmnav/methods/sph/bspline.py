@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from swarmnav.sensing._kernels import esdf_query_kernel
-from swarmnav.world.esdf import Esdf
+from swarmnav.sensing.esdf import Esdf
 
 #: Uniform cubic B-spline basis: position on segment s at local u in [0, 1) is
 #: ``[1, u, u^2, u^3] @ M @ C[s:s + 4]``.

@@ -31,7 +31,7 @@ from swarmnav.methods.sph.kernel import environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.params import build
-from swarmnav.world.esdf import Esdf
+from swarmnav.sensing.esdf import Esdf
 from swarmnav.world.scenario import Scenario
 
 
