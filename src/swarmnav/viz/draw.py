@@ -47,9 +47,15 @@ def draw_scene(
     Obstacles are one PatchCollection (light-blue fill, darker edge), so scenes with thousands
     of obstacles draw in one call.
 
+    A 3-D scene is drawn by :func:`swarmnav.viz.draw3d.draw_scene_3d` on a 3-D ``ax``.
+
     Returns:
         Legend handles of what was drawn (obstacle, periodic cell, spawn, path, goal).
     """
+    if scenario.dim == 3:
+        from swarmnav.viz.draw3d import draw_scene_3d  # it reads this module's colours
+
+        return draw_scene_3d(ax, scenario, show_spawn=show_spawn, show_goal=show_goal, show_path=show_path)
     handles: list[Artist] = []
     shapes = [
         mpatches.Circle(o.center, o.radius) if isinstance(o, Circle) else mpatches.Polygon(o.vertices(), closed=True)

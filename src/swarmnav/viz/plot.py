@@ -8,6 +8,7 @@ returns.
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -18,6 +19,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from swarmnav.metrics import MetricParams
+from swarmnav.viz import draw3d
 from swarmnav.viz.draw import (
     END_COLOR, EVENT_MARKERS, START_COLOR, dot_size, draw_scene, event_handles, event_points, fig_size,
     fmt_metric, label_colors, output_path, period_of, scenario_of, trajectory_segments,
@@ -35,12 +37,29 @@ MAX_SEGMENTS = 200_000
 def plot_scene(scenario: Scenario, out_png: str | Path, *, dpi: int = 150) -> Path:
     """Write a PNG of one scene: title = scene name, subtitle = its description."""
     out = output_path(out_png)
+    if scenario.dim == 3:
+        return _plot_scene_3d(scenario, out, dpi)
     fig = Figure(figsize=fig_size(scenario.bounds, 8.0, extra_width=1.8, extra_height=1.0), layout="constrained")
     ax = fig.add_subplot()
     handles = draw_scene(ax, scenario)
     fig.suptitle(scenario.name, fontsize=13, fontweight="bold")
     ax.set_title(f"{scenario.description}  (N = {scenario.n})".strip(), fontsize=9, color="0.3")
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    fig.savefig(out, dpi=dpi)
+    return out
+
+
+def _plot_scene_3d(scenario: Scenario, out: Path, dpi: int) -> Path:
+    """The 3-D form of :func:`plot_scene`: the scene box seen from the default camera, titles
+    and a one-row legend above it."""
+    sub = textwrap.wrap(f"{scenario.description}  (N = {scenario.n})".strip(), 120)
+    fig, ax = draw3d.panel_figure(scenario, top=0.75 + 0.2 * len(sub))
+    handles = draw_scene(ax, scenario)
+    h = fig.get_figheight()
+    fig.suptitle(scenario.name, fontsize=13, fontweight="bold", y=1 - 0.08 / h, va="top")
+    fig.text(0.5, 1 - 0.42 / h, "\n".join(sub), fontsize=9, color="0.3", ha="center", va="top")
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 1 - (0.45 + 0.2 * len(sub)) / h),
+               ncols=len(handles), fontsize=8, frameon=False)
     fig.savefig(out, dpi=dpi)
     return out
 
