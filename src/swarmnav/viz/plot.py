@@ -17,6 +17,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
+from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from swarmnav.metrics import MetricParams
 from swarmnav.viz import draw3d
@@ -67,7 +68,8 @@ def _plot_scene_3d(scenario: Scenario, out: Path, dpi: int) -> Path:
 def plot_run(result: RunResult, out_png: str | Path, *, dpi: int = 150) -> Path:
     """Write a PNG of a run in the layout of HES Figure 3.
 
-    (a) top-down trajectories: one thin curve per agent, each segment coloured by the agent's
+    (a) top-down trajectories (3-D scenes: seen from the default camera of
+    :mod:`swarmnav.viz.draw3d`, shadows on the floor): one thin curve per agent, each segment coloured by the agent's
     sub-swarm label at that step, start (green) and end (red) positions, goal (star),
     split / merge events at the centroid of the agents they affected;
     (b) minimum clearance over agents [m] (red) with the d_safe threshold (grey dashed) and
@@ -76,38 +78,86 @@ def plot_run(result: RunResult, out_png: str | Path, *, dpi: int = 150) -> Path:
     """
     out = output_path(out_png)
     scn = scenario_of(result)
-    P, labels = result.positions, result.labels
-    K, N = P.shape[0] - 1, P.shape[1]
-    dt = float(result.config.get("dt", 1.0))
-
+    if scn.dim == 3:
+        return _plot_run_3d(result, scn, out, dpi)
     map_w, map_h = fig_size(scn.bounds, 8.0, max_map_height=5.0)
     fig = Figure(figsize=(max(map_w, 6.0) + 2.2, map_h + 3.6), layout="constrained")
     ax, ax_t = fig.subplots(2, 1, height_ratios=[map_h, 2.2])
+    handles = draw_scene(ax, scn, show_spawn=False) + _trajectories(ax, result, scn)
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    ax.set_title("(a) trajectories", fontsize=10, loc="left")
+    _clearance_and_structure(ax_t, result)
+    fig.suptitle(_run_title(result, scn), fontsize=11)
+    fig.savefig(out, dpi=dpi)
+    return out
 
-    # (a) trajectories
-    handles = draw_scene(ax, scn, show_spawn=False)
+
+def _plot_run_3d(result: RunResult, scn: Scenario, out: Path, dpi: int) -> Path:
+    """The 3-D form of :func:`plot_run`: (a) the run in the scene box seen from the default
+    camera, with each trajectory's shadow on the floor (its altitude is otherwise hard to
+    read), its legend above it; (b) the same time series as in 2-D."""
+    n_handles = 8 + min(len(np.unique(result.labels)), 8)  # upper bound: the legend's rows
+    rows = math.ceil(n_handles / LEGEND_COLUMNS_3D)
+    ts_h, ts_margin = 2.0, 0.65  # time-series panel and its x labels [in]
+    fig, ax = draw3d.panel_figure(scn, width=10.0, top=0.95 + 0.2 * rows, below=ts_h + ts_margin + 0.3)
+    handles = draw_scene(ax, scn, show_spawn=False) + _trajectories(ax, result, scn)
+    w, h = fig.get_size_inches()
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 1 - 0.75 / h), fontsize=8,
+               frameon=False, ncols=min(len(handles), LEGEND_COLUMNS_3D))
+    fig.text(0.01, 1 - (0.8 + 0.2 * rows) / h, "(a) trajectories", fontsize=10, ha="left", va="top")
+    ax_t = fig.add_axes([0.7 / w, ts_margin / h, (w - 0.7 - 2.9) / w, ts_h / h])
+    _clearance_and_structure(ax_t, result)
+    fig.suptitle(_run_title(result, scn), fontsize=11, y=1 - 0.08 / h, va="top")
+    fig.savefig(out, dpi=dpi)
+    return out
+
+
+#: Columns of the legend above a 3-D run panel.
+LEGEND_COLUMNS_3D = 6
+#: Trajectory shadows on the floor of a 3-D run (light grey, translucent).
+SHADOW_COLOR = (0.55, 0.55, 0.55, 0.25)
+
+
+def _trajectories(ax, result: RunResult, scn: Scenario) -> list:
+    """Draw a run's trajectories on ``ax`` (2-D or 3-D): one thin curve per agent, each
+    segment coloured by the agent's sub-swarm label at that step, start (green) and end (red)
+    positions, split / merge events at the centroid of the agents they affected.
+
+    Returns:
+        Legend handles of what was drawn.
+    """
+    P, labels = result.positions, result.labels
+    K, N = P.shape[0] - 1, P.shape[1]
+    d = P.shape[2]
+    # 3-D: colours as given, not dimmed with depth (sub-swarm colours must stay comparable)
+    flat = {"depthshade": False} if d == 3 else {}
     # Subsample in time so at most MAX_SEGMENTS segments are drawn (the last state is kept).
     stride = max(1, math.ceil(K * N / MAX_SEGMENTS))
     ks = np.unique(np.r_[np.arange(0, K + 1, stride), K])
     segs, valid = trajectory_segments(P[ks], period_of(scn))
     idx, palette = label_colors(labels)
     colors = palette[idx[ks[:-1]]]
-    lc = LineCollection(segs[valid], colors=colors[valid], linewidths=0.8 if N <= 100 else 0.4,
-                        alpha=1.0 if N <= 100 else 0.4, zorder=3)
+    lc = (Line3DCollection if d == 3 else LineCollection)(
+        segs[valid], colors=colors[valid], linewidths=0.8 if N <= 100 else 0.4, alpha=1.0 if N <= 100 else 0.4,
+        zorder=3)
     ax.add_collection(lc, autolim=False)
+    if d == 3:  # shadows on the floor, under the solids: where each curve is above the ground
+        floor = segs[valid].copy()
+        floor[..., 2] = scn.lower[2]
+        ax.add_collection(Line3DCollection(floor, colors=SHADOW_COLOR, linewidths=0.6, zorder=0.5), autolim=False)
     s = dot_size(N)
-    ax.scatter(P[0, :, 0], P[0, :, 1], s=s, color=START_COLOR, edgecolors="none", zorder=4)
-    ax.scatter(P[-1, :, 0], P[-1, :, 1], s=s, color=END_COLOR, edgecolors="none", zorder=5)
-    handles += [
+    ax.scatter(*P[0].T, s=s, color=START_COLOR, edgecolors="none", zorder=4, **flat)
+    ax.scatter(*P[-1].T, s=s, color=END_COLOR, edgecolors="none", zorder=5, **flat)
+    handles = [
         Line2D([], [], linestyle="none", marker="o", color=START_COLOR, markersize=5, label="start"),
         Line2D([], [], linestyle="none", marker="o", color=END_COLOR, markersize=5, label="end"),
     ]
     points = event_points(P, labels, result.events)
     for action, (marker, color) in EVENT_MARKERS.items():
-        xy = np.array([p for _, a, p in points if a == action]).reshape(-1, 2)
+        xy = np.array([p for _, a, p in points if a == action]).reshape(-1, d)
         if len(xy):
-            ax.scatter(xy[:, 0], xy[:, 1], s=45, marker=marker, color=color, edgecolors="black",
-                       linewidths=0.6, zorder=7)
+            ax.scatter(*xy.T, s=45, marker=marker, color=color, edgecolors="black", linewidths=0.6, zorder=7,
+                       **flat)
     handles += [h for h in event_handles() if any(a == h.get_label() for _, a, _ in points)]
     n_ids = len(palette)
     if 1 < n_ids <= 8:  # few sub-swarms: name their colours; many: the colours speak for themselves
@@ -116,10 +166,14 @@ def plot_run(result: RunResult, out_png: str | Path, *, dpi: int = 150) -> Path:
                     for j in range(n_ids)]
     else:
         handles.append(Line2D([], [], color=palette[0], linewidth=1.0, label="trajectory"))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
-    ax.set_title("(a) trajectories", fontsize=10, loc="left")
+    return handles
 
-    # (b) time series
+
+def _clearance_and_structure(ax_t, result: RunResult) -> None:
+    """Panel (b): minimum clearance over agents [m] (red) with the d_safe threshold (grey
+    dashed) and the sub-swarm count (blue, right axis) against time t = k dt [s]."""
+    K = result.positions.shape[0] - 1
+    dt = float(result.config.get("dt", 1.0))
     t = np.arange(K + 1) * dt
     d_safe = MetricParams().d_safe
     d_min = np.where(np.isfinite(result.min_clearance), result.min_clearance, np.nan)
@@ -143,12 +197,13 @@ def plot_run(result: RunResult, out_png: str | Path, *, dpi: int = 150) -> Path:
     ax_t.legend(handles=lines, loc="upper left", bbox_to_anchor=(1.06, 1.0), fontsize=8, frameon=False)
     ax_t.set_title("(b) clearance and structure", fontsize=10, loc="left")
 
+
+def _run_title(result: RunResult, scn: Scenario) -> str:
+    """Method, scene, seed, N and K; Y, R_goal, E_mean and R_unsafe."""
+    K, N = result.positions.shape[0] - 1, result.positions.shape[1]
     m, cfg = result.metrics, result.config
-    fig.suptitle(
+    return (
         f"{cfg.get('method', '?')} on {scn.name}, seed {cfg.get('seed', '?')}, N = {N}, K = {K}\n"
         f"Y = {fmt_metric(m, 'Y', '.0f')}   R_goal = {fmt_metric(m, 'R_goal', '.2f')}   "
-        f"E_mean = {fmt_metric(m, 'E_mean', '.2f', ' m')}   R_unsafe = {fmt_metric(m, 'R_unsafe', '.3f')}",
-        fontsize=11,
+        f"E_mean = {fmt_metric(m, 'E_mean', '.2f', ' m')}   R_unsafe = {fmt_metric(m, 'R_unsafe', '.3f')}"
     )
-    fig.savefig(out, dpi=dpi)
-    return out
