@@ -1,5 +1,5 @@
 """Animation of a stored run: agents as dots coloured by sub-swarm, short trails, the scene
-and a time stamp. GIF is written with Pillow alone; MP4 needs the ffmpeg program.
+and a time stamp; a 3-D run is seen from the camera of its ``plot_run`` figure. GIF is written with Pillow alone; MP4 needs the ffmpeg program.
 
 Frames are drawn by blitting onto one Agg canvas and handed to Pillow or to an ffmpeg pipe
 directly; matplotlib's PillowWriter / FFMpegWriter redraw the whole figure for every frame,
@@ -21,9 +21,11 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
+from mpl_toolkits.mplot3d.art3d import Line3DCollection
 from PIL import Image
 
 from swarmnav.errors import ConfigError, SwarmnavError
+from swarmnav.viz import draw3d
 from swarmnav.viz.draw import dot_size, draw_scene, fig_size, label_colors, period_of, scenario_of, trajectory_segments
 
 if TYPE_CHECKING:
@@ -72,7 +74,8 @@ def animate_run(
         raise ConfigError(f"trail must be >= 0 [s], got {trail}")
     scn = scenario_of(result)
     P = result.positions
-    K, N = P.shape[0] - 1, P.shape[1]
+    K, N, d = P.shape
+    K -= 1
     dt = float(result.config.get("dt", 1.0))
     frames = frame_steps(K, stride, max_frames)
     idx, palette = label_colors(result.labels)
@@ -80,23 +83,40 @@ def animate_run(
     period = period_of(scn)
     trail_steps = int(round(trail / dt)) if dt > 0 else 0
 
-    fig = Figure(figsize=fig_size(scn.bounds, 8.0, extra_height=0.6, max_map_height=6.0), dpi=dpi,
-                 layout="constrained")
-    canvas = FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    draw_scene(ax, scn, show_spawn=False)
-    ax.set_title(f"{result.config.get('method', '?')} on {scn.name}, seed {result.config.get('seed', '?')}",
-                 fontsize=10)
-    trails = LineCollection([], linewidths=0.8, alpha=0.5, zorder=3)
-    ax.add_collection(trails, autolim=False)
-    dots = ax.scatter(P[0, :, 0], P[0, :, 1], s=2 * dot_size(N), c=palette[idx[0]], edgecolors="black",
-                      linewidths=0.3, zorder=5)
-    stamp = ax.text(0.01, 0.98, "", transform=ax.transAxes, ha="left", va="top", fontsize=9, zorder=8,
-                    bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none", "pad": 2})
+    title = f"{result.config.get('method', '?')} on {scn.name}, seed {result.config.get('seed', '?')}"
+    stamp_box = {"facecolor": "white", "alpha": 0.8, "edgecolor": "none", "pad": 2}
+    if scn.dim == 3:
+        # the camera, solids and box of plot_run; dots keep their colours at any depth
+        fig, ax = draw3d.panel_figure(scn, width=8.0, top=0.4, max_height=6.0)
+        fig.set_dpi(dpi)
+        canvas = FigureCanvasAgg(fig)
+        draw_scene(ax, scn, show_spawn=False)
+        h = fig.get_figheight()
+        fig.suptitle(title, fontsize=10, y=1 - 0.08 / h, va="top")
+        trails = Line3DCollection([], linewidths=0.8, alpha=0.5, zorder=3)
+        ax.add_collection(trails, autolim=False)
+        dots = ax.scatter(*P[0].T, s=2 * dot_size(N), c=palette[idx[0]], edgecolors="black", linewidths=0.3,
+                          zorder=5, depthshade=False)
+        stamp = fig.text(0.01, 1 - 0.45 / h, "", ha="left", va="top", fontsize=9, zorder=8, bbox=stamp_box)
+    else:
+        fig = Figure(figsize=fig_size(scn.bounds, 8.0, extra_height=0.6, max_map_height=6.0), dpi=dpi,
+                     layout="constrained")
+        canvas = FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        draw_scene(ax, scn, show_spawn=False)
+        ax.set_title(title, fontsize=10)
+        trails = LineCollection([], linewidths=0.8, alpha=0.5, zorder=3)
+        ax.add_collection(trails, autolim=False)
+        dots = ax.scatter(P[0, :, 0], P[0, :, 1], s=2 * dot_size(N), c=palette[idx[0]], edgecolors="black",
+                          linewidths=0.3, zorder=5)
+        stamp = ax.text(0.01, 0.98, "", transform=ax.transAxes, ha="left", va="top", fontsize=9, zorder=8,
+                        bbox=stamp_box)
     moving = (trails, dots, stamp)
 
     def set_frame(k: int) -> None:
-        dots.set_offsets(P[k])
+        dots.set_offsets(P[k, :, :2])
+        if d == 3:
+            dots.set_3d_properties(P[k, :, 2], "z")
         dots.set_facecolor(palette[idx[k]])
         k0 = max(0, k - trail_steps)
         if k > k0:
@@ -104,13 +124,13 @@ def animate_run(
             # drawn as one NaN-separated path per colour: a Path per agent or per segment costs
             # 10-100x more per frame for large swarms.
             ts = np.unique(np.r_[np.arange(k, k0 - 1, -max(1, math.ceil((k - k0) / TRAIL_POINTS)))[::-1], k])
-            pts = np.full((N, len(ts) + 1, 2), np.nan)  # the last column separates agents
+            pts = np.full((N, len(ts) + 1, d), np.nan)  # the last column separates agents
             pts[:, :-1] = P[ts].transpose(1, 0, 2)
             if period is not None:  # a wrap-around is not motion: break the line there
                 _, valid = trajectory_segments(P[ts], period)
                 pts[:, 1:-1][~valid.T] = np.nan
             groups = np.unique(idx[k])
-            trails.set_segments([pts[idx[k] == g].reshape(-1, 2) for g in groups])
+            trails.set_segments([pts[idx[k] == g].reshape(-1, d) for g in groups])
             trails.set_color(palette[groups])
         else:
             trails.set_segments([])
@@ -127,6 +147,8 @@ def animate_run(
         set_frame(int(k))
         canvas.restore_region(background)
         for a in moving:
+            if d == 3 and hasattr(a, "do_3d_projection"):
+                a.do_3d_projection()  # Axes3D.draw does this for a full redraw; blitting must
             ax.draw_artist(a)
         return np.asarray(canvas.buffer_rgba())  # (H, W, 4) view of the canvas
 
@@ -158,11 +180,16 @@ def frame_steps(K: int, stride: int | None, max_frames: int) -> np.ndarray:
 
 
 def _write_gif(path: Path, frames, fps: float, palette: np.ndarray) -> None:
-    """GIF with Pillow. Every frame is mapped to one shared 256-colour palette (taken from the
-    first frame plus the sub-swarm colours), so colours do not flicker between frames."""
+    """GIF with Pillow. Every frame is mapped to one shared 256-colour palette: the sub-swarm
+    colours exactly, the rest taken from the first frame, so colours do not flicker between
+    frames and a sub-swarm colour is never merged into a shade of the scene (the shaded solids
+    of a 3-D scene fill a median-cut palette with greys)."""
     first = next(frames)[..., :3].copy()
-    swatch = np.repeat((palette[:, :3] * 255).astype(np.uint8)[None], 8, axis=0)
-    ref = Image.fromarray(np.vstack([first.reshape(-1, 3), swatch.reshape(-1, 3)])[None]).quantize(256)
+    exact = np.unique((palette[:, :3] * 255).round().astype(np.uint8), axis=0)[:128]
+    scene = Image.fromarray(first).quantize(256 - len(exact))
+    colours = scene.getpalette()[: 3 * (256 - len(exact))] + exact.ravel().tolist()
+    ref = Image.new("P", (1, 1))
+    ref.putpalette(colours)
 
     def quantized(rgb: np.ndarray) -> Image.Image:
         return Image.fromarray(rgb).quantize(palette=ref, dither=Image.Dither.NONE)
