@@ -192,8 +192,9 @@ def test_mp4_with_ffmpeg_is_an_mp4_file(tmp_path):
     assert out.read_bytes()[4:8] == b"ftyp"
 
 
-@pytest.mark.parametrize("name", builtin_names())
+@pytest.mark.parametrize("name", [n for n in builtin_names() if load_scenario(n).dim == 2])
 def test_plot_scene_of_each_builtin_scene(tmp_path, name):
+    # 3-D built-in scenes: tests/viz/test_viz3d.py
     out = plot_scene(load_scenario(name), tmp_path / f"scene_{name}.png")
     img = rgb_array(out)
     assert 600 <= img.shape[1] <= 3000

@@ -242,7 +242,7 @@ def panel_figure(scenario: Scenario, width: float = 9.0, top: float = 1.0, below
 
 def projected_aspect(ax: Axes3D) -> float:
     """Height / width of the scene box (the axes limits) as ``ax``'s camera draws it."""
-    px = _box_on_screen(ax)
+    px = box_on_screen(ax)
     w, h = np.ptp(px, axis=0)
     return float(h / w)
 
@@ -257,7 +257,7 @@ def place(ax: Axes3D, rect: tuple[float, float, float, float]) -> None:
     outside the box: ``rect`` must leave them a margin.
     """
     fig = ax.get_figure()
-    px = _box_on_screen(ax)
+    px = box_on_screen(ax)
     lo, hi = px.min(axis=0), px.max(axis=0)
     pos = ax.get_position().transformed(fig.transFigure)  # display px, square after apply_aspect
     target = np.asarray(rect, dtype=float) * fig.dpi
@@ -269,7 +269,7 @@ def place(ax: Axes3D, rect: tuple[float, float, float, float]) -> None:
     ax.set_position([x0 / w, y0 / h, k * pos.width / w, k * pos.height / h])
 
 
-def _box_on_screen(ax: Axes3D) -> np.ndarray:
+def box_on_screen(ax: Axes3D) -> np.ndarray:
     """(8, 2) display coordinates [px] of the corners of the axes' limits box."""
     ax.apply_aspect()
     lo = np.array([ax.get_xlim()[0], ax.get_ylim()[0], ax.get_zlim()[0]])
