@@ -155,6 +155,16 @@ def _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, k):
 
 
 @njit(cache=True)
+def _cull2(bound):
+    """Squared box gap [m^2] beyond which an obstacle cannot go below ``bound`` [m]. The 1e-9 m
+    slack covers rounding between a box gap and the obstacle's own distance (which may come out
+    an ulp below it), so culling never changes a minimum and the ESDF's node values equal the
+    point kernel's bit for bit."""
+    b = max(bound, 0.0) + 1e-9
+    return b * b
+
+
+@njit(cache=True)
 def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
                      bbox_lo, bbox_hi, points, out_d, out_dir, want_dir):
     """Signed distance [m] (minimum of the per-obstacle exact signed distances) and unit
@@ -171,10 +181,10 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
         vy = 0.0
         vz = 0.0
         for p in range(n_poly):
-            # Outside its box an obstacle is farther than the box: skip it when that is no
-            # better than the best so far (every containing obstacle lies inside its box).
+            # Outside its box an obstacle is farther than the box: skip it when that is worse
+            # than the best so far (every containing obstacle lies inside its box).
             g2 = _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, p)
-            if g2 > 0.0 and (best <= 0.0 or g2 >= best * best):
+            if g2 > _cull2(best):
                 continue
             d2, qx, qy = _poly_sd2(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1])
             sd = _extrude_sd(d2, pz, poly_z[p, 0], poly_z[p, 1])
@@ -184,7 +194,7 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
                     vx, vy, vz = _extrude_offset(d2, qx, qy, pz, poly_z[p, 0], poly_z[p, 1])
         for c in range(n_circ):
             g2 = _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + c)
-            if g2 > 0.0 and (best <= 0.0 or g2 >= best * best):
+            if g2 > _cull2(best):
                 continue
             cx = circ_c[c, 0] - px
             cy = circ_c[c, 1] - py
@@ -201,7 +211,7 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
                     vx, vy, vz = _extrude_offset(d2, ux * d2, uy * d2, pz, circ_z[c, 0], circ_z[c, 1])
         for b in range(n_sph):
             g2 = _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + n_circ + b)
-            if g2 > 0.0 and (best <= 0.0 or g2 >= best * best):
+            if g2 > _cull2(best):
                 continue
             cx = sph_c[b, 0] - px
             cy = sph_c[b, 1] - py
@@ -594,8 +604,7 @@ def esdf3d_build_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ
             for k in range(n_obs):
                 gx = max(bbox_lo[k, 0] - px, 0.0, px - bbox_hi[k, 0])
                 gy = max(bbox_lo[k, 1] - py, 0.0, py - bbox_hi[k, 1])
-                g2 = gx * gx + gy * gy
-                if g2 > 0.0 and (u_best < 0.0 or g2 > u_best * u_best):
+                if gx * gx + gy * gy > _cull2(u_best):
                     continue  # its footprint alone is farther than the column's upper bound
                 if k < n_poly:
                     d2, qx, qy = _poly_sd2(px, py, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1])

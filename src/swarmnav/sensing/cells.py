@@ -5,6 +5,7 @@ a whole number of them; a far-flung swarm gets coarser cells, at most ~4N of the
 agent reads its own and the 8 surrounding cells. The result is a CSR-like list: the neighbours
 of agent ``i`` are ``indices[start[i]:end[i]]`` with squared distances ``dist2`` alongside.
 Used by the Vicsek models (their neighbour lists) and by the metrics (contacts over a run).
+(N, 3) positions (open space only) use cubic cells and the 27 surrounding ones, same contract.
 """
 
 from __future__ import annotations
@@ -70,6 +71,99 @@ def _min_image(d, box, half):
 
 
 @njit(cache=True)
+def _neighbour_csr3(pos, radius, indices, dist2, min_d2):
+    """:func:`neighbour_csr` for (N, 3) positions in open space: cubic cells at least ``radius``
+    wide (doubled while there are more than ~4N of them), the 27 cells around each agent's."""
+    n = pos.shape[0]
+    cap = indices.shape[0]
+    max_cells = 4 * n + 64
+    x0 = np.inf
+    y0 = np.inf
+    z0 = np.inf
+    x1 = -np.inf
+    y1 = -np.inf
+    z1 = -np.inf
+    for i in range(n):
+        x0 = min(x0, pos[i, 0])
+        y0 = min(y0, pos[i, 1])
+        z0 = min(z0, pos[i, 2])
+        x1 = max(x1, pos[i, 0])
+        y1 = max(y1, pos[i, 1])
+        z1 = max(z1, pos[i, 2])
+    h = radius if radius > 0.0 else 1.0
+    if n == 0:
+        x0 = y0 = z0 = 0.0
+        x1 = y1 = z1 = 0.0
+    # counted in floating point: a tiny radius over a wide swarm would overflow an int product
+    while ((x1 - x0) / h + 1.0) * ((y1 - y0) / h + 1.0) * ((z1 - z0) / h + 1.0) > max_cells:
+        h *= 2.0
+    ncx = int((x1 - x0) / h) + 1
+    ncy = int((y1 - y0) / h) + 1
+    ncz = int((z1 - z0) / h) + 1
+    ncell = ncx * ncy * ncz
+    cell = np.empty(n, dtype=np.int64)
+    first = np.zeros(ncell + 1, dtype=np.int64)
+    for i in range(n):
+        cx = min(max(int((pos[i, 0] - x0) / h), 0), ncx - 1)
+        cy = min(max(int((pos[i, 1] - y0) / h), 0), ncy - 1)
+        cz = min(max(int((pos[i, 2] - z0) / h), 0), ncz - 1)
+        cell[i] = cx + ncx * (cy + ncy * cz)
+        first[cell[i] + 1] += 1
+    for c in range(ncell):
+        first[c + 1] += first[c]
+    fill = first[:-1].copy()
+    order = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        order[fill[cell[i]]] = i
+        fill[cell[i]] += 1
+    sp = np.empty((n, 3))
+    for s in range(n):
+        sp[s, 0] = pos[order[s], 0]
+        sp[s, 1] = pos[order[s], 1]
+        sp[s, 2] = pos[order[s], 2]
+    r2 = radius * radius
+    start = np.empty(n, dtype=np.int64)
+    end = np.empty(n, dtype=np.int64)
+    total = 0
+    wx = 3 if ncx >= 3 else ncx
+    wy = 3 if ncy >= 3 else ncy
+    wz = 3 if ncz >= 3 else ncz
+    for c0 in range(ncell):
+        cx = c0 % ncx
+        cy = (c0 // ncx) % ncy
+        cz = c0 // (ncx * ncy)
+        for si in range(first[c0], first[c0 + 1]):
+            px = sp[si, 0]
+            py = sp[si, 1]
+            pz = sp[si, 2]
+            start[order[si]] = total
+            for e in range(wz):
+                qz = _stencil_cell(cz, e, ncz, False)
+                if qz < 0:
+                    continue
+                for a in range(wy):
+                    qy = _stencil_cell(cy, a, ncy, False)
+                    if qy < 0:
+                        continue
+                    for b in range(wx):
+                        qx = _stencil_cell(cx, b, ncx, False)
+                        if qx < 0:
+                            continue
+                        c = qx + ncx * (qy + ncy * qz)
+                        for s in range(first[c], first[c + 1]):
+                            dx = sp[s, 0] - px
+                            dy = sp[s, 1] - py
+                            dz = sp[s, 2] - pz
+                            d2 = dx * dx + dy * dy + dz * dz
+                            if total < cap:
+                                indices[total] = order[s]
+                                dist2[total] = d2
+                            total += (d2 > min_d2) & (d2 <= r2)
+            end[order[si]] = total
+    return order, start, end, total
+
+
+@njit(cache=True)
 def neighbour_csr(pos, radius, box, wrap, indices, dist2, min_d2=0.0):
     """Fill ``indices`` / ``dist2`` with every neighbour of every agent.
 
@@ -79,7 +173,7 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2, min_d2=0.0):
     every candidate is written and the write position advances only for a true neighbour.
 
     Args:
-        pos: (N, 2) positions [m] (in ``[0, box)`` when periodic).
+        pos: (N, 2) positions [m] (in ``[0, box)`` when periodic), or (N, 3) in open space.
         radius: neighbour radius [m].
         box: side of the periodic square [m], or <= 0 for open space.
         wrap: use minimum-image distances in the periodic square.
@@ -95,6 +189,10 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2, min_d2=0.0):
         bounds and the number of entries. If ``total`` exceeds the buffers' length they hold
         only a prefix; call again with ``total`` capacity.
     """
+    if pos.shape[1] == 3:
+        if box > 0.0 and wrap:
+            raise ValueError("neighbour_csr: the periodic box is planar, positions must be (N, 2)")
+        return _neighbour_csr3(pos, radius, indices, dist2, min_d2)
     n = pos.shape[0]
     cap = indices.shape[0]
     periodic = box > 0.0 and wrap

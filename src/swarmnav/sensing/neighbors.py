@@ -2,7 +2,8 @@
 
 Pairs are unordered ``i < j`` with Euclidean distance ``<= radius`` (in a periodic square box
 of side ``box``, the minimum-image distance). Results are sorted by ``(i, j)`` so they do not
-depend on the tree's traversal order.
+depend on the tree's traversal order. Positions are (N, 2) or (N, 3) in open space; the
+periodic box is planar only.
 """
 
 from __future__ import annotations
@@ -13,8 +14,21 @@ from scipy.spatial import cKDTree
 from swarmnav.sensing._kernels import as_points
 
 
+def _positions(positions: np.ndarray, box: float | None) -> np.ndarray:
+    """Contiguous float64 (N, 2) positions, or (N, 3) in open space; ValueError otherwise."""
+    a = np.asarray(positions)
+    if a.ndim == 2 and a.shape[1] == 3:
+        if box is not None:
+            raise ValueError("a periodic box is planar: positions must have shape (N, 2) when box is given")
+        return np.ascontiguousarray(a, dtype=np.float64)
+    try:
+        return as_points(positions, "positions")
+    except ValueError:
+        raise ValueError(f"positions must have shape (N, 2) or (N, 3), got {a.shape}") from None
+
+
 def _tree(positions: np.ndarray, box: float | None) -> tuple[cKDTree, np.ndarray]:
-    pos = as_points(positions, "positions")
+    pos = _positions(positions, box)
     if box is None:
         return cKDTree(pos), pos
     box = float(box)
@@ -30,7 +44,7 @@ def neighbor_pairs(positions: np.ndarray, radius: float, box: float | None = Non
     """All unordered agent pairs closer than ``radius`` [m].
 
     Args:
-        positions: (N, 2) agent positions [m].
+        positions: (N, d) agent positions [m], d = 2 or 3 (3 only in open space).
         radius: interaction radius [m]; pairs at exactly ``radius`` are included.
         box: side [m] of a periodic square box ``[0, box)^2`` (positions are wrapped into it),
             or None for open space.
@@ -54,14 +68,14 @@ def neighbor_lists(positions: np.ndarray, radius: float, box: float | None = Non
     Both directions of every pair are stored, self excluded, neighbours sorted ascending.
 
     Args:
-        positions: (N, 2) agent positions [m].
+        positions: (N, d) agent positions [m], d = 2 or 3 (3 only in open space).
         radius: interaction radius [m] (inclusive).
         box: periodic box side [m], or None.
 
     Returns:
         ``(indptr (N + 1,), indices (2 P,))`` int64.
     """
-    n = as_points(positions, "positions").shape[0]
+    n = _positions(positions, box).shape[0]
     i, j = neighbor_pairs(positions, radius, box)
     src = np.concatenate([i, j])
     dst = np.concatenate([j, i])
@@ -73,8 +87,8 @@ def neighbor_lists(positions: np.ndarray, radius: float, box: float | None = Non
 
 def pairwise_min_distance(positions: np.ndarray, box: float | None = None) -> float:
     """Smallest distance [m] between two distinct agents (minimum-image in a periodic square of
-    side ``box``); ``inf`` for N < 2."""
-    pos = as_points(positions, "positions")
+    side ``box``); ``inf`` for N < 2. Positions (N, 2), or (N, 3) in open space [m]."""
+    pos = _positions(positions, box)
     if pos.shape[0] < 2:
         return float("inf")
     tree, pts = _tree(pos, box)
