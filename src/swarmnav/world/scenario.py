@@ -384,7 +384,9 @@ class _Ctx:
     def keys(self, table: dict, allowed: set[str], prefix: str) -> None:
         for k in table:
             if k not in allowed:
-                full = f"{prefix}.{k}" if prefix else k
+                full = f"{prefix}.{k}" if prefix else str(k)
+                if not full.isprintable():  # a quoted TOML key may hold a newline: keep one line
+                    full = repr(full)[1:-1]
                 raise self.err("", f"unknown key '{full}' (allowed: {', '.join(sorted(allowed))})")
 
     def table(self, data: dict, key: str, required: bool) -> dict:
@@ -407,9 +409,13 @@ class _Ctx:
     def number(self, v: Any, key: str) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise self.err(key, f"must be a number, got {v!r}")
-        if not math.isfinite(v):
+        try:
+            x = float(v)
+        except OverflowError:  # an integer beyond the float range (TOML integers are unbounded)
+            raise self.err(key, "must be finite, got an integer too large for a float") from None
+        if not math.isfinite(x):
             raise self.err(key, f"must be finite, got {v!r}")
-        return float(v)
+        return x
 
     def nonneg(self, v: Any, key: str) -> float:
         x = self.number(v, key)
@@ -423,10 +429,10 @@ class _Ctx:
             raise self.err(key, f"must be > 0, got {x}")
         return x
 
-    def point(self, v: Any, key: str, dim: int = 2) -> tuple[float, ...]:
+    def point(self, v: Any, key: str, dim: int = 2, why: str | None = None) -> tuple[float, ...]:
         if not isinstance(v, list) or len(v) != dim:
             if isinstance(v, list) and len(v) in (2, 3):
-                raise self.err(key, f"must be {_POINT[dim]} because {_WORLD[dim]}, got {v!r}")
+                raise self.err(key, f"must be {_POINT[dim]} because {why or _WORLD[dim]}, got {v!r}")
             raise self.err(key, f"must be {_POINT[dim]}, got {v!r}")
         return tuple(self.number(c, key) for c in v)
 
@@ -437,6 +443,8 @@ class _Ctx:
             raise self.err(key, f"must be {_RECT[dim]}, got {v!r}")
         c = tuple(self.number(x, key) for x in v)
         lo, hi = c[:dim], c[dim:]
+        if not all(math.isfinite(b - a) for a, b in zip(lo, hi)):  # e.g. [-1e308, ..., 1e308, ...]
+            raise self.err(key, f"has an extent too large for a float, got {v!r}")
         bad = any((b < a) if allow_degenerate else (b <= a) for a, b in zip(lo, hi))
         if bad:
             axes = "xmax > xmin and ymax > ymin" + (" and zmax > zmin" if dim == 3 else "")
@@ -474,7 +482,8 @@ class _Ctx:
                 raise self.err(key, f"box needs max > min in {axes} (size must be positive), got min={list(lo)} max={list(hi)}")
             return Box(lo, hi)
         if kind in ("circle", "cylinder", "sphere"):
-            c = self.point(o["center"], f"{key}.center", 3 if kind == "sphere" else 2)
+            c = self.point(o["center"], f"{key}.center", 3 if kind == "sphere" else 2,
+                           why="a cylinder is vertical: its height is z = [z0, z1]" if kind == "cylinder" else None)
             r = self.positive(o["radius"], f"{key}.radius")
             if kind == "circle":
                 return Circle(c, r)
@@ -484,7 +493,8 @@ class _Ctx:
         pts = o["points"]
         if not isinstance(pts, list) or len(pts) < 3:
             raise self.err(f"{key}.points", "needs at least 3 [x, y] vertices")
-        poly = tuple(self.point(p, f"{key}.points[{j}]", 2) for j, p in enumerate(pts))
+        why = "a 3-D polygon is a vertical prism: its height is z = [z0, z1]" if dim == 3 else None
+        poly = tuple(self.point(p, f"{key}.points[{j}]", 2, why) for j, p in enumerate(pts))
         if not polygon_is_simple(np.asarray(poly)):
             raise self.err(f"{key}.points", "must form a simple polygon (no self-intersection, non-zero area)")
         return Polygon(poly, self.zrange(o["z"], f"{key}.z") if dim == 3 else None)
