@@ -12,6 +12,12 @@ Each agent sums three forces and a velocity damping term, then saturates:
   resolution and integrates the obstacle's visible extent);
 - inter-agent separation with the same law against neighbours closer than ``r_sep``.
 
+In a 3-D world the ring becomes a sphere of ``n_rays_3d`` rays in Fibonacci-lattice
+directions (near-uniform, deterministic), each weighted by its solid angle ``4 pi / n_rays_3d``
+times a constant fixed once so that a flat wall pushes exactly as hard as in the plane (the
+normal force of a wall at 1 m is the same for the ring and the sphere; see
+:func:`sphere_weight`). Everything else is the same formula on (N, 3) arrays.
+
 It uses the same damped double integrator and inverse-model input as HES (eq. 5-7), so the
 comparison is on equal dynamics. It has the textbook weaknesses of potential fields: local
 minima in front of concave or wide obstacles, and oscillation in narrow passages. That is the
@@ -21,6 +27,7 @@ point of a baseline: it is honest, not tuned per scene.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -29,7 +36,8 @@ from swarmnav.dynamics import DampedDoubleIntegrator, clip_norm
 from swarmnav.methods.base import Observation
 from swarmnav.methods.registry import register
 from swarmnav.params import build
-from swarmnav.sensing import lidar_ring, neighbor_pairs
+from swarmnav.errors import ConfigError
+from swarmnav.sensing import lidar_ring, neighbor_pairs, range_scan
 from swarmnav.world.scenario import Scenario
 
 
@@ -52,6 +60,7 @@ class ApfParams:
     k_damp: float = 1.5  # velocity damping [1/s]
     a_max: float = 2.6  # acceleration saturation [m/s^2], as HES Table A1
     d_floor: float = 0.05  # distances are floored here before 1/d^2 [m] (bounded force)
+    n_rays_3d: int = 2048  # rays of the 3-D range sphere (ours: ~4.5 deg apart, 0.24 m at d0 = 3 m)
 
 
 class Apf:
@@ -61,12 +70,29 @@ class Apf:
         self.params = build(ApfParams, overrides, context="apf")
         self.dt = self.params.dt
         self.dynamics = DampedDoubleIntegrator()
+        p = self.params
+        for key in ("dt", "lidar_range", "d0", "r_sep", "r_att", "d_floor"):
+            if not (getattr(p, key) > 0 and np.isfinite(getattr(p, key))):
+                raise ConfigError(f"apf: {key} must be finite and > 0, got {getattr(p, key)}")
+        if p.n_rays < 1 or p.n_rays_3d < 1:
+            raise ConfigError(f"apf: n_rays and n_rays_3d must be >= 1, got {p.n_rays}, {p.n_rays_3d}")
+        if not p.a_max > 0:
+            raise ConfigError(f"apf: a_max must be > 0, got {p.a_max}")
         theta = 2 * np.pi * np.arange(self.params.n_rays) / self.params.n_rays
         self._dirs = np.column_stack([np.cos(theta), np.sin(theta)])  # (R, 2) ray directions
+        self._weight = 2 * np.pi / self.params.n_rays  # [rad] per ray
 
     def reset(self, scenario: Scenario, positions, velocities, rng) -> None:
         self.scenario = scenario
         self.goal = scenario.goal_array
+        p = self.params
+        if scenario.dim == 3:
+            self._dirs = fibonacci_sphere(p.n_rays_3d)
+            self._weight = 4 * np.pi / p.n_rays_3d * sphere_weight(p.d0)
+        else:
+            theta = 2 * np.pi * np.arange(p.n_rays) / p.n_rays
+            self._dirs = np.column_stack([np.cos(theta), np.sin(theta)])
+            self._weight = 2 * np.pi / p.n_rays
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.params
@@ -76,14 +102,17 @@ class Apf:
         a = p.k_att * to_goal / np.maximum(dist, p.r_att)[:, None]
         geom = self.scenario.geometry
         if not geom.is_empty:
-            ring = lidar_ring(geom, x, p.n_rays, p.lidar_range)  # (N, R)
+            if x.shape[1] == 2:
+                ring = lidar_ring(geom, x, p.n_rays, p.lidar_range)  # (N, R)
+            else:
+                ring = range_scan(geom, x, self._dirs, min(p.lidar_range, p.d0))  # (N, R)
             agent, ray = np.nonzero(ring < p.d0)  # only the few returns inside d0 matter
             if len(agent):
                 d = np.maximum(ring[agent, ray], p.d_floor)
-                w = (2 * np.pi / p.n_rays) * p.k_rep * (1.0 / d - 1.0 / p.d0) / d**2
+                w = self._weight * p.k_rep * (1.0 / d - 1.0 / p.d0) / d**2
                 n = len(x)  # push away from each return
-                a[:, 0] -= np.bincount(agent, w * self._dirs[ray, 0], minlength=n)
-                a[:, 1] -= np.bincount(agent, w * self._dirs[ray, 1], minlength=n)
+                for c in range(x.shape[1]):
+                    a[:, c] -= np.bincount(agent, w * self._dirs[ray, c], minlength=n)
         a += separation(x, p.k_sep, p.r_sep, p.d_floor)
         a -= p.k_damp * v
         return clip_norm(a, p.a_max), {}
@@ -110,9 +139,41 @@ def separation(x: np.ndarray, k: float, r: float, d_floor: float) -> np.ndarray:
         return out
     d = np.maximum(np.sqrt(np.einsum("ij,ij->i", diff, diff)), d_floor)
     f = (k * (1.0 / d - 1.0 / r) / d**3)[:, None] * diff
-    for c in range(2):
+    for c in range(x.shape[1]):
         out[:, c] = np.bincount(i, f[:, c], minlength=n) - np.bincount(j, f[:, c], minlength=n)
     return out
 
 
-register("apf", Apf, "Artificial potential field baseline: goal attraction, LiDAR repulsion, separation.")
+def fibonacci_sphere(n: int) -> np.ndarray:
+    """(n, 3) unit vectors of the Fibonacci lattice: near-uniform directions over the sphere,
+    each standing for the solid angle ``4 pi / n`` (deterministic, no random seed)."""
+    k = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * k / n
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * k
+    rho = np.sqrt(1.0 - z * z)
+    return np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z])
+
+
+@lru_cache(maxsize=8)
+def sphere_weight(d0: float, d: float = 1.0) -> float:
+    """Per-steradian weight [rad/sr] that gives a sphere of rays the ring's push on a flat wall.
+
+    A wall at distance ``d`` seen by rays at angle ``t`` from its normal returns ``d / cos t``;
+    the normal force of the Khatib law ``g(r) = (1/r - 1/d0) / r^2`` summed over the ring is
+    ``F2 = int g(d/cos t) cos t dt`` over ``|t| < acos(d/d0)``, over the sphere
+    ``F3 = int g(d/cos t) cos t 2 pi sin t dt``. The weight ``F2 / F3`` (at ``d`` = 1 m, our
+    choice) makes APF's obstacle push the same in 3-D as in the plane.
+    """
+    from scipy.integrate import quad
+
+    if d >= d0:
+        d = 0.5 * d0
+    tm = np.arccos(d / d0)
+    g = lambda t: (np.cos(t) / d - 1.0 / d0) * (np.cos(t) / d) ** 2 * np.cos(t)  # noqa: E731
+    f2 = 2.0 * quad(g, 0.0, tm)[0]
+    f3 = quad(lambda t: g(t) * 2.0 * np.pi * np.sin(t), 0.0, tm)[0]
+    return float(f2 / f3)
+
+
+register("apf", Apf, "Artificial potential field baseline: goal attraction, LiDAR repulsion, separation.",
+         dims=(2, 3))
