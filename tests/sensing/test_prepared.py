@@ -26,3 +26,24 @@ def test_prepared_queries_equal_the_public_ones(seed):
     np.testing.assert_array_equal(got, want)
     assert want.any() and not want.all()  # both answers occur, so the comparison means something
     assert not prep.is_empty and PreparedGeometry(Geometry.from_obstacles([])).is_empty
+
+
+def test_prepared_3d_queries_equal_the_public_ones():
+    from swarmnav.sensing import range_scan
+    from swarmnav.world.obstacles import Box, Cylinder, Sphere
+
+    rng = np.random.default_rng(5)
+    obs = [Box((0, 0, 0), (2, 3, 2)), Cylinder((5, 5), 0.7, (0, 4)), Sphere((2, 7, 2), 1.2)]
+    geom = Geometry.from_obstacles(obs, dim=3)
+    prep = PreparedGeometry(geom)
+    p, q = rng.uniform(-1, 9, (60, 3)), rng.uniform(-1, 9, (60, 3))
+    want = segments_blocked(geom, p, q)
+    np.testing.assert_array_equal(prep.blocked_into(p, q, np.empty(60, dtype=np.bool_)), want)
+    assert want.any() and not want.all()
+    u = rng.normal(size=(50, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    # range_scan normalises the directions again, which may move them by an ulp
+    np.testing.assert_allclose(prep.range_into(p[:5], u, 6.0, np.empty((5, 50))), range_scan(geom, p[:5], u, 6.0),
+                               rtol=0, atol=1e-12)
+    with pytest.raises(ValueError):
+        prep.lidar_into(p[:, :2].copy(), *_ray_table(8), 6.0, np.empty((60, 8)))

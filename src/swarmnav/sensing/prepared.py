@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, segments_blocked_kernel
+from swarmnav.sensing._kernels3d import geom_arrays3d, range_scan_kernel, segments_blocked3d_kernel
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
@@ -23,14 +24,15 @@ class PreparedGeometry:
     """A ``Geometry`` converted once to the sensing kernels' flat arrays.
 
     Inputs are not validated: positions and segment ends must be C-contiguous float64
-    (M, 2) arrays and ``out`` a buffer of the documented shape and dtype.
+    (M, d) arrays, ``d = geom.dim``, and ``out`` a buffer of the documented shape and dtype.
     """
 
-    __slots__ = ("geom", "_arrays")
+    __slots__ = ("geom", "_arrays", "_arrays3d")
 
     def __init__(self, geom: Geometry):
         self.geom = geom
-        self._arrays = geom_arrays(geom)
+        self._arrays = geom_arrays(geom) if geom.dim == 2 else None
+        self._arrays3d = geom_arrays3d(geom) if geom.dim == 3 else None
 
     @property
     def is_empty(self) -> bool:
@@ -39,12 +41,26 @@ class PreparedGeometry:
     def lidar_into(self, positions: np.ndarray, cos_t: np.ndarray, sin_t: np.ndarray, max_range: float,
                    out: np.ndarray) -> np.ndarray:
         """``out`` (N, R) float64 <- the LiDAR ranges [m] of rays (cos_t, sin_t) from every agent,
-        as :func:`swarmnav.sensing.lidar_ring` (``max_range`` where nothing is hit)."""
+        as :func:`swarmnav.sensing.lidar_ring` (``max_range`` where nothing is hit). Planar only."""
+        if self._arrays is None:
+            raise ValueError("lidar_into is the planar ring; use range_into in a 3-D world")
         lidar_kernel(*self._arrays, positions, cos_t, sin_t, float(max_range), out)
         return out
 
     def blocked_into(self, p: np.ndarray, q: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out`` (M,) bool <- whether segment p[m] -> q[m] meets an obstacle, as
-        :func:`swarmnav.sensing.segments_blocked`."""
+        :func:`swarmnav.sensing.segments_blocked` (either dimension)."""
+        if self._arrays3d is not None:
+            segments_blocked3d_kernel(*self._arrays3d, p, q, out)
+            return out
         segments_blocked_kernel(*self._arrays, p, q, out)
+        return out
+
+    def range_into(self, positions: np.ndarray, directions: np.ndarray, max_range: float,
+                   out: np.ndarray) -> np.ndarray:
+        """``out`` (N, R) float64 <- the range [m] along unit ``directions`` (R, 3) from every
+        position (N, 3), as :func:`swarmnav.sensing.range_scan` in a 3-D world."""
+        if self._arrays3d is None:
+            raise ValueError("range_into needs a 3-D world; use lidar_into in the plane")
+        range_scan_kernel(*self._arrays3d, positions, directions, float(max_range), out)
         return out
