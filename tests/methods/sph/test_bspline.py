@@ -6,7 +6,7 @@ import pytest
 from scipy.optimize import minimize
 
 from swarmnav.methods.sph.bspline import (
-    SplineCosts, _cost_grad, _esdf_query3, boundary_matrix, boundary_points, evaluate, optimize, total_cost,
+    SplineCosts, _cost_grad, boundary_matrix, boundary_points, evaluate, optimize, total_cost,
 )
 from swarmnav.world import Circle, Geometry
 from swarmnav.sensing.esdf import Esdf
@@ -143,16 +143,15 @@ def test_3d_cost_gradient_matches_finite_differences(esdf3):
     np.testing.assert_allclose(g3[:, :2], g2, rtol=1e-10, atol=1e-10)
 
 
-def test_3d_trilinear_field_is_exact_at_nodes_and_points_away_from_the_ball(esdf3):
+def test_3d_field_is_exact_at_nodes_and_points_away_from_the_ball(esdf3):
     m = 200
     rng = np.random.default_rng(4)
     idx = np.column_stack([rng.integers(0, n, m) for n in (101, 61, 61)])  # ix, iy, iz
     pts = esdf3.origin + esdf3.resolution * idx
-    d, g = np.empty(m), np.empty((m, 3))
-    _esdf_query3(esdf3.values, *esdf3.origin, esdf3.resolution, pts, d, g)
+    d, g = esdf3.query(pts)
     np.testing.assert_allclose(d, np.linalg.norm(pts - BALL_C, axis=1) - BALL_R, atol=1e-12)
     off = pts + 0.05  # cell centres: the gradient is the SDF's unit normal within the grid error
-    _esdf_query3(esdf3.values, *esdf3.origin, esdf3.resolution, off, d, g)
+    d, g = esdf3.query(off)
     normal = (off - BALL_C) / np.linalg.norm(off - BALL_C, axis=1)[:, None]
     far = np.linalg.norm(off - BALL_C, axis=1) > 0.3  # away from the centre, where the SDF has a kink
     assert np.einsum("md,md->m", g[far], normal[far]).min() > 0.98
@@ -169,3 +168,11 @@ def test_3d_optimiser_lifts_the_path_out_of_the_ball(esdf3):
     np.testing.assert_allclose(plan.ctrl[-3:], boundary_points(*end, DT))
     q, _, _ = evaluate(plan.ctrl, DT, np.linspace(0.0, plan.duration, 400))
     assert (np.linalg.norm(q - BALL_C, axis=1) - BALL_R).min() > 0.0  # the flown curve misses the ball
+
+
+def test_3d_compiled_cost_equals_numpy_cost(esdf3):
+    ctrl = np.column_stack([np.linspace(0, 6, 12), np.sin(np.arange(12.0)), 1.0 + np.cos(np.arange(12.0))])
+    f_np, g_np = total_cost(ctrl, 0.3, esdf3.query, W)
+    f_nb, g_nb = _compiled(ctrl, 0.3, esdf3)
+    assert f_nb == pytest.approx(f_np, rel=1e-12)
+    np.testing.assert_allclose(g_nb, g_np, rtol=1e-10, atol=1e-10)

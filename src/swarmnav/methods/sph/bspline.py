@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from swarmnav.sensing._kernels import esdf_query_kernel
+from swarmnav.sensing._kernels3d import esdf3d_query_kernel
 from swarmnav.sensing.esdf import Esdf
 
 #: Uniform cubic B-spline basis: position on segment s at local u in [0, 1) is
@@ -190,48 +191,6 @@ def optimize(
 
 
 @njit(cache=True)
-def _esdf_query3(values, ox, oy, oz, res, points, out_v, out_g):
-    """Trilinear interpolation of a 3-D ESDF and its analytic gradient, clamped to the grid: node
-    ``values[iz, iy, ix]`` sits at ``origin + res * (ix, iy, iz)`` (the convention of
-    ``Esdf.query`` in 3-D). Cells with a non-finite corner give the smallest corner value and a
-    zero gradient, as the planar kernel."""
-    nz, ny, nx = values.shape
-    inv = 1.0 / res
-    for m in range(points.shape[0]):
-        fx = min(max((points[m, 0] - ox) * inv, 0.0), nx - 1.0)
-        fy = min(max((points[m, 1] - oy) * inv, 0.0), ny - 1.0)
-        fz = min(max((points[m, 2] - oz) * inv, 0.0), nz - 1.0)
-        ix = min(int(math.floor(fx)), nx - 2)
-        iy = min(int(math.floor(fy)), ny - 2)
-        iz = min(int(math.floor(fz)), nz - 2)
-        u, v, w = fx - ix, fy - iy, fz - iz
-        c000, c100 = values[iz, iy, ix], values[iz, iy, ix + 1]
-        c010, c110 = values[iz, iy + 1, ix], values[iz, iy + 1, ix + 1]
-        c001, c101 = values[iz + 1, iy, ix], values[iz + 1, iy, ix + 1]
-        c011, c111 = values[iz + 1, iy + 1, ix], values[iz + 1, iy + 1, ix + 1]
-        lo = min(min(min(c000, c100), min(c010, c110)), min(min(c001, c101), min(c011, c111)))
-        if not math.isfinite(c000 + c100 + c010 + c110 + c001 + c101 + c011 + c111):
-            out_v[m] = lo
-            out_g[m, 0] = 0.0
-            out_g[m, 1] = 0.0
-            out_g[m, 2] = 0.0
-            continue
-        # along x first, then y, then z
-        c00 = c000 + u * (c100 - c000)
-        c10 = c010 + u * (c110 - c010)
-        c01 = c001 + u * (c101 - c001)
-        c11 = c011 + u * (c111 - c011)
-        c0 = c00 + v * (c10 - c00)
-        c1 = c01 + v * (c11 - c01)
-        out_v[m] = c0 + w * (c1 - c0)
-        gx0 = (1.0 - v) * (c100 - c000) + v * (c110 - c010)
-        gx1 = (1.0 - v) * (c101 - c001) + v * (c111 - c011)
-        out_g[m, 0] = ((1.0 - w) * gx0 + w * gx1) * inv
-        out_g[m, 1] = ((1.0 - w) * (c10 - c00) + w * (c11 - c01)) * inv
-        out_g[m, 2] = (c1 - c0) * inv
-
-
-@njit(cache=True)
 def _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origin, res, pts, dist, dgrad, grad):
     """Eq. (8) = lambda_s (9) + lambda_c (10) + lambda_f (11) and its gradient (into ``grad``),
     the loop form of :func:`total_cost`; ``values`` is a (ny, nx) or (nz, ny, nx) ESDF whose node
@@ -279,7 +238,7 @@ def _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origi
         if values.ndim == 2:  # resolved at compile time: one specialisation per dimension
             esdf_query_kernel(values, origin[0], origin[1], res, pts, dist, dgrad)
         else:
-            _esdf_query3(values, origin[0], origin[1], origin[2], res, pts, dist, dgrad)
+            esdf3d_query_kernel(values, origin[0], origin[1], origin[2], res, pts, dist, dgrad)
         for k in range(m):
             e = dist[k] - d_thr
             if e < 0.0 and math.isfinite(e):

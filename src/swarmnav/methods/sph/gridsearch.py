@@ -14,7 +14,9 @@ costs a long detour), and falls back to the body clearance. It is A* on the 8-co
 
 The dimension is the scene's: on a 3-D scene (six bounds) the maps are voxel grids
 (nz, ny, nx) and the search is A* on the 26-connected grid, the same classes and tiers, no
-corner cutting (a diagonal step needs every cell it grazes free), the 3-D octile heuristic.
+corner cutting (a diagonal step needs every cell it grazes free), the 3-D octile heuristic
+weighted by ``weight_3d`` (weighted A*: a path costs at most ``weight_3d`` times the optimum;
+the planar search keeps its fixed 1.001, a tie-break only).
 Its per-cell work arrays are kept between searches and marked by a search number, so a search
 costs what it expands, not the size of the grid (millions of voxels at 0.1 m).
 """
@@ -47,7 +49,7 @@ class OccupancyMaps:
 
     def __init__(self, obstacles: tuple[Obstacle, ...], bounds, n_robots: int, resolution: float,
                  inflation: float, sensing_range: float, margin: float | None = None, wide: float = 0.0,
-                 wide_cost: float = 0.0):
+                 wide_cost: float = 0.0, weight_3d: float = 1.001):
         dim = len(bounds) // 2
         lo_b, hi_b = np.asarray(bounds[:dim], dtype=float), np.asarray(bounds[dim:], dtype=float)
         self.dim = dim
@@ -78,6 +80,7 @@ class OccupancyMaps:
             self._work = (np.empty(n), np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.int32),
                           np.zeros(n, dtype=np.int32), np.empty(1024), np.empty(1024, dtype=np.int64))
             self._searches = 0
+            self.weight_3d = float(weight_3d)
 
     def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
         """Flat indices and clearance classes (see the module docstring) of the cells around
@@ -168,7 +171,7 @@ class OccupancyMaps:
                 self._searches += 1
                 gcost, parent, seen, closed, keys, vals = self._work
                 idx, keys, vals = _astar3(occ, s, g, max_expand, blocked, self.cost, _STEPS3, self._searches,
-                                          gcost, parent, seen, closed, keys, vals)
+                                          gcost, parent, seen, closed, keys, vals, self.weight_3d)
                 self._work = (gcost, parent, seen, closed, keys, vals)
                 if len(idx):
                     break
@@ -369,12 +372,12 @@ def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost):
 
 
 @njit(cache=True)
-def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen, closed, keys, vals):
+def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen, closed, keys, vals, weight):
     """A* over the voxels with ``occ < blocked`` of the 26-connected grid: step length 1,
     sqrt(2) or sqrt(3) times ``cost[occ]`` of the entered voxel, no corner cutting (every voxel
     a diagonal step grazes, i.e. each partial step of its offsets, must be passable), 3-D octile
-    heuristic ``d1 + (sqrt2 - 1) d2 + (sqrt3 - sqrt2) d3`` (d1 >= d2 >= d3, ties towards larger
-    g as the planar search). ``g, parent`` hold values for voxels whose ``seen == sid`` (this
+    heuristic ``d1 + (sqrt2 - 1) d2 + (sqrt3 - sqrt2) d3`` (d1 >= d2 >= d3) times ``weight``
+    (>= 1; just above 1 it only breaks ties towards larger g, as the planar search). ``g, parent`` hold values for voxels whose ``seen == sid`` (this
     search's number), ``closed == sid`` marks expanded ones, so nothing is cleared between
     searches. Returns ``(flat voxel indices start -> goal or empty, keys, vals)`` (the heap
     arrays, possibly grown)."""
@@ -434,7 +437,7 @@ def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen,
                 d3 = min(a, min(b, c))
                 d2 = a + b + c - d1 - d3
                 h = d1 + (r2 - 1.0) * d2 + (r3 - r2) * d3
-                keys, vals, size = _heap_push(keys, vals, size, ng + h * 1.001, nb)
+                keys, vals, size = _heap_push(keys, vals, size, ng + h * weight, nb)
     if not found:
         return np.zeros(0, dtype=np.int64), keys, vals
     count = 1

@@ -13,6 +13,10 @@ Every control step (Algorithm 2):
 
 Planning is per robot (a Python loop over robots, by design of the paper: each UAV plans
 independently); the coordination force and visibility are array operations.
+
+The same code flies planar and 3-D scenes (the paper's Fig. 3 (C, D)): positions, forces,
+splines and references are (N, d) with d = ``scenario.dim``; only the field (bilinear or
+trilinear ESDF) and the grid search (8- or 26-connected) differ, chosen by the scene.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ class Sph:
     """The SPH navigation method (see module docstring)."""
 
     name = "sph"
+    dims = (2, 3)  # flies planar and 3-D scenes natively: every array is (N, d), d from the scene
 
     def __init__(self, **overrides: Any):
         p = build(SphParams, overrides, context="sph")
@@ -48,6 +53,8 @@ class Sph:
                 raise ConfigError(f"sph: {key} must be > 0, got {getattr(p, key)}")
         if p.horizon_points < 0 or p.max_iter < 0:
             raise ConfigError("sph: horizon_points and max_iter must be >= 0")
+        if not p.search_weight_3d >= 1.0:
+            raise ConfigError(f"sph: search_weight_3d must be >= 1, got {p.search_weight_3d}")
         if p.once_hold < 0:
             raise ConfigError(f"sph: once_hold must be >= 0, got {p.once_hold}")
         self.params = p
@@ -67,7 +74,8 @@ class Sph:
         n = scenario.n
         self.esdf = Esdf.build(self.geom, scenario.bounds, p.esdf_resolution)
         self.maps = OccupancyMaps(scenario.obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.R,
-                                  margin=p.d_thr, wide=p.plan_clearance, wide_cost=p.plan_clearance_cost)
+                                  margin=p.d_thr, wide=p.plan_clearance, wide_cost=p.plan_clearance_cost,
+                                  weight_3d=p.search_weight_3d)
         x = np.asarray(positions, dtype=float)
         self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
         self._replan_every = max(1, int(round(p.T_p / p.dt)))
