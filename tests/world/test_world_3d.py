@@ -179,3 +179,14 @@ def test_forest_slice_keeps_exactly_the_trunks_taller_than_the_altitude():
     tall = sorted(o.center for o in _trunks(scn) if o.z[1] >= z)
     discs = sorted(o.center for o in scn.planar_slice(z).obstacles if isinstance(o, Circle))
     assert discs == tall and 0 < len(tall) < len(_trunks(scn))
+
+
+def test_docs_example_3d_scene_loads():
+    from pathlib import Path
+
+    from swarmnav.world.scenario import loads
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "scenarios.md").read_text()
+    block = text.split("A small 3-D scene", 1)[1].split("```toml\n", 1)[1].split("```", 1)[0]
+    scn = loads(block, "docs/scenarios.md")
+    assert scn.dim == 3 and {type(o) for o in scn.obstacles} == {Box, Cylinder, Sphere, Polygon}
