@@ -337,19 +337,36 @@ def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60)
     d = scn.dim
     n, spacing, clear = scn.n, scn.swarm.min_spacing, scn.swarm.clearance
     geom = scn.geometry
-    kept = np.zeros((0, d))
+    kept = np.empty((n, d))
+    k = 0
+    # Accepted agents hashed in cells of side 2 * spacing: an agent three or more cells away
+    # (along any axis) is more than 2 * spacing away, so checking the 3^d cells around a
+    # candidate accepts exactly the candidates a check against every agent accepts, in O(n)
+    # instead of O(n^2) (n up to MAX_AGENTS must not hang the load).
+    cells: dict[tuple[float, ...], list[int]] = {}
+    near = [np.array(o, dtype=float) for o in np.ndindex(*(3,) * d)]
+    lo = np.asarray(region[:d], dtype=float)
     batch = max(64, 4 * n)
     for _ in range(max_rounds):
         # one uniform draw per axis, x then y (then z): the planar draw order is unchanged
         cand = np.column_stack([rng.uniform(region[a], region[d + a], batch) for a in range(d)])
         if not geom.is_empty:
             cand = cand[signed_distance(geom, cand) >= clear]
-        for p in cand:  # sequential acceptance keeps the spacing rule exact; n is small here
-            if len(kept) == n:
-                break
-            if spacing <= 0 or len(kept) == 0 or np.min(np.sum((kept - p) ** 2, axis=1)) >= spacing**2:
-                kept = np.vstack([kept, p])
-        if len(kept) == n:
+        if spacing <= 0:
+            take = cand[: n - k]
+            kept[k : k + len(take)] = take
+            k += len(take)
+        else:
+            key = np.floor((cand - lo) / (2.0 * spacing)) - 1.0
+            for p, c in zip(cand, key):  # sequential acceptance keeps the spacing rule exact
+                if k == n:
+                    break
+                idx = [i for o in near for i in cells.get(tuple(c + o), ())]
+                if not idx or np.min(np.sum((kept[idx] - p) ** 2, axis=1)) >= spacing**2:
+                    kept[k] = p
+                    cells.setdefault(tuple(c + 1.0), []).append(k)
+                    k += 1
+        if k == n:
             return kept
     return None
 
