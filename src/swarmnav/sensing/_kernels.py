@@ -31,6 +31,13 @@ def geom_arrays(geom) -> tuple[np.ndarray, ...]:
     for a single type signature.
     """
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    return (*footprint_arrays(geom), f(geom.bbox_lo).reshape(-1, 2), f(geom.bbox_hi).reshape(-1, 2))
+
+
+def footprint_arrays(geom) -> tuple[np.ndarray, ...]:
+    """``seg_a, seg_b, poly_offsets, circ_c, circ_r``: the planar footprints (polygons and
+    circles) of a 2-D or 3-D geometry, contiguous with fixed dtypes."""
+    f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
     return (
         f(geom.seg_a).reshape(-1, 2),
         f(geom.seg_b).reshape(-1, 2),
@@ -38,8 +45,6 @@ def geom_arrays(geom) -> tuple[np.ndarray, ...]:
         else np.zeros(1, dtype=np.int64),
         f(geom.circ_c).reshape(-1, 2),
         f(geom.circ_r).reshape(-1),
-        f(geom.bbox_lo).reshape(-1, 2),
-        f(geom.bbox_hi).reshape(-1, 2),
     )
 
 
@@ -262,6 +267,46 @@ def lidar_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, p
 
 
 @njit(cache=True)
+def polygon_nearest(px, py, seg_a, seg_b, k0, k1):
+    """Nearest boundary point of the polygon with edges ``k0:k1`` to ``(px, py)``.
+
+    Returns ``(dmin2, inside, qx, qy)``: the squared distance [m^2] to the boundary, whether the
+    point is strictly inside (even-odd rule), and the offset (qx, qy) [m] from the point to the
+    nearest boundary point. A point exactly on an edge gives ``(0, False, 0, 0)`` (distance 0,
+    direction undefined).
+    """
+    dmin2 = np.inf
+    qx = 0.0
+    qy = 0.0
+    inside = False
+    for k in range(k0, k1):
+        ax = seg_a[k, 0] - px
+        ay = seg_a[k, 1] - py
+        bx = seg_b[k, 0] - px
+        by = seg_b[k, 1] - py
+        cr = ax * by - ay * bx
+        if cr == 0.0 and ax * bx + ay * by <= 0.0:
+            return 0.0, False, 0.0, 0.0
+        if (ay > 0.0) != (by > 0.0):
+            if (cr > 0.0) == (by > ay):
+                inside = not inside
+        ex = bx - ax
+        ey = by - ay
+        ee = ex * ex + ey * ey
+        s = 0.0
+        if ee > 0.0:
+            s = min(max(-(ax * ex + ay * ey) / ee, 0.0), 1.0)
+        nx = ax + s * ex
+        ny = ay + s * ey
+        d2 = nx * nx + ny * ny
+        if d2 < dmin2:
+            dmin2 = d2
+            qx = nx
+            qy = ny
+    return dmin2, inside, qx, qy
+
+
+@njit(cache=True)
 def nearest_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, points,
                    out_d, out_dir, want_dir):
     """Signed distance [m] to the obstacles and unit direction toward the nearest boundary point.
@@ -293,41 +338,7 @@ def nearest_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi,
                     continue
             elif not in_box:
                 continue
-            dmin2 = np.inf
-            qx = 0.0
-            qy = 0.0
-            inside = False
-            on_edge = False
-            for k in range(poly_offsets[p], poly_offsets[p + 1]):
-                ax = seg_a[k, 0] - px
-                ay = seg_a[k, 1] - py
-                bx = seg_b[k, 0] - px
-                by = seg_b[k, 1] - py
-                cr = ax * by - ay * bx
-                if cr == 0.0 and ax * bx + ay * by <= 0.0:
-                    on_edge = True
-                if (ay > 0.0) != (by > 0.0):
-                    if (cr > 0.0) == (by > ay):
-                        inside = not inside
-                ex = bx - ax
-                ey = by - ay
-                ee = ex * ex + ey * ey
-                s = 0.0
-                if ee > 0.0:
-                    s = min(max(-(ax * ex + ay * ey) / ee, 0.0), 1.0)
-                nx = ax + s * ex
-                ny = ay + s * ey
-                d2 = nx * nx + ny * ny
-                if d2 < dmin2:
-                    dmin2 = d2
-                    qx = nx
-                    qy = ny
-            if on_edge:
-                # Exactly on the boundary: distance 0, direction undefined (zeros).
-                dmin2 = 0.0
-                qx = 0.0
-                qy = 0.0
-                inside = False
+            dmin2, inside, qx, qy = polygon_nearest(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1])
             if inside:
                 depth = math.sqrt(dmin2)
                 if depth > best_in:

@@ -23,53 +23,31 @@ import math
 import numpy as np
 from numba import njit
 
-from swarmnav.sensing._kernels import OUTSIDE, _polygon_status, _segments_touch
+from swarmnav.sensing._kernels import OUTSIDE, _polygon_status, _segments_touch, footprint_arrays, polygon_nearest
 
 
 def geom_arrays3d(geom) -> tuple[np.ndarray, ...]:
     """The eleven 3-D ``Geometry`` arrays in kernel argument order, contiguous with fixed dtypes:
     ``seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r, bbox_lo, bbox_hi``.
     """
-    f = lambda a, d: np.ascontiguousarray(a, dtype=np.float64).reshape(-1, d)  # noqa: E731
-    return (
-        f(geom.seg_a, 2),
-        f(geom.seg_b, 2),
-        np.ascontiguousarray(geom.poly_offsets, dtype=np.int64).reshape(-1) if len(geom.poly_offsets)
-        else np.zeros(1, dtype=np.int64),
-        f(geom.circ_c, 2),
-        np.ascontiguousarray(geom.circ_r, dtype=np.float64).reshape(-1),
-        f(geom.poly_z, 2),
-        f(geom.circ_z, 2),
-        f(geom.sph_c, 3),
-        np.ascontiguousarray(geom.sph_r, dtype=np.float64).reshape(-1),
-        f(geom.bbox_lo, 3),
-        f(geom.bbox_hi, 3),
-    )
+    return _pack(geom, geom.poly_z, geom.circ_z, geom.sph_c, geom.sph_r, geom.bbox_lo, geom.bbox_hi)
 
 
 def planar_as_3d(geom) -> tuple[np.ndarray, ...]:
     """A planar geometry's arrays in 3-D kernel form: every footprint extruded over all z
     (``[-inf, inf]``), no spheres. A planar query is then the 3-D query at ``z = 0``."""
-    n_poly = len(geom.poly_offsets) - 1 if len(geom.poly_offsets) else 0
-    n_circ = len(geom.circ_r)
+    lo = np.asarray(geom.bbox_lo, dtype=np.float64).reshape(-1, 2)
+    hi = np.asarray(geom.bbox_hi, dtype=np.float64).reshape(-1, 2)
     inf_z = lambda n: np.tile([-np.inf, np.inf], (n, 1))  # noqa: E731
-    lo = np.column_stack([np.asarray(geom.bbox_lo, dtype=np.float64).reshape(-1, 2), np.full(n_poly + n_circ, -np.inf)])
-    hi = np.column_stack([np.asarray(geom.bbox_hi, dtype=np.float64).reshape(-1, 2), np.full(n_poly + n_circ, np.inf)])
+    return _pack(geom, inf_z(geom.n_polygons), inf_z(geom.n_circles), np.zeros((0, 3)), np.zeros(0),
+                 np.column_stack([lo, np.full(len(lo), -np.inf)]), np.column_stack([hi, np.full(len(hi), np.inf)]))
+
+
+def _pack(geom, poly_z, circ_z, sph_c, sph_r, bbox_lo, bbox_hi) -> tuple[np.ndarray, ...]:
+    """The footprint arrays of ``geom`` and the given 3-D ones, contiguous float64 / int64."""
     f = lambda a, d: np.ascontiguousarray(a, dtype=np.float64).reshape(-1, d)  # noqa: E731
-    return (
-        f(geom.seg_a, 2),
-        f(geom.seg_b, 2),
-        np.ascontiguousarray(geom.poly_offsets, dtype=np.int64).reshape(-1) if len(geom.poly_offsets)
-        else np.zeros(1, dtype=np.int64),
-        f(geom.circ_c, 2),
-        np.ascontiguousarray(geom.circ_r, dtype=np.float64).reshape(-1),
-        f(inf_z(n_poly), 2),
-        f(inf_z(n_circ), 2),
-        np.zeros((0, 3)),
-        np.zeros(0),
-        f(lo, 3),
-        f(hi, 3),
-    )
+    return (*footprint_arrays(geom), f(poly_z, 2), f(circ_z, 2), f(sph_c, 3),
+            np.ascontiguousarray(sph_r, dtype=np.float64).reshape(-1), f(bbox_lo, 3), f(bbox_hi, 3))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -80,38 +58,8 @@ def planar_as_3d(geom) -> tuple[np.ndarray, ...]:
 @njit(cache=True)
 def _poly_sd2(px, py, seg_a, seg_b, k0, k1):
     """Signed planar distance [m] from (px, py) to the polygon with edges ``k0:k1`` and the
-    offset (qx, qy) to its nearest boundary point (outward when inside; zeros on an edge).
-
-    The same loop as the planar ``nearest_kernel``: even-odd rule, exact on-edge test.
-    """
-    dmin2 = np.inf
-    qx = 0.0
-    qy = 0.0
-    inside = False
-    for k in range(k0, k1):
-        ax = seg_a[k, 0] - px
-        ay = seg_a[k, 1] - py
-        bx = seg_b[k, 0] - px
-        by = seg_b[k, 1] - py
-        cr = ax * by - ay * bx
-        if cr == 0.0 and ax * bx + ay * by <= 0.0:
-            return 0.0, 0.0, 0.0
-        if (ay > 0.0) != (by > 0.0):
-            if (cr > 0.0) == (by > ay):
-                inside = not inside
-        ex = bx - ax
-        ey = by - ay
-        ee = ex * ex + ey * ey
-        s = 0.0
-        if ee > 0.0:
-            s = min(max(-(ax * ex + ay * ey) / ee, 0.0), 1.0)
-        nx = ax + s * ex
-        ny = ay + s * ey
-        d2 = nx * nx + ny * ny
-        if d2 < dmin2:
-            dmin2 = d2
-            qx = nx
-            qy = ny
+    offset (qx, qy) to its nearest boundary point (outward when inside; zeros on an edge)."""
+    dmin2, inside, qx, qy = polygon_nearest(px, py, seg_a, seg_b, k0, k1)
     d = math.sqrt(dmin2)
     return (-d if inside else d), qx, qy
 

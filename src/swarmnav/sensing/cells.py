@@ -71,6 +71,24 @@ def _min_image(d, box, half):
 
 
 @njit(cache=True)
+def _counting_sort(cell, ncell):
+    """``(first, order)``: the agents grouped by cell (a counting sort), index order kept within
+    a cell; the agents of cell ``c`` are ``order[first[c]:first[c + 1]]``."""
+    n = cell.shape[0]
+    first = np.zeros(ncell + 1, dtype=np.int64)
+    for i in range(n):
+        first[cell[i] + 1] += 1
+    for c in range(ncell):
+        first[c + 1] += first[c]
+    fill = first[:-1].copy()
+    order = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        order[fill[cell[i]]] = i
+        fill[cell[i]] += 1
+    return first, order
+
+
+@njit(cache=True)
 def _neighbour_csr3(pos, radius, indices, dist2, min_d2):
     """:func:`neighbour_csr` for (N, 3) positions in open space: cubic cells at least ``radius``
     wide (doubled while there are more than ~4N of them), the 27 cells around each agent's."""
@@ -102,20 +120,12 @@ def _neighbour_csr3(pos, radius, indices, dist2, min_d2):
     ncz = int((z1 - z0) / h) + 1
     ncell = ncx * ncy * ncz
     cell = np.empty(n, dtype=np.int64)
-    first = np.zeros(ncell + 1, dtype=np.int64)
     for i in range(n):
         cx = min(max(int((pos[i, 0] - x0) / h), 0), ncx - 1)
         cy = min(max(int((pos[i, 1] - y0) / h), 0), ncy - 1)
         cz = min(max(int((pos[i, 2] - z0) / h), 0), ncz - 1)
         cell[i] = cx + ncx * (cy + ncy * cz)
-        first[cell[i] + 1] += 1
-    for c in range(ncell):
-        first[c + 1] += first[c]
-    fill = first[:-1].copy()
-    order = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        order[fill[cell[i]]] = i
-        fill[cell[i]] += 1
+    first, order = _counting_sort(cell, ncell)
     sp = np.empty((n, 3))
     for s in range(n):
         sp[s, 0] = pos[order[s], 0]
@@ -199,19 +209,11 @@ def neighbour_csr(pos, radius, box, wrap, indices, dist2, min_d2=0.0):
     x0, y0, h, ncx, ncy = _grid(pos, radius, box, periodic, 4 * n + 64)
     ncell = ncx * ncy
     cell = np.empty(n, dtype=np.int64)
-    first = np.zeros(ncell + 1, dtype=np.int64)
     for i in range(n):
         cx = min(max(int((pos[i, 0] - x0) / h), 0), ncx - 1)
         cy = min(max(int((pos[i, 1] - y0) / h), 0), ncy - 1)
         cell[i] = cx + ncx * cy
-        first[cell[i] + 1] += 1
-    for c in range(ncell):
-        first[c + 1] += first[c]
-    fill = first[:-1].copy()
-    order = np.empty(n, dtype=np.int64)
-    for i in range(n):  # counting sort: agents of a cell stay in index order
-        order[fill[cell[i]]] = i
-        fill[cell[i]] += 1
+    first, order = _counting_sort(cell, ncell)
     sx = np.empty(n)
     sy = np.empty(n)
     for s in range(n):

@@ -129,59 +129,42 @@ class OccupancyMaps:
                others: np.ndarray | None = None, others_radius: float = 0.0) -> np.ndarray | None:
         """A* path from ``start`` to ``goal`` [m] on ``robot``'s map: (P, dim) cell centres, the
         first replaced by ``start`` itself; None if no path. A start or goal inside an
-        inflated obstacle is moved to the nearest free cell (as the released planner does)."""
-        if self.dim == 3:
-            return self._search3(robot, start, goal, max_expand, others, others_radius)
+        inflated obstacle is moved to the nearest free cell (as the released planner does).
+        8-connected on a planar map, 26-connected on a voxel map."""
         occ = self.grids[robot]
         if others is not None and len(others) and others_radius > 0 and len(self.levels) > 1:
             occ = occ.copy()  # neighbours: cells within others_radius join the wide (costly) band
-            _mark_discs(occ, (np.asarray(others) - self.origin) / self.resolution, others_radius / self.resolution)
+            mark = _mark_balls if self.dim == 3 else _mark_discs
+            mark(occ, (np.asarray(others) - self.origin) / self.resolution, others_radius / self.resolution)
+        nearest_free = _nearest_free3 if self.dim == 3 else _nearest_free
         idx = np.zeros(0, dtype=np.int64)
         gc = self.cell(goal)
         top = len(self.levels) + 1
         for blocked in (top - 1, top) if top > 1 else (1,):  # keep d_thr if possible, else the body clearance
-            s = _nearest_free(occ, *self.cell(start), 40, blocked)
-            g = _nearest_free(occ, *gc, 40, blocked)
+            s = nearest_free(occ, *self.cell(start), 40, blocked)
+            g = nearest_free(occ, *gc, 40, blocked)
             if s[0] >= 0 and g[0] >= 0:
-                idx = _astar(occ, s[0], s[1], g[0], g[1], max_expand, blocked, self.cost)
-                if len(idx):
-                    break
-        if len(idx) == 0:
-            return None
-        nx = self.shape[1]
-        path = self.center(idx // nx, idx % nx)
-        path[0] = start
-        if g == gc:  # the goal itself is free: end exactly on it
-            path[-1] = goal
-        return path
-
-    def _search3(self, robot, start, goal, max_expand, others, others_radius):
-        """:meth:`search` on the voxel grid (26-connected A*)."""
-        occ = self.grids[robot]
-        if others is not None and len(others) and others_radius > 0 and len(self.levels) > 1:
-            occ = occ.copy()  # neighbours: voxels within others_radius join the wide (costly) band
-            _mark_balls(occ, (np.asarray(others) - self.origin) / self.resolution, others_radius / self.resolution)
-        idx = np.zeros(0, dtype=np.int64)
-        gc = self.cell(goal)
-        top = len(self.levels) + 1
-        for blocked in (top - 1, top) if top > 1 else (1,):  # keep d_thr if possible, else the body clearance
-            s = _nearest_free3(occ, *self.cell(start), 40, blocked)
-            g = _nearest_free3(occ, *gc, 40, blocked)
-            if s[0] >= 0 and g[0] >= 0:
-                self._searches += 1
-                gcost, parent, seen, closed, keys, vals = self._work
-                idx, keys, vals = _astar3(occ, s, g, max_expand, blocked, self.cost, _STEPS3, self._searches,
-                                          gcost, parent, seen, closed, keys, vals, self.weight_3d)
-                self._work = (gcost, parent, seen, closed, keys, vals)
+                idx = self._astar(occ, s, g, max_expand, blocked)
                 if len(idx):
                     break
         if len(idx) == 0:
             return None
         path = self.center(*np.unravel_index(idx, self.shape))
         path[0] = start
-        if g == gc:
+        if g == gc:  # the goal itself is free: end exactly on it
             path[-1] = goal
         return path
+
+    def _astar(self, occ, s, g, max_expand, blocked) -> np.ndarray:
+        """Flat cell indices of the A* path between free cells ``s`` and ``g`` (empty: none)."""
+        if self.dim == 2:
+            return _astar(occ, s[0], s[1], g[0], g[1], max_expand, blocked, self.cost)
+        self._searches += 1
+        gcost, parent, seen, closed, keys, vals = self._work
+        idx, keys, vals = _astar3(occ, s, g, max_expand, blocked, self.cost, _STEPS3, self._searches,
+                                  gcost, parent, seen, closed, keys, vals, self.weight_3d)
+        self._work = (gcost, parent, seen, closed, keys, vals)
+        return idx
 
 
 @njit(cache=True)
