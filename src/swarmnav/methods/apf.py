@@ -37,7 +37,7 @@ from swarmnav.methods.base import Observation
 from swarmnav.methods.registry import register
 from swarmnav.params import build
 from swarmnav.errors import ConfigError
-from swarmnav.sensing import lidar_ring, neighbor_pairs, range_scan
+from swarmnav.sensing import PreparedGeometry, lidar_ring, neighbor_pairs
 from swarmnav.world.scenario import Scenario
 
 
@@ -89,6 +89,8 @@ class Apf:
         if scenario.dim == 3:
             self._dirs = fibonacci_sphere(p.n_rays_3d)
             self._weight = 4 * np.pi / p.n_rays_3d * sphere_weight(p.d0)
+            self._prepared = PreparedGeometry(scenario.geometry)  # converted once, not per step
+            self._ranges = np.empty((scenario.n, p.n_rays_3d))
         else:
             theta = 2 * np.pi * np.arange(p.n_rays) / p.n_rays
             self._dirs = np.column_stack([np.cos(theta), np.sin(theta)])
@@ -105,7 +107,8 @@ class Apf:
             if x.shape[1] == 2:
                 ring = lidar_ring(geom, x, p.n_rays, p.lidar_range)  # (N, R)
             else:
-                ring = range_scan(geom, x, self._dirs, min(p.lidar_range, p.d0))  # (N, R)
+                ring = self._prepared.range_into(np.ascontiguousarray(x), self._dirs, min(p.lidar_range, p.d0),
+                                                 self._ranges)  # (N, R)
             agent, ray = np.nonzero(ring < p.d0)  # only the few returns inside d0 matter
             if len(agent):
                 d = np.maximum(ring[agent, ray], p.d_floor)
@@ -151,7 +154,7 @@ def fibonacci_sphere(n: int) -> np.ndarray:
     z = 1.0 - 2.0 * k / n
     phi = np.pi * (3.0 - np.sqrt(5.0)) * k
     rho = np.sqrt(1.0 - z * z)
-    return np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z])
+    return np.ascontiguousarray(np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z]))
 
 
 @lru_cache(maxsize=8)

@@ -424,6 +424,33 @@ def _segments_touch(p0x, p0y, p1x, p1y, ax, ay, bx, by):
 
 
 @njit(cache=True)
+def segment_meets_polygon(ax, ay, bx, by, seg_a, seg_b, k0, k1):
+    """The closed segment a-b touches or lies inside the polygon with edges ``k0:k1``."""
+    for k in range(k0, k1):
+        if _segments_touch(ax, ay, bx, by, seg_a[k, 0], seg_a[k, 1], seg_b[k, 0], seg_b[k, 1]):
+            return True
+    # No edge is touched: the segment is wholly inside or wholly outside, so testing one
+    # endpoint decides.
+    return _polygon_status(ax, ay, seg_a, seg_b, k0, k1) != OUTSIDE
+
+
+@njit(cache=True)
+def segment_meets_disc(ax, ay, bx, by, cx, cy, r):
+    """The closed segment a-b meets the closed disc (c, r)."""
+    ex = bx - ax
+    ey = by - ay
+    wx = cx - ax
+    wy = cy - ay
+    ee = ex * ex + ey * ey
+    s = 0.0
+    if ee > 0.0:
+        s = min(max((wx * ex + wy * ey) / ee, 0.0), 1.0)
+    dx = wx - s * ex
+    dy = wy - s * ey
+    return dx * dx + dy * dy <= r * r
+
+
+@njit(cache=True)
 def segments_blocked_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, p, q, out):
     """``out[m]`` is True if the closed segment p[m]-q[m] meets any closed obstacle."""
     n_poly = poly_offsets.shape[0] - 1
@@ -441,31 +468,12 @@ def segments_blocked_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo,
         for pg in range(n_poly):
             if hix < bbox_lo[pg, 0] or lox > bbox_hi[pg, 0] or hiy < bbox_lo[pg, 1] or loy > bbox_hi[pg, 1]:
                 continue
-            k0 = poly_offsets[pg]
-            k1 = poly_offsets[pg + 1]
-            for k in range(k0, k1):
-                if _segments_touch(p0x, p0y, p1x, p1y, seg_a[k, 0], seg_a[k, 1], seg_b[k, 0], seg_b[k, 1]):
-                    blocked = True
-                    break
-            # No edge is touched: the segment is wholly inside or wholly outside, so testing
-            # one endpoint decides.
-            if not blocked and _polygon_status(p0x, p0y, seg_a, seg_b, k0, k1) != OUTSIDE:
-                blocked = True
+            blocked = segment_meets_polygon(p0x, p0y, p1x, p1y, seg_a, seg_b, poly_offsets[pg], poly_offsets[pg + 1])
             if blocked:
                 break
         if not blocked:
-            ex = p1x - p0x
-            ey = p1y - p0y
-            ee = ex * ex + ey * ey
             for c in range(n_circ):
-                wx = circ_c[c, 0] - p0x
-                wy = circ_c[c, 1] - p0y
-                s = 0.0
-                if ee > 0.0:
-                    s = min(max((wx * ex + wy * ey) / ee, 0.0), 1.0)
-                dx = wx - s * ex
-                dy = wy - s * ey
-                if dx * dx + dy * dy <= circ_r[c] * circ_r[c]:
+                if segment_meets_disc(p0x, p0y, p1x, p1y, circ_c[c, 0], circ_c[c, 1], circ_r[c]):
                     blocked = True
                     break
         out[m] = blocked

@@ -23,7 +23,14 @@ import math
 import numpy as np
 from numba import njit
 
-from swarmnav.sensing._kernels import OUTSIDE, _polygon_status, _segments_touch, footprint_arrays, polygon_nearest
+from swarmnav.sensing._kernels import (
+    OUTSIDE,
+    _polygon_status,
+    footprint_arrays,
+    polygon_nearest,
+    segment_meets_disc,
+    segment_meets_polygon,
+)
 
 
 def geom_arrays3d(geom) -> tuple[np.ndarray, ...]:
@@ -264,22 +271,6 @@ def _point_on(t, p0, p1, e):
 
 
 @njit(cache=True)
-def _segment_disc(ax, ay, bx, by, cx, cy, r):
-    """The closed planar segment a-b meets the closed disc (c, r)."""
-    ex = bx - ax
-    ey = by - ay
-    wx = cx - ax
-    wy = cy - ay
-    ee = ex * ex + ey * ey
-    s = 0.0
-    if ee > 0.0:
-        s = min(max((wx * ex + wy * ey) / ee, 0.0), 1.0)
-    dx = wx - s * ex
-    dy = wy - s * ey
-    return dx * dx + dy * dy <= r * r
-
-
-@njit(cache=True)
 def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
                               bbox_lo, bbox_hi, p, q, out):
     """``out[m]`` is True if the closed segment p[m]-q[m] meets any closed obstacle.
@@ -323,18 +314,10 @@ def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
                 bx = _point_on(t1, p0x, p1x, ex)
                 by = _point_on(t1, p0y, p1y, ey)
                 if k < n_poly:
-                    k0 = poly_offsets[k]
-                    k1 = poly_offsets[k + 1]
-                    for j in range(k0, k1):
-                        if _segments_touch(ax, ay, bx, by, seg_a[j, 0], seg_a[j, 1], seg_b[j, 0], seg_b[j, 1]):
-                            blocked = True
-                            break
-                    # No edge touched: the clipped part is wholly inside or wholly outside.
-                    if not blocked and _polygon_status(ax, ay, seg_a, seg_b, k0, k1) != OUTSIDE:
-                        blocked = True
+                    blocked = segment_meets_polygon(ax, ay, bx, by, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1])
                 else:
                     c = k - n_poly
-                    blocked = _segment_disc(ax, ay, bx, by, circ_c[c, 0], circ_c[c, 1], circ_r[c])
+                    blocked = segment_meets_disc(ax, ay, bx, by, circ_c[c, 0], circ_c[c, 1], circ_r[c])
             else:
                 b = k - n_poly - n_circ
                 wx = sph_c[b, 0] - p0x

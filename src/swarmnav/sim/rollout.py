@@ -77,14 +77,12 @@ def run(
     geom = scn.geometry
     no_obstacles = geom.is_empty
     clear = (lambda x: np.full(len(x), np.inf)) if no_obstacles else (lambda x: signed_distance(geom, x))
-    if plane_z is None:
-        lift = _identity
-    else:  # the slice's (N, 2) state at altitude plane_z; velocity has no vertical part
+    lift = vlift = _identity
+    if plane_z is not None:  # the slice's (N, 2) state at altitude plane_z, no vertical velocity
         lift = lambda x, z=plane_z: np.column_stack([x, np.full(len(x), z)])  # noqa: E731
         vlift = lambda x: np.column_stack([x, np.zeros(len(x))])  # noqa: E731
-        clear = (lambda x, c=clear: c(lift(x)))
-    vrec = lift if plane_z is None else vlift
-    P[0], V[0], C[0] = lift(pos), vrec(vel), clear(pos)
+    P[0], V[0] = lift(pos), vlift(vel)
+    C[0] = clear(P[0])  # against the scene's own (3-D) obstacles
     events: list[dict] = []
     bar = _progress(progress, steps)
     t0 = time.perf_counter()
@@ -95,7 +93,8 @@ def run(
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
         if period is not None:  # the world is a torus whatever the method's dynamics
             pos = lo + np.mod(pos - lo, period)
-        P[k + 1], V[k + 1], C[k + 1] = lift(pos), vrec(vel), clear(pos)
+        P[k + 1], V[k + 1] = lift(pos), vlift(vel)
+        C[k + 1] = clear(P[k + 1])
         labels = info.get("labels")
         lab[k + 1] = lab[k] if labels is None else labels
         for ev in info.get("events", ()):

@@ -287,6 +287,22 @@ def _heap_pop(keys, vals, size):
 
 
 @njit(cache=True)
+def _walk_back(parent, s, goal):
+    """Flat cell indices of the path ``s -> goal`` read back through ``parent``."""
+    count = 1
+    c = goal
+    while c != s:
+        c = parent[c]
+        count += 1
+    out = np.empty(count, dtype=np.int64)
+    c = goal
+    for k in range(count - 1, -1, -1):
+        out[k] = c
+        c = parent[c]
+    return out
+
+
+@njit(cache=True)
 def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost):
     """A* over the cells with ``occ < blocked`` of an 8-connected grid, step length 1 (diagonal
     sqrt(2)) times ``cost[occ]`` of the entered cell (all >= 1), no corner cutting, octile
@@ -341,17 +357,7 @@ def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost):
                 keys, vals, size = _heap_push(keys, vals, size, ng + h * 1.001, nb)
     if not found:
         return np.zeros(0, dtype=np.int64)
-    count = 1
-    c = goal
-    while c != s:
-        c = parent[c]
-        count += 1
-    out = np.empty(count, dtype=np.int64)
-    c = goal
-    for k in range(count - 1, -1, -1):
-        out[k] = c
-        c = parent[c]
-    return out
+    return _walk_back(parent, s, goal)
 
 
 @njit(cache=True)
@@ -423,17 +429,7 @@ def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen,
                 keys, vals, size = _heap_push(keys, vals, size, ng + h * weight, nb)
     if not found:
         return np.zeros(0, dtype=np.int64), keys, vals
-    count = 1
-    c = goal
-    while c != s:
-        c = parent[c]
-        count += 1
-    out = np.empty(count, dtype=np.int64)
-    c = goal
-    for k in range(count - 1, -1, -1):
-        out[k] = c
-        c = parent[c]
-    return out, keys, vals
+    return _walk_back(parent, s, goal), keys, vals
 
 
 def resample(path: np.ndarray, spacing: float) -> np.ndarray:
