@@ -29,7 +29,7 @@ def test_method_on_scene(method, scene):
     n = a.config["scenario"]["swarm"]["n"]
     dim = len(a.config["scenario"]["goal"]["position"])
     assert a.positions.shape == (steps + 1, n, dim)
-    if dim == 3 and 3 not in registry.spec(method).dims:  # a planar method keeps its altitude
+    if dim == 3 and 3 not in registry.make(method).dims:  # a planar method keeps its altitude
         z = a.config["plane"]["z_fly"]
         assert np.all(a.positions[:, :, 2] == z) and np.all(a.velocities[:, :, 2] == 0.0)
     assert np.all(np.isfinite(a.positions)) and np.all(np.isfinite(a.velocities))

@@ -21,6 +21,7 @@ class _StopAt:
     name = "stop-at"
     params = _NoParams()
     dt = 1.0
+    dims = (2,)
 
     def __init__(self, stop):
         self.stop = stop

@@ -65,6 +65,7 @@ class ApfParams:
 
 class Apf:
     name = "apf"
+    dims = (2, 3)  # a range ring in the plane, a range sphere in 3-D
 
     def __init__(self, **overrides: Any):
         self.params = build(ApfParams, overrides, context="apf")
@@ -178,5 +179,4 @@ def sphere_weight(d0: float, d: float = 1.0) -> float:
     return float(f2 / f3)
 
 
-register("apf", Apf, "Artificial potential field baseline: goal attraction, LiDAR repulsion, separation.",
-         dims=(2, 3))
+register("apf", Apf, "Artificial potential field baseline: goal attraction, LiDAR repulsion, separation.")

@@ -45,6 +45,7 @@ class Method(Protocol):
     params: Any
     dynamics: Dynamics
     dt: float  # integration step [s] the method is designed for
+    dims: tuple[int, ...]  # world dimensions flown natively; (2,): a 3-D scene is flown in its slice at z_fly
 
     def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray, rng: np.random.Generator) -> None: ...
 

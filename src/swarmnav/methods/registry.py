@@ -15,23 +15,16 @@ class MethodSpec:
     factory: Callable[..., Method]
     description: str
     navigation: bool = True  # a goal-seeking method (runs on the navigation scenes)
-    #: World dimensions the method flies natively. A planar method (dims = (2,)) flies a 3-D
-    #: scene in its horizontal slice at a fixed altitude (``swarmnav.sim.run(..., z_fly=)``).
-    dims: tuple[int, ...] = (2,)
 
 
 _REGISTRY: dict[str, MethodSpec] = {}
 
 
-def register(name: str, factory: Callable[..., Method], description: str, *, navigation: bool = True,
-             dims: tuple[int, ...] = (2,)) -> None:
-    """Register ``factory(**params) -> Method`` under ``name``; ``dims`` lists the world
-    dimensions it flies natively (planar methods fly 3-D scenes in a horizontal slice)."""
+def register(name: str, factory: Callable[..., Method], description: str, *, navigation: bool = True) -> None:
+    """Register ``factory(**params) -> Method`` under ``name``."""
     if name in _REGISTRY:
         raise ValueError(f"method {name!r} registered twice")
-    if not dims or any(d not in (2, 3) for d in dims):
-        raise ValueError(f"dims must be a non-empty subset of (2, 3), got {dims!r}")
-    _REGISTRY[name] = MethodSpec(name, factory, description, navigation, tuple(dims))
+    _REGISTRY[name] = MethodSpec(name, factory, description, navigation)
 
 
 #: Modules whose import registers the built-in methods (one line per method family).

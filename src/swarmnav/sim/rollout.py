@@ -37,7 +37,7 @@ def run(
     """Simulate ``method`` on ``scenario`` for ``steps`` steps from a seeded start.
 
     Positions, velocities and commands are (N, d) arrays, d the scene's dimension. A planar
-    method (registered with ``dims=(2,)``: HES, the Vicsek family) keeps its paper's plane on
+    method (``dims = (2,)``: HES, the Vicsek family) keeps its paper's plane on
     a 3-D scene: it flies the scene's horizontal slice at altitude ``z_fly`` (spawned, sensing
     and acting in that slice), while the run is recorded in 3-D at that altitude and its
     clearance and metrics are measured against the 3-D world; ``config["plane"]`` says so.
@@ -61,8 +61,7 @@ def run(
         raise ConfigError(f"steps must be >= 1, got {steps}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
-    dims = registry.spec(method).dims if isinstance(method, str) else tuple(getattr(m, "dims", (2,)))
-    world, plane_z = _world_of(scn, dims, z_fly, m.name)
+    world, plane_z = _world_of(scn, m.dims, z_fly, m.name)
     rng = np.random.default_rng(seed)
     pos = world.spawn_positions(rng)
     vel = np.zeros_like(pos)

@@ -129,6 +129,7 @@ class Hes:
     """The HES method (see module docstring); parameters: :class:`HesParams`."""
 
     name = "hes"
+    dims = (2,)  # planar, as its paper: a 3-D scene is flown in its horizontal slice at z_fly
 
     def __init__(self, **overrides: Any):
         self.params = build(HesParams, overrides, context="hes")

@@ -5,7 +5,6 @@ from swarmnav.methods.registry import register
 from swarmnav.methods.sph.method import Sph
 from swarmnav.methods.sph.params import SphParams
 
-register("sph", Sph, "SPH swarm navigation: SPH coordination + per-robot B-spline planning + raycast split/merge.",
-         dims=(2, 3))
+register("sph", Sph, "SPH swarm navigation: SPH coordination + per-robot B-spline planning + raycast split/merge.")
 
 __all__ = ["Sph", "SphParams"]

@@ -102,6 +102,8 @@ class VicsekParams:
 class VicsekFamily:
     """One of the six models, chosen by ``model`` (a key of :data:`MODELS`)."""
 
+    dims = (2,)  # headings are planar angles: a 3-D scene is flown in its horizontal slice at z_fly
+
     def __init__(self, model: str, **overrides: Any):
         if model not in MODELS:
             raise ConfigError(f"unknown Vicsek model {model!r} (known: {', '.join(MODELS)})")
