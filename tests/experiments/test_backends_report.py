@@ -3,6 +3,7 @@
 import csv
 import shutil
 import subprocess
+from html.parser import HTMLParser
 
 import pytest
 
@@ -60,6 +61,64 @@ def test_bad_spec_files(tmp_path, text, fragment):
     with pytest.raises(ConfigError, match=fragment.replace("[", r"\[")):
         exp = load_experiment(str(f))
         run_experiment(exp, tmp_path / "o", progress=False)
+
+
+class _Page(HTMLParser):
+    """The parts of report.html a reader meets: visible text and each table's rows of cells."""
+
+    def __init__(self):
+        super().__init__()
+        self.text, self.tables, self._skip, self._cell = [], [], 0, None
+
+    def handle_starttag(self, tag, attrs):
+        if tag in ("style", "script"):
+            self._skip += 1
+        elif tag == "table":
+            self.tables.append([])
+        elif tag == "tr":
+            self.tables[-1].append([])
+        elif tag in ("td", "th"):
+            a = dict(attrs)
+            self._cell = {"tag": tag, "class": (a.get("class") or "").split(), "span": int(a.get("colspan", 1)), "text": ""}
+            self.tables[-1][-1].append(self._cell)
+
+    def handle_endtag(self, tag):
+        if tag in ("style", "script"):
+            self._skip -= 1
+        elif tag in ("td", "th"):
+            self._cell = None
+
+    def handle_data(self, data):
+        if not self._skip:
+            self.text.append(data)
+            if self._cell is not None:
+                self._cell["text"] += data
+
+
+@pytest.fixture(scope="module")
+def wide_report(tmp_path_factory):
+    """A report as wide as the newcomer's hes-sim3 one: ten metrics, four with published values."""
+    d = tmp_path_factory.mktemp("wide")
+    spec = d / "wide.toml"
+    spec.write_text('name = "wide"\ndescription = "APF on two `hes.table5` scenes"\nsteps = 30\nseeds = "1-2"\n'
+                    'matrix = { method = ["apf"], scenario = ["default_corridor", "narrow_alternating_gates"] }\n'
+                    '[report]\nreference = "hes.table5"\nreference_index = 0\n'
+                    'metrics = ["Y", "R_goal", "E_mean", "S_scene", "R_unsafe", "R_unsafe_agent", "d_clr_min", '
+                    '"L_mean", "collisions", "min_inter_agent_distance"]\n'
+                    'variant_map = { "apf/default_corridor" = "default_corridor", '
+                    '"apf/narrow_alternating_gates" = "narrow_alternating_gates" }\n')
+    run_experiment(load_experiment(str(spec)), d / "o", workers=1, progress=False)
+    md, html = write_report(d / "o")
+    page = _Page()
+    page.feed(html.read_text())
+    return d / "o", md.read_text(), page
+
+
+def test_report_html_shows_no_markdown_markup(wide_report):
+    _, _, page = wide_report
+    text = "".join(page.text)
+    assert "hes.table5" in text  # the reference is named (as <code>), ...
+    assert "`" not in text  # ... without the markdown backticks around it
 
 
 def test_packaged_reference_matches_the_papers_tables():

@@ -11,6 +11,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+import re
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -203,6 +204,11 @@ def _short(name: str, limit: int = 40) -> str:
     return name if len(name) <= limit else name[: limit - 1] + "…"
 
 
+def _inline_html(text: str) -> str:
+    """Markdown-ish prose as HTML: escaped, with `code` spans as <code> (no backticks leak through)."""
+    return re.sub(r"`([^`]+)`", r"<code>\1</code>", html.escape(text))
+
+
 def _png(fig) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
@@ -249,9 +255,9 @@ tr:nth-child(even) td {{ background: #fafafa; }}
 img {{ max-width: 100%; }}
 </style></head><body>
 <h1>{e(t['title'])}</h1>
-<p>{e(t['description'])}</p>
+<p>{_inline_html(t['description'])}</p>
 <p>Experiment <code>{e(experiment)}</code>, {t['n_runs']} runs. Cells are mean ± population std over seeds.
-{e(ref_note)}</p>
+{_inline_html(ref_note)}</p>
 <table id="results"><thead><tr>{''.join(f'<th>{e(h)}</th>' for h in head)}</tr></thead>
 <tbody>
 {rows_html}
