@@ -3,6 +3,7 @@
 import csv
 import shutil
 import subprocess
+from html import unescape as html_unescape
 from html.parser import HTMLParser
 
 import pytest
@@ -121,6 +122,66 @@ def test_report_html_shows_no_markdown_markup(wide_report):
     assert "`" not in text  # ... without the markdown backticks around it
 
 
+def test_wide_report_is_split_into_tables_that_fit_a_page(wide_report):
+    """Ten metrics and four paper columns were one 22-column table; now each table has at most
+    eight value columns beside the variant (and, in the first, the run count)."""
+    _, md, page = wide_report
+    assert len(page.tables) >= 2
+    shown = []
+    for table in page.tables:
+        body = [r for r in table if r and r[0]["tag"] == "td"]
+        assert max(len(r) for r in body) <= 10
+        assert [r[0]["text"] for r in body] == ["apf/default_corridor", "apf/narrow_alternating_gates"]
+        assert all("num" in c["class"] for r in body for c in r[1:])  # right-aligned, nowrap, tabular
+        heads = [c["text"] for r in table if r[0]["tag"] == "th" for c in r]
+        shown += [h.split(" [")[0] for h in heads if h not in ("variant", "runs", "ours", "paper")]
+    metrics = ["Y", "R_goal", "E_mean", "S_scene", "R_unsafe", "R_unsafe_agent", "d_clr_min", "L_mean",
+               "collisions", "min_inter_agent_distance"]
+    assert sorted(shown) == sorted(metrics)  # every metric in exactly one table
+    # the paper's value sits in a paper cell of its variant's row (hes.table5, rule: E_mean 6.126)
+    row = next(r for t in page.tables for r in t if r[0]["text"] == "apf/default_corridor" and len(r) > 2
+               and any("paper" in c["class"] for c in r))
+    assert "6.126" in [c["text"] for c in row if "paper" in c["class"]]
+    assert "## Outcome" in md and "| E_mean (paper) |" in md and "R_unsafe (paper)" not in md  # table5 has none
+
+
+def _chromium_flags(tmp_path):
+    return ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync",
+            f"--user-data-dir={tmp_path / 'profile'}"]
+
+
+#: Appended to a copy of report.html: measures the laid-out page and writes the figures into the DOM.
+_PROBE = """<script>
+const lines = c => { const r = document.createRange(); r.selectNodeContents(c);
+  return new Set([...r.getClientRects()].map(x => Math.round(x.top))).size; };
+const out = {numLines: [...document.querySelectorAll("tbody td:not(:first-child)")].map(lines),
+             tables: [...document.querySelectorAll("table")].map(t => [t.scrollWidth, t.parentElement.clientWidth]),
+             page: [document.documentElement.scrollWidth, window.innerWidth]};
+document.body.insertAdjacentHTML("beforeend", "<pre id=probe>" + JSON.stringify(out) + "</pre>");
+</script></body>"""
+
+
+def test_report_tables_fit_the_window_without_wrapped_numbers_in_chromium(wide_report, tmp_path):
+    import json
+    import re
+
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("Debian's chromium is not installed (CI installs it)")
+    out, _, _ = wide_report
+    probe = tmp_path / "probe.html"
+    probe.write_text((out / "report.html").read_text().replace("</body>", _PROBE))
+    dom = subprocess.run([browser, *_chromium_flags(tmp_path), "--window-size=1280,1000", "--dump-dom",
+                          probe.as_uri()], capture_output=True, text=True, timeout=120)
+    m = re.search(r'<pre id="probe">(.*?)</pre>', dom.stdout)
+    assert m, dom.stderr[-2000:]
+    got = json.loads(html_unescape(m.group(1)))
+    assert max(got["numLines"]) == 1  # "6.001 ± 0.021" never breaks across lines
+    assert all(width <= room for width, room in got["tables"])  # no table scrolls sideways ...
+    assert got["page"][0] <= got["page"][1]  # ... nor does the page
+
+
 def test_packaged_reference_matches_the_papers_tables():
     ref = paper_results()
     assert ref["hes"]["table2"]["rule"]["E_mean"] == [6.126, 0.068]
@@ -134,11 +195,9 @@ def test_report_html_renders_in_headless_chromium(tmp_path):
     exp = load_experiment("apf-scenes", overrides={"steps": "30"}, seeds="1-2")
     run_experiment(exp, tmp_path, workers=1, progress=False)
     _, html = write_report(tmp_path)
-    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-             "--disable-background-networking", "--disable-component-update", "--disable-sync",
-             f"--user-data-dir={tmp_path / 'profile'}"]
+    flags = _chromium_flags(tmp_path)
     dom = subprocess.run([browser, *flags, "--dump-dom", html.as_uri()], capture_output=True, text=True, timeout=120)
-    assert "<table id=\"results\">" in dom.stdout and "narrow_alternating_gates" in dom.stdout
+    assert '<section id="results">' in dom.stdout and "<table>" in dom.stdout and "narrow_alternating_gates" in dom.stdout
     assert dom.stdout.count("data:image/png;base64,") == 2  # figures are embedded: the page is self-contained
     shot = tmp_path / "shot.png"
     subprocess.run([browser, *flags, "--window-size=1400,1800", f"--screenshot={shot}", html.as_uri()],

@@ -28,6 +28,20 @@ DEFAULT_METRICS = ("Y", "R_goal", "E_mean", "R_unsafe", "d_clr_min", "L_mean", "
 UNITS = {"E_mean": "m", "E_90": "m", "sigma_E": "m", "d_clr_min": "m", "L_mean": "m",
          "min_inter_agent_distance": "m", "flight_distance": "m", "flight_time": "s", "average_velocity": "m/s",
          "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%"}
+#: Tables of the report in reading order; a metric not named here goes to OTHER_GROUP.
+METRIC_GROUPS = (
+    ("Outcome", ("Y", "R_goal", "success_rate", "arrived_fraction", "P_s", "converged", "S_scene",
+                 "E_mean", "E_90", "sigma_E")),
+    ("Safety and clearance", ("R_unsafe", "R_unsafe_agent", "d_clr_min", "R_below_0_75", "R_below_0_30",
+                              "min_inter_agent_distance", "min_inter_robot_distance",
+                              "min_robot_obstacle_distance", "D_obs", "D_ind", "collisions")),
+    ("Path, time and velocity", ("L_mean", "path_stretch", "flight_distance", "flight_time", "avg_velocity",
+                                 "average_velocity", "jerk_energy", "k_con", "coordination_time")),
+)
+OTHER_GROUP = "Method-specific"
+#: Value columns (ours and the paper's) in one table: eight cells like "6.001 ± 0.021" beside a
+#: variant name fit a 1000 px wide page without wrapping.
+MAX_VALUE_COLUMNS = 8
 
 
 def paper_results() -> dict:
@@ -133,23 +147,65 @@ def _header(m: str) -> str:
     return f"{m} [{u}]" if u else m
 
 
-def table_rows(t: dict) -> tuple[list[str], list[list[str]]]:
-    """Header and body of the comparison table: each metric ours, then the paper's if any."""
-    has_ref = any(v["reference"] for v in t["variants"])
-    head = ["variant", "runs"]
-    for m in t["metrics"]:
-        head.append(_header(m))
-        if has_ref:
-            head.append(f"{m} (paper)")
-    body = []
-    for v in t["variants"]:
-        row = [v["name"], f"{v['done']}/{v['runs']}"]
-        for m in t["metrics"]:
-            row.append(_cell(v["values"][m]))
-            if has_ref:
-                row.append(_fmt_ref((v["reference"] or {}).get(m), t["reference_index"]))
-        body.append(row)
-    return head, body
+def tables(t: dict) -> list[dict[str, Any]]:
+    """The comparison table; split by metric group when it is too wide for a page.
+
+    Each table is ``{"title", "columns", "rows"}``; a column is ``{"label", "metric", "kind"}`` with
+    kind ``name`` (the variant, in every table), ``runs`` (first table only), ``ours`` or ``paper``.
+    A metric has a paper column only when the published table gives it for some variant.
+    """
+    index = t.get("reference_index")
+    refs = [[_fmt_ref((v.get("reference") or {}).get(m), index) for m in t["metrics"]] for v in t["variants"]]
+    paper = {m for j, m in enumerate(t["metrics"]) if any(r[j] for r in refs)}
+    if len(t["metrics"]) + len(paper) <= MAX_VALUE_COLUMNS:
+        groups = [("Results", list(t["metrics"]))]  # fits one page: the spec's own column order
+    else:
+        groups = _metric_groups(t["metrics"], paper)
+    out = []
+    for title, chunk in groups:
+        columns = [{"label": "variant", "metric": None, "kind": "name"}]
+        if not out:
+            columns.append({"label": "runs", "metric": None, "kind": "runs"})
+        for m in chunk:
+            columns.append({"label": _header(m), "metric": m, "kind": "ours"})
+            if m in paper:
+                columns.append({"label": f"{m} (paper)", "metric": m, "kind": "paper"})
+        rows = []
+        for v, ref in zip(t["variants"], refs):
+            row = []
+            for c in columns:
+                if c["kind"] == "name":
+                    row.append(v["name"])
+                elif c["kind"] == "runs":
+                    row.append(f"{v['done']}/{v['runs']}")
+                elif c["kind"] == "ours":
+                    row.append(_cell(v["values"][c["metric"]]))
+                else:
+                    row.append(ref[t["metrics"].index(c["metric"])])
+            rows.append(row)
+        out.append({"title": title, "columns": columns, "rows": rows})
+    return out
+
+
+def _metric_groups(metrics: list[str], paper: set[str]) -> list[tuple[str, list[str]]]:
+    """Metrics by METRIC_GROUPS (spec order kept inside a group); a group wider than
+    MAX_VALUE_COLUMNS is cut into the fewest even pieces that each fit."""
+    named = {m: g for g, members in METRIC_GROUPS for m in members}
+    out = []
+    for g in [g for g, _ in METRIC_GROUPS] + [OTHER_GROUP]:
+        ms = [m for m in metrics if named.get(m, OTHER_GROUP) == g]
+        if not ms:
+            continue
+        width = [1 + (m in paper) for m in ms]
+        n = max(1, int(np.ceil(sum(width) / MAX_VALUE_COLUMNS)))
+        while True:
+            cuts = np.array_split(np.arange(len(ms)), n)
+            if all(sum(width[i] for i in c) <= MAX_VALUE_COLUMNS for c in cuts) or n >= len(ms):
+                break
+            n += 1
+        for k, c in enumerate(cuts):
+            out.append((g if k == 0 else f"{g}, continued", [ms[i] for i in c]))
+    return out
 
 
 def figures(t: dict) -> list[tuple[str, bytes]]:
@@ -204,6 +260,39 @@ def _short(name: str, limit: int = 40) -> str:
     return name if len(name) <= limit else name[: limit - 1] + "…"
 
 
+def _html_table(tab: dict) -> str:
+    """One table; a metric with a paper column gets a two-level header (metric over ours | paper)."""
+    e = html.escape
+    cols = tab["columns"]
+    two = any(c["kind"] == "paper" for c in cols)
+    rs = ' rowspan="2"' if two else ""
+    top, sub = [], []
+    for c in cols:
+        if c["kind"] == "name":
+            top.append(f'<th class="name"{rs}>{e(c["label"])}</th>')
+        elif c["kind"] == "paper":
+            sub.append('<th class="num paper">paper</th>')
+        elif c["kind"] == "ours" and two and any(o["kind"] == "paper" and o["metric"] == c["metric"] for o in cols):
+            top.append(f'<th class="group" colspan="2">{e(c["label"])}</th>')
+            sub.append('<th class="num">ours</th>')
+        else:
+            top.append(f'<th class="num"{rs}>{e(c["label"])}</th>')
+    head = "<tr>" + "".join(top) + "</tr>" + (f"<tr>{''.join(sub)}</tr>" if two else "")
+    body = []
+    for r in tab["rows"]:
+        cells = []
+        for c, text in zip(cols, r):
+            if c["kind"] == "name":
+                cells.append(f'<td class="name">{e(text)}</td>')
+                continue
+            mean, pm, sd = text.partition(" ± ")  # the spread in grey, so the means read first
+            inner = e(mean) + (f'<span class="sd"> ± {e(sd)}</span>' if pm else "")
+            cells.append(f'<td class="num{" paper" if c["kind"] == "paper" else ""}">{inner}</td>')
+        body.append("<tr>" + "".join(cells) + "</tr>")
+    return (f'<h2>{e(tab["title"])}</h2>\n<div class="scroll"><table>\n<thead>{head}</thead>\n<tbody>\n'
+            + "\n".join(body) + "\n</tbody></table></div>\n")
+
+
 def _inline_html(text: str) -> str:
     """Markdown-ish prose as HTML: escaped, with `code` spans as <code> (no backticks leak through)."""
     return re.sub(r"`([^`]+)`", r"<code>\1</code>", html.escape(text))
@@ -225,43 +314,50 @@ def write_report(directory: str | Path, experiment: str | None = None) -> list[P
     if experiment is None:
         raise SwarmnavError(f"{d}: the store names no experiment")
     t = build_tables(store, experiment)
-    head, body = table_rows(t)
+    tabs = tables(t)
     figs = figures(t)
     files = d / "report_files"
     files.mkdir(exist_ok=True)
     for name, data in figs:
         (files / name).write_bytes(data)
     ref_note = (f"Published values: `{t['reference']}` of the packaged paper_results.toml "
-                f"(the papers' figures, copied as published)." if t["reference"] else "No published table to compare.")
+                f"(the papers' figures, copied as published), in a paper column beside ours where the paper "
+                f"gives the metric." if t["reference"] else "No published table to compare.")
     md = [f"# {t['title']}", "", t["description"], "",
-          f"Experiment `{experiment}`, {t['n_runs']} runs. Cells are mean ± population std over seeds.", ref_note, "",
-          "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    md += ["| " + " | ".join(r) + " |" for r in body]
+          f"Experiment `{experiment}`, {t['n_runs']} runs. Cells are mean ± population std over seeds.", ref_note]
+    for tab in tabs:
+        md += ["", f"## {tab['title']}", "", "| " + " | ".join(c["label"] for c in tab["columns"]) + " |",
+               "|" + "".join("---|" if c["kind"] == "name" else "--:|" for c in tab["columns"])]
+        md += ["| " + " | ".join(r) + " |" for r in tab["rows"]]
     md += [""] + [f"![{n}](report_files/{n})" for n, _ in figs] + [""]
     md_path = d / "report.md"
     md_path.write_text("\n".join(md), encoding="utf-8")
     e = html.escape
-    rows_html = "\n".join("<tr>" + "".join(f"<td>{e(c)}</td>" for c in r) + "</tr>" for r in body)
     imgs = "\n".join(f'<figure><img alt="{e(n)}" src="data:image/png;base64,{base64.b64encode(b).decode()}">'
                      f"</figure>" for n, b in figs)
     page = f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>{e(t['title'])}</title>
 <style>
-body {{ font-family: system-ui, sans-serif; margin: 2em; color: #222; }}
+body {{ font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; padding: 0 2em; color: #222; }}
+h2 {{ font-size: 1.1em; margin: 1.4em 0 0.4em; }}
+.scroll {{ overflow-x: auto; }}
 table {{ border-collapse: collapse; font-size: 13px; }}
-th, td {{ border: 1px solid #ccc; padding: 4px 8px; text-align: right; }}
-th {{ background: #eef3f8; }} td:first-child, th:first-child {{ text-align: left; }}
-tr:nth-child(even) td {{ background: #fafafa; }}
+th, td {{ border: 1px solid #ccc; padding: 4px 8px; }}
+th {{ background: #eef3f8; font-weight: 600; }}
+.name {{ text-align: left; }}
+.num {{ text-align: right; white-space: nowrap; font-variant-numeric: tabular-nums; }}
+th.num, th.group {{ text-align: center; }}
+tbody tr:nth-child(even) td {{ background: #fafafa; }}
+tbody tr td.paper, th.paper {{ background: #f5f1e4; color: #444; }}
+.sd {{ color: #666; }}
 img {{ max-width: 100%; }}
 </style></head><body>
 <h1>{e(t['title'])}</h1>
 <p>{_inline_html(t['description'])}</p>
 <p>Experiment <code>{e(experiment)}</code>, {t['n_runs']} runs. Cells are mean ± population std over seeds.
 {_inline_html(ref_note)}</p>
-<table id="results"><thead><tr>{''.join(f'<th>{e(h)}</th>' for h in head)}</tr></thead>
-<tbody>
-{rows_html}
-</tbody></table>
+<section id="results">
+{"".join(_html_table(tab) for tab in tabs)}</section>
 {imgs}
 </body></html>
 """
