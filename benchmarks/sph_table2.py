@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 COLS = [("flight_distance", "Dist (m)", "dist_m"), ("flight_time", "Time (s)", "time_s"),
-        ("success_rate", "Rate (%)", "success_rate"), ("jerk_energy", "Eng m2/s5", "jerk_energy"),
+        ("sph_success", "Rate (%)", "success_rate"), ("jerk_energy", "Eng m2/s5", "jerk_energy"),
         ("comm_mbps", "Comm Mbps", "comm_mbps"), ("avg_velocity", "Vel (m/s)", "velocity")]
 
 
@@ -43,6 +43,9 @@ def _fmt_ref(v) -> str:
 
 def table(out_dir: Path) -> None:
     rows = [r for r in csv.DictReader(open(out_dir / "runs.csv")) if r["status"] == "done"]
+    for r in rows:  # stores written before the key was renamed (docs/metrics.md) call it success_rate
+        if not r.get("sph_success") and r.get("success_rate"):
+            r["sph_success"] = r["success_rate"]
     paper = _paper()
     dens = sorted({float(r["scenario"].split("density=")[1].split(",")[0]) for r in rows})
     method = rows[0]["method"] if rows else "?"
@@ -53,11 +56,11 @@ def table(out_dir: Path) -> None:
         cells = []
         for key, _, _ in COLS:
             v = np.array([float(r[key]) for r in mine])
-            cells.append(f"{100 * v.mean():.0f}" if key == "success_rate" else f"{v.mean():.3g}+-{v.std():.2g}")
+            cells.append(f"{100 * v.mean():.0f}" if key == "sph_success" else f"{v.mean():.3g}+-{v.std():.2g}")
         rr = min(float(r["min_inter_robot_distance"]) for r in mine)
         ro = min(float(r["min_robot_obstacle_distance"]) for r in mine)
         hit = [float(r["min_inter_robot_distance"]) < 0.4 or float(r["min_robot_obstacle_distance"]) < 0.2 for r in mine]
-        late = sum(1 for r, h in zip(mine, hit) if not h and float(r["success_rate"]) < 1.0)
+        late = sum(1 for r, h in zip(mine, hit) if not h and float(r["sph_success"]) < 1.0)
         print(f"{d:>6g} {len(mine):>4} " + " ".join(f"{c:>18}" for c in cells)
               + f" {rr:>8.3f} {ro:>8.3f} {sum(hit):>7} {late:>5}")
         if d in paper["d_obs"]:

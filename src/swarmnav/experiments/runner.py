@@ -30,7 +30,7 @@ from swarmnav.experiments.store import Store, config_key
 
 #: Metrics where the worst case over seeds matters: summary.csv also gets ``<metric>_min``.
 MIN_METRICS = ("d_clr_min", "min_inter_agent_distance", "Y", "R_goal", "min_inter_robot_distance",
-               "min_robot_obstacle_distance", "success_rate")
+               "min_robot_obstacle_distance", "sph_success")
 #: Metrics whose spread over seeds is reported as quartiles: ``<m>_p25``, ``<m>_p50``, ``<m>_p75``.
 QUANTILE_METRICS = ("k_con", "P_s")
 #: Per-run 0/1 outcomes: summary.csv also gets ``<m>_fraction``, the share of runs where it is 1.

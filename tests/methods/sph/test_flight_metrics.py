@@ -23,7 +23,7 @@ def test_straight_flight_time_distance_velocity():
     assert m["flight_time"] == pytest.approx(7.0)  # within 3 m of the goal at x = 7 m
     assert m["flight_distance"] == pytest.approx(7.0)
     assert m["avg_velocity"] == pytest.approx(1.0)
-    assert m["success_rate"] == 1.0 and m["min_robot_obstacle_distance"] == np.inf
+    assert m["sph_success"] == 1.0 and m["min_robot_obstacle_distance"] == np.inf
 
 
 def test_jerk_energy_of_constant_jerk():
@@ -44,13 +44,13 @@ def test_bandwidth_is_ten_hz_position_broadcasts():
 def test_contact_or_missed_goal_is_failure():
     P, V, C = _line(n=2, y_gap=0.35)  # two bodies of 0.2 m radius 0.35 m apart: contact
     m = flight_metrics(P, V, C, GOAL, DT)
-    assert m["min_inter_robot_distance"] == pytest.approx(0.35) and m["success_rate"] == 0.0
+    assert m["min_inter_robot_distance"] == pytest.approx(0.35) and m["sph_success"] == 0.0
     P, V, C = _line(n=2, y_gap=1.0, steps=40)  # stopped short of the goal region
     m = flight_metrics(P, V, C, GOAL, DT)
-    assert m["success_rate"] == 0.0 and m["flight_time"] == pytest.approx(4.0)  # censored at the horizon
+    assert m["sph_success"] == 0.0 and m["flight_time"] == pytest.approx(4.0)  # censored at the horizon
     P, V, C = _line(n=1)
     C[50] = 0.1  # grazed an obstacle
-    assert flight_metrics(P, V, C, GOAL, DT)["success_rate"] == 0.0
+    assert flight_metrics(P, V, C, GOAL, DT)["sph_success"] == 0.0
 
 
 def test_coordination_time_is_first_coherent_motion():

@@ -62,7 +62,7 @@ def test_sph_flies_a_3d_scene_to_the_goal_without_contact(flight):
     scn, res = flight
     m = res.metrics
     assert res.positions.shape[2] == 3 and "plane" not in res.config  # flown in 3-D, not in a slice
-    assert m["success_rate"] == 1.0 and m["collisions"] == 0.0
+    assert m["sph_success"] == 1.0 and m["collisions"] == 0.0
     assert m["min_inter_robot_distance"] >= 0.4
     assert res.min_clearance.min() > 0.2  # body radius: no robot touched an obstacle
     assert np.ptp(res.positions[:, :, 2]) > 0.5  # the swarm used the third dimension

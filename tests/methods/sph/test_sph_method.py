@@ -31,7 +31,7 @@ def test_open_flight_reaches_the_goal_without_contact():
     dt = registry.make("sph").dt
     res = swarmnav.run("sph", from_dict(OPEN), seed=2, steps=round(18.0 / dt))  # 18 s
     m = res.metrics
-    assert m["success_rate"] == 1.0 and m["collisions"] == 0.0
+    assert m["sph_success"] == 1.0 and m["collisions"] == 0.0
     assert m["min_inter_robot_distance"] >= 0.4
     assert 0.3 < m["avg_velocity"] <= 1.0 + 1e-9  # never above v_max (eq. 2)
     assert np.all(np.linalg.norm(np.diff(res.positions, axis=0), axis=2) <= 1.0 * dt + 1e-12)
