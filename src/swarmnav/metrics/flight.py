@@ -1,4 +1,6 @@
-"""Flight metrics of the SPH paper's Table II and Fig. 3(E-G), for every method.
+"""Flight metrics of the SPH paper's Table II and Fig. 3(E-G), for every method in an open world
+(the rollout leaves them out of periodic worlds: no goal to arrive at, and the wrap jumps would
+count as path and jerk).
 
 Per robot ``i`` the flight ends at its arrival step ``a_i``: the first step at which it is
 within ``r_goal`` of the goal (the horizon K if it never is). Then
