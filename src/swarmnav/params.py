@@ -1,14 +1,20 @@
-"""Parameter records: typed, immutable, and strict about unknown keys.
+"""Parameter records: typed, immutable, declared with unit, valid range and source.
 
-Methods and experiments keep their parameters in frozen dataclasses. :func:`build` turns a
-mapping of overrides (from Python, ``--set key=value`` strings or experiment specs) into such
-a record, coercing strings to the field's type and rejecting unknown keys by name.
+Methods keep their parameters in frozen dataclasses whose fields are declared with
+:func:`param`: the default, its unit, the interval of valid values, where the value comes
+from (a paper's table or equation, or ``ours``) and a one-line meaning. :func:`build` is the
+one place that turns overrides (from Python, ``--set key=value`` strings or experiment specs)
+into such a record: it coerces strings to the field's type, rejects unknown keys by name,
+non-finite numbers and values outside the declared range, and applies named presets
+(``preset=NAME``). :func:`describe` lists a record's parameters for ``swarmnav methods NAME``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
+import re
 import typing
 from typing import Any, Mapping, TypeVar
 
@@ -16,27 +22,170 @@ from swarmnav.errors import ConfigError
 
 T = TypeVar("T")
 
+_INTERVAL = re.compile(r"^\s*([\[(])\s*([^,\s]+)\s*,\s*([^\])\s]+)\s*([\])])\s*$")
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Range:
+    """An interval of valid values, written as in mathematics: ``"(0, inf)"``, ``"[0, 1]"``."""
+
+    lo: float
+    hi: float
+    lo_closed: bool
+    hi_closed: bool
+
+    @classmethod
+    def parse(cls, text: str) -> Range:
+        m = _INTERVAL.match(text)
+        if not m:
+            raise ValueError(f"not an interval: {text!r} (write e.g. '(0, inf)' or '[1, 8]')")
+        lo, hi = _number(m.group(2)), _number(m.group(3))
+        if not lo <= hi or math.isnan(lo) or math.isnan(hi):
+            raise ValueError(f"empty interval: {text!r}")
+        return cls(lo, hi, m.group(1) == "[" and math.isfinite(lo), m.group(4) == "]" and math.isfinite(hi))
+
+    def __contains__(self, x: float) -> bool:
+        above = x >= self.lo if self.lo_closed else x > self.lo
+        below = x <= self.hi if self.hi_closed else x < self.hi
+        return bool(above and below)
+
+    def __str__(self) -> str:
+        def num(v: float) -> str:
+            if math.isinf(v):
+                return "-inf" if v < 0 else "inf"
+            k = round(v / math.pi)
+            if k and k * math.pi == v:  # a multiple of pi, as declared ("2pi" parses to 2 * math.pi)
+                return {1: "pi", -1: "-pi"}.get(k, f"{k}pi")
+            return f"{v:g}" if float(f"{v:g}") == v else repr(v)
+
+        return f"{'[' if self.lo_closed else '('}{num(self.lo)}, {num(self.hi)}{']' if self.hi_closed else ')'}"
+
+
+def _number(text: str) -> float:
+    """A bound: a number, inf, or a multiple of pi ("pi", "2pi", "-pi")."""
+    if text.endswith("pi"):
+        k = text[:-2]
+        return (float(k) if k not in ("", "-") else (-1.0 if k == "-" else 1.0)) * math.pi
+    return float(text)
+
+
+def param(default: Any, unit: str = "", range: str | None = None, source: str = "ours", doc: str = "") -> Any:
+    """Declare a parameter field: ``dt: float = param(0.1, "s", "(0, 1]", "Sec. 5.1", "step")``.
+
+    Args:
+        default: the default value.
+        unit: SI unit ("m", "m/s^2", "deg", ...); "" for dimensionless, switches and names.
+        range: interval of valid values of a number (see :class:`Range`); numbers must also be
+            finite. None for switches, choices and text.
+        source: where the default comes from: the paper's table / equation / section, or "ours".
+        doc: what the parameter does, in one line.
+    """
+    meta = {"unit": unit, "range": None if range is None else Range.parse(range), "source": source, "doc": doc}
+    return dataclasses.field(default=default, metadata=meta)
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class ParamInfo:
+    """One parameter of a record, as :func:`describe` lists it."""
+
+    name: str
+    kind: str  # "float", "int", "bool", "text" or "choice"
+    default: Any
+    unit: str
+    range: Range | None
+    choices: tuple[Any, ...]
+    source: str
+    doc: str
+
+    @property
+    def valid(self) -> str:
+        """The valid values in words: an interval, the choices, or true/false."""
+        if self.kind == "bool":
+            return "true | false"
+        if self.kind == "choice":
+            return " | ".join(map(str, self.choices))
+        if self.range is not None:
+            return str(self.range) + (" (integer)" if self.kind == "int" else "")
+        return "text" if self.kind == "text" else "finite"
+
+
+def describe(cls: type) -> list[ParamInfo]:
+    """Every parameter of record class ``cls``, in declaration order."""
+    hints = typing.get_type_hints(cls)
+    out = []
+    for f in dataclasses.fields(cls):
+        if not f.init:
+            continue
+        typ = hints[f.name]
+        choices: tuple[Any, ...] = ()
+        if typ is bool:
+            kind = "bool"
+        elif typ is int:
+            kind = "int"
+        elif typ is float:
+            kind = "float"
+        elif typing.get_origin(typ) is typing.Literal:
+            kind, choices = "choice", typing.get_args(typ)
+        else:
+            kind = "text"
+        md = f.metadata
+        out.append(ParamInfo(f.name, kind, f.default, md.get("unit", ""), md.get("range"), choices,
+                             md.get("source", ""), md.get("doc", "")))
+    return out
+
+
+def presets(cls: type) -> dict[str, dict[str, Any]]:
+    """Named presets of record class ``cls`` (``preset=NAME`` in :func:`build`): name -> overrides."""
+    return dict(getattr(cls, "PRESETS", {}))
+
 
 def build(cls: type[T], overrides: Mapping[str, Any] | None = None, *, context: str = "") -> T:
     """Instantiate parameter record ``cls`` with ``overrides`` applied.
 
+    ``preset=NAME`` (one of the record's ``PRESETS``) applies that preset's values first; the
+    other overrides then apply on top of it.
+
     Raises:
-        ConfigError: on an unknown key (naming it and the known keys) or a bad value.
+        ConfigError: on an unknown key (naming it and the known keys), a value of the wrong
+            type, a non-finite number, or a number outside the parameter's declared range.
     """
     base = cls()
     if not overrides:
         return base
+    where = f"{context}: " if context else ""
+    overrides = dict(overrides)
+    if "preset" in overrides:
+        name = str(overrides.pop("preset"))
+        table = presets(cls)
+        if name not in table:
+            known = ", ".join(sorted(table)) or "none"
+            raise ConfigError(f"{where}unknown preset '{name}'{_did_you_mean(name, table)}; known: {known}")
+        overrides = {**table[name], **overrides}
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     hints = typing.get_type_hints(cls)
-    where = f"{context}: " if context else ""
     changes = {}
     for key, value in overrides.items():
         if key not in fields:
-            close = [k for k in fields if k.startswith(key[:3])]
-            hint = f" (did you mean {', '.join(sorted(close))}?)" if close else ""
-            raise ConfigError(f"{where}unknown parameter '{key}'{hint}; known: {', '.join(sorted(fields))}")
-        changes[key] = coerce(value, hints[key], f"{where}{key}")
+            raise ConfigError(f"{where}unknown parameter '{key}'{_did_you_mean(key, fields)}; "
+                              f"known: {', '.join(sorted(fields))}")
+        changes[key] = value = coerce(value, hints[key], f"{where}{key}")
+        _check_range(fields[key], value, where)
     return dataclasses.replace(base, **changes)
+
+
+def _did_you_mean(key: str, known) -> str:
+    close = difflib.get_close_matches(key, list(known), n=3, cutoff=0.6)
+    close += [k for k in known if k.startswith(key[:3]) and k not in close and len(key) >= 3][: 3 - len(close)]
+    return f" (did you mean {', '.join(close)}?)" if close else ""
+
+
+def _check_range(f: dataclasses.Field, value: Any, where: str) -> None:
+    rng = f.metadata.get("range")
+    if rng is None or value is None or isinstance(value, bool):
+        return
+    if value not in rng:
+        unit = f.metadata.get("unit", "")
+        raise ConfigError(f"{where}{f.name} must be in {rng}{' ' + unit if unit else ''}, got {value!r}")
 
 
 def coerce(value: Any, typ: Any, name: str) -> Any:
@@ -79,8 +228,8 @@ def coerce(value: Any, typ: Any, name: str) -> Any:
             f = float(value)
         except (TypeError, ValueError):
             raise ConfigError(f"{name}: expected a number, got {value!r}") from None
-        if math.isnan(f):
-            raise ConfigError(f"{name}: expected a number, got NaN")
+        if not math.isfinite(f):
+            raise ConfigError(f"{name}: expected a finite number, got {value!r}")
         return f
     if typ is str:
         return str(value)

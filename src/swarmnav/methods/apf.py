@@ -35,8 +35,7 @@ import numpy as np
 from swarmnav.dynamics import DampedDoubleIntegrator, clip_norm
 from swarmnav.methods.base import Observation
 from swarmnav.methods.registry import register
-from swarmnav.params import build
-from swarmnav.errors import ConfigError
+from swarmnav.params import build, param
 from swarmnav.sensing import PreparedGeometry, lidar_ring, neighbor_pairs
 from swarmnav.world.scenario import Scenario
 
@@ -48,19 +47,20 @@ class ApfParams:
     coarse grid that gave zero collisions on the four HES scenes and two random forests at
     seed 1, and are kept fixed for every scene."""
 
-    dt: float = 0.1  # integration step [s], as HES
-    n_rays: int = 360  # LiDAR rays, as HES Table A1
-    lidar_range: float = 20.0  # R_L [m], as HES Table A1
-    k_att: float = 2.0  # goal attraction [m/s^2] (unit-direction pull)
-    r_att: float = 5.0  # radius inside which the pull becomes linear [m]
-    k_rep: float = 8.0  # obstacle repulsion gain [m^3/s^2 per rad]
-    d0: float = 3.0  # obstacle influence distance [m]
-    k_sep: float = 3.0  # inter-agent separation gain [m^3/s^2]
-    r_sep: float = 2.0  # separation influence radius [m]
-    k_damp: float = 1.5  # velocity damping [1/s]
-    a_max: float = 2.6  # acceleration saturation [m/s^2], as HES Table A1
-    d_floor: float = 0.05  # distances are floored here before 1/d^2 [m] (bounded force)
-    n_rays_3d: int = 2048  # rays of the 3-D range sphere (ours: ~4.5 deg apart, 0.24 m at d0 = 3 m)
+    dt: float = param(0.1, "s", "[0.0001, 1]", "ours", "integration step, as HES")
+    n_rays: int = param(360, "", "[4, 36000]", "HES Table A1", "LiDAR rays")
+    lidar_range: float = param(20.0, "m", "(0, inf)", "HES Table A1", "LiDAR range R_L")
+    k_att: float = param(2.0, "m/s^2", "[0, inf)", "ours", "goal attraction (unit-direction pull)")
+    r_att: float = param(5.0, "m", "(0, inf)", "ours", "radius inside which the pull becomes linear")
+    k_rep: float = param(8.0, "m^3/s^2 per rad", "[0, inf)", "ours", "obstacle repulsion gain")
+    d0: float = param(3.0, "m", "(0, inf)", "ours", "obstacle influence distance")
+    k_sep: float = param(3.0, "m^3/s^2", "[0, inf)", "ours", "inter-agent separation gain")
+    r_sep: float = param(2.0, "m", "(0, inf)", "ours", "separation influence radius")
+    k_damp: float = param(1.5, "1/s", "[0, inf)", "ours", "velocity damping")
+    a_max: float = param(2.6, "m/s^2", "(0, inf)", "HES Table A1", "acceleration saturation")
+    d_floor: float = param(0.05, "m", "(0, inf)", "ours", "distances are floored here before 1/d^2 (bounded force)")
+    n_rays_3d: int = param(2048, "", "[16, 100000]", "ours",
+        "rays of the 3-D range sphere (~4.5 deg apart, 0.24 m at d0 = 3 m)")
 
 
 class Apf:
@@ -71,14 +71,6 @@ class Apf:
         self.params = build(ApfParams, overrides, context="apf")
         self.dt = self.params.dt
         self.dynamics = DampedDoubleIntegrator()
-        p = self.params
-        for key in ("dt", "lidar_range", "d0", "r_sep", "r_att", "d_floor"):
-            if not (getattr(p, key) > 0 and np.isfinite(getattr(p, key))):
-                raise ConfigError(f"apf: {key} must be finite and > 0, got {getattr(p, key)}")
-        if p.n_rays < 1 or p.n_rays_3d < 1:
-            raise ConfigError(f"apf: n_rays and n_rays_3d must be >= 1, got {p.n_rays}, {p.n_rays_3d}")
-        if not p.a_max > 0:
-            raise ConfigError(f"apf: a_max must be > 0, got {p.a_max}")
         theta = 2 * np.pi * np.arange(self.params.n_rays) / self.params.n_rays
         self._dirs = np.column_stack([np.cos(theta), np.sin(theta)])  # (R, 2) ray directions
         self._weight = 2 * np.pi / self.params.n_rays  # [rad] per ray
@@ -179,4 +171,5 @@ def sphere_weight(d0: float, d: float = 1.0) -> float:
     return float(f2 / f3)
 
 
-register("apf", Apf, "Artificial potential field baseline: goal attraction, LiDAR repulsion, separation.")
+register("apf", Apf, "Artificial potential field baseline: goal attraction, LiDAR repulsion, separation.",
+         params=ApfParams)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -14,17 +15,20 @@ class MethodSpec:
     name: str
     factory: Callable[..., Method]
     description: str
+    params: type  # the parameter record class (swarmnav.params: declared units, ranges, sources)
     navigation: bool = True  # a goal-seeking method (runs on the navigation scenes)
 
 
 _REGISTRY: dict[str, MethodSpec] = {}
 
 
-def register(name: str, factory: Callable[..., Method], description: str, *, navigation: bool = True) -> None:
-    """Register ``factory(**params) -> Method`` under ``name``."""
+def register(name: str, factory: Callable[..., Method], description: str, *, params: type,
+             navigation: bool = True) -> None:
+    """Register ``factory(**overrides) -> Method`` under ``name``; ``params`` is the record class
+    the factory builds its parameters from (``swarmnav methods NAME`` lists it)."""
     if name in _REGISTRY:
         raise ValueError(f"method {name!r} registered twice")
-    _REGISTRY[name] = MethodSpec(name, factory, description, navigation)
+    _REGISTRY[name] = MethodSpec(name, factory, description, params, navigation)
 
 
 #: Modules whose import registers the built-in methods (one line per method family).
@@ -51,7 +55,9 @@ def names() -> list[str]:
 def spec(name: str) -> MethodSpec:
     _load_builtins()
     if name not in _REGISTRY:
-        raise ConfigError(f"unknown method '{name}' (known: {', '.join(sorted(_REGISTRY))})")
+        close = difflib.get_close_matches(name, list(_REGISTRY), n=3)
+        hint = f" (did you mean {', '.join(close)}?)" if close else ""
+        raise ConfigError(f"unknown method '{name}'{hint}; known: {', '.join(sorted(_REGISTRY))}")
     return _REGISTRY[name]
 
 

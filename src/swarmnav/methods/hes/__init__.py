@@ -11,6 +11,7 @@ from swarmnav.methods.hes.method import Hes
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.registry import register
 
-register("hes", Hes, "HES: hierarchical embodied swarm, corridor-driven split/merge, eight-term force control.")
+register("hes", Hes, "HES: hierarchical embodied swarm, corridor-driven split/merge, eight-term force control.",
+         params=HesParams)
 
 __all__ = ["DecisionSource", "DecisionState", "Hes", "HesParams", "Proposal", "RulePolicy", "project"]

@@ -5,6 +5,7 @@ from swarmnav.methods.registry import register
 from swarmnav.methods.sph.method import Sph
 from swarmnav.methods.sph.params import SphParams
 
-register("sph", Sph, "SPH swarm navigation: SPH coordination + per-robot B-spline planning + raycast split/merge.")
+register("sph", Sph, "SPH swarm navigation: SPH coordination + per-robot B-spline planning + raycast split/merge.",
+         params=SphParams)
 
 __all__ = ["Sph", "SphParams"]

@@ -27,7 +27,6 @@ from typing import Any
 import numpy as np
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator
-from swarmnav.errors import ConfigError
 from swarmnav.methods.base import Observation
 from swarmnav.methods.sph.bspline import SplineCosts, evaluate, optimize
 from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
@@ -47,16 +46,6 @@ class Sph:
 
     def __init__(self, **overrides: Any):
         p = build(SphParams, overrides, context="sph")
-        for key in ("h", "m", "v_max", "plan_speed", "a_max", "T_p", "dt", "rho0", "esdf_resolution", "grid_resolution",
-                    "ctrl_spacing", "R"):
-            if not getattr(p, key) > 0:
-                raise ConfigError(f"sph: {key} must be > 0, got {getattr(p, key)}")
-        if p.horizon_points < 0 or p.max_iter < 0:
-            raise ConfigError("sph: horizon_points and max_iter must be >= 0")
-        if not p.search_weight_3d >= 1.0:
-            raise ConfigError(f"sph: search_weight_3d must be >= 1, got {p.search_weight_3d}")
-        if p.once_hold < 0:
-            raise ConfigError(f"sph: once_hold must be >= 0, got {p.once_hold}")
         self.params = p
         self.dt = p.dt
         self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)

@@ -28,6 +28,7 @@ _DESCRIPTIONS = {
 }
 
 for _name in MODELS:
-    register(_name, partial(VicsekFamily, _name), _DESCRIPTIONS[_name], navigation=_name in WITH_INFO_UAV)
+    register(_name, partial(VicsekFamily, _name), _DESCRIPTIONS[_name], params=VicsekParams,
+             navigation=_name in WITH_INFO_UAV)
 
 __all__ = ["MODELS", "VicsekFamily", "VicsekParams", "info_uav_index"]

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
@@ -28,7 +28,7 @@ from swarmnav.methods.base import Observation
 from swarmnav.methods.vicsek import kernels as K
 from swarmnav.methods.vicsek.geometry import Polyline, avoidance, pursue, wrap
 from swarmnav.methods.vicsek.measures import deg_con
-from swarmnav.params import build
+from swarmnav.params import build, param
 from swarmnav.sensing import signed_distance
 from swarmnav.world.scenario import Scenario
 
@@ -45,58 +45,82 @@ class VicsekParams:
     """Parameters of the Vicsek family. Defaults are the mission settings of HWVEM Section 3.2;
     the alignment study of Section 3.1 sets v0 = 0.03, eta = 0, c_rep = c_att = 0."""
 
-    dt: float = 1.0  # [step] eq. (8) advances one time step with x(k+1) = x(k) + v(k+1)
-    v0: float = 0.1  # [m/step] constant speed, eq. (7); Sec. 3.2 (Sec. 3.1: 0.03)
-    r: float = 1.0  # [m] interaction radius r (= r_align), Sec. 3.1-3.2
-    eta: float = 0.1  # [rad] noise intensity, d_theta ~ U[-eta/2, eta/2], eq. (6); Sec. 3.2 (Sec. 3.1: 0)
-    c_align: float = 1.0  # [-] alignment coefficient, eq. (25), Sec. 3.2
-    c_rep: float = 0.1  # [-] repulsion coefficient, eq. (25), Sec. 3.2 (Sec. 3.1 ignores the term: 0)
-    r_rep: float = 0.7  # [m] repulsion range, eq. (24), Sec. 3.2
-    c_att: float = 0.003  # [-] attraction coefficient, eq. (25), Sec. 3.2 (Sec. 3.1: 0)
-    r_att: float = 1.0  # [m] attraction range, eq. (23), Sec. 3.2
-    v_max: float = 0.1  # [m/step] speed cap, eq. (26)
-    reference: float = math.pi / 4  # [rad] theta_d of the information UAV in a periodic world, Sec. 3.1
+    #: Named parameter sets (``--set preset=NAME``) of the paper's Sections 3.1-3.2.
+    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
+        "mission": {},  # Sec. 3.2, the defaults (HWVEM-I weights)
+        "hwvem-i": {"p1": 0.1, "p2": 5.0},  # Sec. 3.2
+        "hwvem-ii": {"p1": 0.0, "p2": 100.0},  # Sec. 3.2
+        "alignment": {"v0": 0.03, "eta": 0.0, "c_rep": 0.0, "c_att": 0.0},  # Sec. 3.1: no attraction / repulsion
+    }
+
+    dt: float = param(1.0, "step", "[0.001, 1000]", "eq. (8)",
+        "time step: eq. (8) advances one step with x(k+1) = x(k) + v(k+1)")
+    v0: float = param(0.1, "m/step", "[0, inf)", "eq. (7), Sec. 3.2, Sec. 3.1",
+        "constant speed; Sec. 3.2 (Sec. 3.1: 0.03)")
+    r: float = param(1.0, "m", "(0, inf)", "Sec. 3.1-3.2", "interaction radius r (= r_align)")
+    eta: float = param(0.1, "rad", "[0, 2pi]", "eq. (6), Sec. 3.2, Sec. 3.1",
+        "noise intensity, d_theta ~ U[-eta/2, eta/2]; Sec. 3.2 (Sec. 3.1: 0)")
+    c_align: float = param(1.0, "", "[0, inf)", "eq. (25), Sec. 3.2", "alignment coefficient")
+    c_rep: float = param(0.1, "", "[0, inf)", "eq. (25), Sec. 3.2, Sec. 3.1",
+        "repulsion coefficient, Sec. 3.2 (Sec. 3.1 ignores the term: 0)")
+    r_rep: float = param(0.7, "m", "(0, inf)", "eq. (24), Sec. 3.2", "repulsion range")
+    c_att: float = param(0.003, "", "[0, inf)", "eq. (25), Sec. 3.2, Sec. 3.1",
+        "attraction coefficient, Sec. 3.2 (Sec. 3.1: 0)")
+    r_att: float = param(1.0, "m", "(0, inf)", "eq. (23), Sec. 3.2", "attraction range")
+    v_max: float = param(0.1, "m/step", "(0, inf)", "eq. (26)", "speed cap")
+    reference: float = param(math.pi / 4, "rad", "[-inf, inf]", "Sec. 3.1",
+        "theta_d of the information UAV in a periodic world")
     # HWVEM, eq. (14)-(17). HWVEM-I: p1 = 0.1, p2 = 5; HWVEM-II: p1 = 0, p2 = 100 (Sec. 3.2).
-    p1: float = 0.1  # [-] absolute layer weight offset, eq. (14), p1 >= 0
-    p2: float = 5.0  # [-] relative layer weight base, eq. (15), p2 >= 1
-    nei_weight: bool = True  # neighbourhood-layer-status weight eq. (17) on (False: ablation, Fig. 6)
+    p1: float = param(0.1, "", "[0, inf)", "eq. (14)", "absolute layer weight offset")
+    p2: float = param(5.0, "", "[1, inf)", "eq. (15)", "relative layer weight base")
+    nei_weight: bool = param(True, "", None, "eq. (17), Fig. 6",
+        "neighbourhood-layer-status weight eq. (17) on (False: ablation)")
     # WVEM weights of the information UAV, its direct neighbours and the rest (Sec. 3.1.2).
-    k_alpha: float = 30.0  # [-]
-    k_beta: float = 18.0  # [-]
-    k_gamma: float = 1.0  # [-]
-    info_weight: float = 100.0  # [-] IVEM-A weight of the information UAV (Sec. 3.1.2)
+    k_alpha: float = param(30.0, "", "(0, inf)", "Sec. 3.1.2", "WVEM weight of the information UAV")
+    k_beta: float = param(18.0, "", "(0, inf)", "Sec. 3.1.2", "WVEM weight of its direct neighbours")
+    k_gamma: float = param(1.0, "", "(0, inf)", "Sec. 3.1.2", "WVEM weight of the rest")
+    info_weight: float = param(100.0, "", "(0, inf)", "Sec. 3.1.2", "IVEM-A weight of the information UAV")
     # Layers before the first step (our choice, see docs/methods/vicsek.md): "bfs" = the
     # hierarchy of the initial neighbour graph exists at k = 0; "unknown" = only the
     # information UAV has a layer and eq. (5) spreads the others one hop per step.
-    initial_layers: Literal["bfs", "unknown"] = "bfs"
+    initial_layers: Literal["bfs", "unknown"] = param("bfs", "", None, "ours", "layers before the first step")
     # Periodic worlds: neighbours across the seam of the box (minimum image). False: agents
     # interact only by the plain distance of their wrapped positions (our choice to expose,
     # see docs/methods/vicsek.md).
-    wrap_neighbours: bool = True
-    avoidance: bool = True  # obstacle-avoidance mechanism of Section 2.3
+    wrap_neighbours: bool = param(True, "", None, "ours", "periodic worlds: neighbours across the seam (minimum image)")
+    avoidance: bool = param(True, "", None, "Section 2.3", "obstacle-avoidance mechanism")
     # How an avoiding agent "moves along the tangent direction" (our choice, see
     # docs/methods/vicsek.md): "tangent" = its velocity points along theta_obs with the speed of
     # eq. (26); "heading" = theta_obs only replaces the heading in the alignment term of eq. (25).
-    avoid_velocity: Literal["tangent", "heading"] = "tangent"
-    r_avoid: float = 0.5  # [m] trigger distance, eq. (20), Sec. 2.3
-    theta_obstruct: float = 11 * math.pi / 20  # [rad] trigger half-angle, eq. (21), Sec. 2.3
+    avoid_velocity: Literal["tangent", "heading"] = param("tangent", "", None, "ours",
+        "how an avoiding agent moves along the tangent: its velocity, or its heading only")
+    r_avoid: float = param(0.5, "m", "[0, inf)", "eq. (20), Sec. 2.3", "trigger distance")
+    theta_obstruct: float = param(11 * math.pi / 20, "rad", "[0, pi]", "eq. (21), Sec. 2.3",
+        "trigger half-angle")
     # Which genuine direction the trigger of eq. (21) tests (our choice, see docs/methods/vicsek.md):
     # "new" = theta^g(k+1) just computed (with its noise), the direction the agent is about to
     # fly; "previous" = theta^g(k), the index eq. (21) is printed with.
-    trigger_heading: Literal["new", "previous"] = "new"
-    lookahead: float = 1.0  # [m] carrot distance of the information UAV's path following (our choice: = r)
-    deg_con_d: float = 0.9984  # [-] desired consistency degree, Sec. 3.1
-    deg_con_norm: Literal["l1", "l2"] = "l1"  # norm of eq. (28) (our choice, see measures.deg_con)
-    stop_at_convergence: bool = False  # end the run once Deg_con >= deg_con_d held converge_hold steps
-    converge_hold: int = 20  # [step] how long Deg_con must hold before stopping (our choice)
+    trigger_heading: Literal["new", "previous"] = param("new", "", None, "ours",
+        "which genuine heading the trigger of eq. (21) tests")
+    lookahead: float = param(1.0, "m", "(0, inf)", "ours",
+        "carrot distance of the information UAV's path following (= r)")
+    deg_con_d: float = param(0.9984, "", "[0, 1]", "Sec. 3.1", "desired consistency degree")
+    deg_con_norm: Literal["l1", "l2"] = param("l1", "", None, "ours",
+        "norm of eq. (28) (see measures.deg_con)")
+    stop_at_convergence: bool = param(False, "", None, "ours",
+        "end the run once Deg_con >= deg_con_d held converge_hold steps")
+    converge_hold: int = param(20, "step", "[1, inf)", "ours",
+        "how long Deg_con must hold before stopping")
     # Mission success, eq. (32) (our choice of test, see docs/methods/vicsek.md): an agent
     # succeeds if it is with the information UAV at the first and the last step and never
     # apart from it for more than follow_gap consecutive steps. "component": in the
     # information UAV's connected component of the interaction graph (radius r);
     # "distance": within follow_radius of it.
-    follow_test: Literal["component", "distance"] = "component"
-    follow_radius: float = 3.0  # [m] for follow_test = "distance" (our choice)
-    follow_gap: int = 10  # [step] (our choice: r / v0 = 10 steps, the time to fly one interaction radius)
+    follow_test: Literal["component", "distance"] = param("component", "", None, "ours",
+        "mission success test of eq. (32): same graph component, or within follow_radius")
+    follow_radius: float = param(3.0, "m", "(0, inf)", "ours", "for follow_test = \"distance\"")
+    follow_gap: int = param(10, "step", "[0, inf)", "ours",
+        "longest time apart from the information UAV (r / v0 = 10 steps: one interaction radius)")
 
 
 class VicsekFamily:
@@ -110,13 +134,8 @@ class VicsekFamily:
         self.name = model
         self.code = MODELS[model]
         self.params = p = build(VicsekParams, overrides, context=model)
-        for key, ok in (("v0", p.v0 >= 0), ("r", p.r > 0), ("eta", p.eta >= 0), ("v_max", p.v_max > 0),
-                        ("p1", p.p1 >= 0), ("p2", p.p2 >= 1), ("r_rep", p.r_rep > 0),
-                        ("r_att", p.r_att >= p.r_rep), ("r_avoid", p.r_avoid >= 0), ("dt", p.dt > 0),
-                        ("converge_hold", p.converge_hold >= 1), ("follow_gap", p.follow_gap >= 0),
-                        ("lookahead", p.lookahead > 0)):
-            if not ok:
-                raise ConfigError(f"{model}: invalid value {key}={getattr(p, key)!r}")
+        if not p.r_att >= p.r_rep:  # eq. (23)-(24): attraction acts beyond the repulsion range
+            raise ConfigError(f"{model}: need r_att >= r_rep, got r_att={p.r_att}, r_rep={p.r_rep}")
         self.dt = p.dt
         self.dynamics = Kinematic(v_max=p.v_max)
         self.has_info = model in WITH_INFO_UAV
