@@ -1,6 +1,7 @@
 """The command line: outputs, reproducibility of config.json, and one-line errors (exit 2)."""
 
 import json
+import tomllib
 import subprocess
 import sys
 
@@ -95,8 +96,10 @@ def test_scenarios_list_and_show(tmp_path, capsys):
         assert name in out
     png = tmp_path / "s.png"
     assert main(["scenarios", "show", "off_axis_goal", "--plot", str(png)]) == 0
-    assert json.loads(capsys.readouterr().out)["goal"]["position"] == [70.0, 7.5]
+    assert tomllib.loads(capsys.readouterr().out)["goal"]["position"] == [70.0, 7.5]
     assert png.stat().st_size > 1000
+    assert main(["scenarios", "show", "off_axis_goal", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["goal"]["position"] == [70.0, 7.5]
 
 
 def test_experiment_runner_end_to_end(tmp_path):

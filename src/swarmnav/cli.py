@@ -101,7 +101,7 @@ def _cmd_scenarios(args) -> int:
     s = load_scenario(args.name)
     if args.plot:
         _writable_file(args.plot, "--plot")
-    print(json.dumps(s.to_dict(), indent=2))
+    print(json.dumps(s.to_dict(), indent=2) if args.json else s.to_toml(), end="\n" if args.json else "")
     if args.plot:
         from swarmnav.viz import plot_scene
 
@@ -112,9 +112,47 @@ def _cmd_scenarios(args) -> int:
 def _cmd_methods(args) -> int:
     from swarmnav.methods import registry
 
-    for name in registry.names():
-        print(f"{name:10s} {registry.spec(name).description}")
+    if args.name is None:
+        for name in registry.names():
+            print(f"{name:10s} {registry.spec(name).description}")
+        print("swarmnav methods NAME lists a method's parameters: default, unit, valid range, source")
+        return 0
+    _print_params(registry.spec(args.name), sys.stdout)
     return 0
+
+
+def _print_params(spec, out) -> None:
+    """The parameter table of a registered method (``swarmnav methods NAME``)."""
+    import shutil
+    import textwrap
+
+    from swarmnav.params import describe, presets
+
+    def shown(v) -> str:
+        return ("true" if v else "false") if isinstance(v, bool) else ('""' if v == "" else f"{v:g}" if isinstance(v, float) else str(v))
+
+    dims = getattr(spec.factory, "dims", None) or getattr(getattr(spec.factory, "func", None), "dims", ())
+    print(f"{spec.name}: {spec.description}", file=out)
+    if dims:
+        planar = " (a 3-D scene is flown in its horizontal slice at z_fly)" if tuple(dims) == (2,) else ""
+        print(f"worlds: {' and '.join(f'{d}-D' for d in dims)}{planar}", file=out)
+    table = presets(spec.params)
+    if table:
+        print("presets (--set preset=NAME):", file=out)
+        for name, values in table.items():
+            body = " ".join(f"{k}={shown(v)}" for k, v in values.items()) or "the defaults"
+            print(f"  {name:10s} {body}", file=out)
+    rows = [(i.name, shown(i.default), i.unit or "-", i.valid, i.source, i.doc) for i in describe(spec.params)]
+    head = ("parameter", "default", "unit", "valid", "source", "meaning")
+    widths = [max(len(r[c]) for r in [head, *rows]) for c in range(5)]
+    lead = sum(widths) + 2 * 5
+    width = shutil.get_terminal_size((120, 24)).columns if out.isatty() else 0
+    for r in [head, *rows]:
+        cells = "  ".join(c.ljust(w) for c, w in zip(r[:5], widths))
+        meaning = [r[5]] if width - lead < 30 else textwrap.wrap(r[5], width - lead) or [""]
+        print(f"{cells}  {meaning[0]}".rstrip(), file=out)
+        for more in meaning[1:]:
+            print(" " * lead + more, file=out)
 
 
 def _cmd_run(args) -> int:
@@ -123,18 +161,25 @@ def _cmd_run(args) -> int:
 
     if (args.scenario is None) == (args.scenario_file is None):
         raise ConfigError("run: give exactly one of --scenario NAME or --scenario-file PATH")
-    if args.steps < 1:
+    if args.steps is not None and args.steps < 1:
         raise ConfigError(f"run: --steps must be >= 1, got {args.steps}")
+    horizon = args.horizon
+    if args.steps is None and horizon is None:
+        steps = 1000
+    else:
+        steps = args.steps
     params = _llm_sets(args, _parse_sets(args.set))
     n = params.pop("n", None)
-    scn = load_scenario(args.scenario_file or args.scenario, n=None if n is None else coerce(n, int, "--set n"))
+    n = None if n is None else coerce(n, int, "--set n")
+    scn = load_scenario(Path(args.scenario_file) if args.scenario_file else args.scenario, n=n)
     _writable_dir(args.out, "--out")
     progress = sys.stderr.isatty() and not args.quiet
-    res = run(args.method, scn, seed=args.seed, steps=args.steps, progress=progress, **params)
+    res = run(args.method, scn, seed=args.seed, steps=steps, horizon=horizon, progress=progress, **params)
     out = res.save(args.out)
     m = res.metrics
-    print(f"{res.config['method']} on {scn.name}, seed {args.seed}, {args.steps} steps "
-          f"({args.steps * res.config['dt']:g} s simulated, {res.wall_time:.2f} s wall)")
+    steps = res.config["steps"]
+    print(f"{res.config['method']} on {scn.name}, seed {args.seed}, {steps} steps of {res.config['dt']:g} s "
+          f"({res.config['horizon']:g} s simulated, {res.wall_time:.2f} s wall)")
     print(f"  Y = {m['Y']:.0f}  R_goal = {m['R_goal']:.3f}  E_mean = {m['E_mean']:.3f} m  "
           f"R_unsafe = {m['R_unsafe']:.3f}  d_clr_min = {m['d_clr_min']:.3f} m  L_mean = {m['L_mean']:.1f} m")
     if args.plot:
@@ -225,9 +270,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("action", nargs="?", choices=["show"])
     s.add_argument("name", nargs="?")
     s.add_argument("--plot", metavar="PNG", help="draw the scene to this PNG file")
+    s.add_argument("--json", action="store_true", help="print JSON instead of a TOML scene file")
     s.set_defaults(fn=_cmd_scenarios)
 
-    s = sub.add_parser("methods", help="list registered methods")
+    s = sub.add_parser("methods", help="list registered methods, or one method's parameters")
+    s.add_argument("name", nargs="?", help="a method: list its parameters (default, unit, valid range, source)")
     s.set_defaults(fn=_cmd_methods)
 
     s = sub.add_parser("run", help="run one simulation and write a run directory")
@@ -235,7 +282,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scenario", metavar="NAME", help="built-in scene or generator spec")
     s.add_argument("--scenario-file", metavar="PATH", help="a .toml scene file")
     s.add_argument("--seed", type=int, default=1)
-    s.add_argument("--steps", type=int, default=1000)
+    length = s.add_mutually_exclusive_group()
+    length.add_argument("--steps", type=int, help="integration steps (default 1000; the method's dt each)")
+    length.add_argument("--horizon", type=float, metavar="SECONDS",
+                        help="simulated time [s] instead of --steps: the same horizon for every method")
     s.add_argument("--out", required=True, metavar="DIR")
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="method parameter (repeatable); n=N resizes the swarm")
     s.add_argument("--plot", action="store_true", help="also draw DIR/trajectory.png")
@@ -280,13 +330,43 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: Printed once when Numba compiles a kernel (it caches them: only the first run pays).
+COMPILE_NOTICE = "swarmnav: compiling numerical kernels, first run only: ~30 s (cached for later runs)"
+
+
+def _notify_compiling():
+    """Print :data:`COMPILE_NOTICE` on stderr the first time Numba starts compiling (a cache
+    hit compiles nothing and prints nothing). Returns the listener to unregister."""
+    from numba.core import event
+
+    class Notice(event.Listener):
+        shown = False
+
+        def on_start(self, ev):
+            if not self.shown:
+                self.shown = True
+                from tqdm import tqdm
+
+                tqdm.write(COMPILE_NOTICE, file=sys.stderr)  # above a progress bar, not through it
+
+        def on_end(self, ev):
+            pass
+
+    listener = Notice()
+    event.register("numba:compile", listener)
+    return listener
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
+    listener = None
     try:
         args = parser.parse_args(argv)
         if not getattr(args, "fn", None):
             parser.print_help()
             return EXIT_USAGE
+        if args.command in ("run", "experiment"):
+            listener = _notify_compiling()
         return args.fn(args)
     except SwarmnavError as e:
         print(f"swarmnav: error: {e}", file=sys.stderr)
@@ -300,6 +380,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # Python's exit flush would raise again
         return 1
+    finally:
+        if listener is not None:
+            from numba.core import event
+
+            event.unregister("numba:compile", listener)
 
 
 def _stdout_closed() -> bool:

@@ -18,3 +18,8 @@ class ScenarioError(SwarmnavError):
 
 class ConfigError(SwarmnavError):
     """A method parameter, experiment spec or command-line value is invalid."""
+
+
+class DivergedError(SwarmnavError):
+    """The simulated state stopped being finite: the parameters (gains, step) make the method
+    numerically unstable. Valid values can still combine into an unstable run."""

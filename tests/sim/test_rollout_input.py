@@ -13,5 +13,5 @@ def test_run_rejects_a_seed_numpy_cannot_take(seed):
 
 
 def test_run_rejects_zero_steps():
-    with pytest.raises(ConfigError, match="steps must be >= 1"):
+    with pytest.raises(ConfigError, match="steps must be an integer >= 1"):
         run("apf", "default_corridor", seed=1, steps=0)

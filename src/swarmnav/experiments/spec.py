@@ -210,12 +210,10 @@ def steps_for(method: str, params: dict[str, Any], horizon: float) -> int:
     """Steps that cover ``horizon`` seconds with the method's own integration step."""
     from swarmnav.methods import registry
 
-    if not horizon > 0:
-        raise ConfigError(f"horizon must be > 0 s, got {horizon}")
-    from swarmnav.sim.rollout import RUN_OPTIONS
+    from swarmnav.sim.rollout import RUN_OPTIONS, steps_for_horizon
 
     dt = float(registry.make(method, **{k: v for k, v in params.items() if k not in RUN_OPTIONS}).dt)
-    return max(1, int(round(horizon / dt)))
+    return steps_for_horizon(horizon, dt)
 
 
 def parse_seeds(text: str) -> tuple[int, ...]:

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav._version import __version__
-from swarmnav.errors import ConfigError, ScenarioError
+from swarmnav.errors import ConfigError, DivergedError, ScenarioError
 from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
 from swarmnav.metrics.flight import flight_metrics
@@ -29,7 +29,8 @@ def run(
     scenario: str | Scenario,
     *,
     seed: int,
-    steps: int,
+    steps: int | None = None,
+    horizon: float | None = None,
     progress: bool | Any = False,
     z_fly: float | str | None = None,
     **params: Any,
@@ -48,6 +49,9 @@ def run(
         seed: seed of the run's ``numpy.random.Generator`` (spawn positions, method noise).
         steps: number of integration steps K (K + 1 states are recorded); at most K if the
             method ends the run early with ``info["done"] = True``.
+        horizon: instead of ``steps``, the simulated time [s]: K = round(horizon / dt) steps of
+            the method's own dt (at least one). Give exactly one of the two; the config
+            records both (``horizon`` = K dt when given ``steps``).
         progress: True for a tqdm bar, or a callable ``f(done_steps)``.
         z_fly: altitude [m] of a planar method on a 3-D scene (default: the middle of the
             spawn box's z range); an error anywhere else.
@@ -57,8 +61,12 @@ def run(
     """
     scn = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
     m = registry.make(method, **params) if isinstance(method, str) else method
-    if steps < 1:
-        raise ConfigError(f"steps must be >= 1, got {steps}")
+    if (steps is None) == (horizon is None):
+        raise ConfigError("give exactly one of steps or horizon")
+    if steps is None:
+        steps = steps_for_horizon(horizon, float(m.dt))
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+        raise ConfigError(f"steps must be an integer >= 1, got {steps!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
     world, plane_z = _world_of(scn, m.dims, z_fly, m.name)
@@ -90,6 +98,9 @@ def run(
     for k in range(steps):
         cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
+        if not (np.isfinite(pos).all() and np.isfinite(vel).all()):
+            raise DivergedError(f"{m.name} diverged at step {k + 1} (t = {(k + 1) * dt:g} s): non-finite "
+                                f"positions or velocities; check the parameters ({_changed(m.params)})")
         if period is not None:  # the world is a torus whatever the method's dynamics
             pos = lo + np.mod(pos - lo, period)
         P[k + 1], V[k + 1] = lift(pos), vlift(vel)
@@ -116,6 +127,7 @@ def run(
             "seed": int(seed),
             "steps": int(steps),
             "dt": dt,
+            "horizon": int(steps) * dt,  # [s] simulated time asked for (a method may end the run early)
             **({"plane": {"z_fly": plane_z, "reason": f"{m.name} is planar: it flew the scene's "
                           f"horizontal slice at z = {plane_z:g} m"}} if plane_z is not None else {}),
         },
@@ -139,6 +151,27 @@ def run(
     if callable(artifacts):
         result.artifacts = dict(artifacts())
     return result
+
+
+def _changed(params: Any) -> str:
+    """The parameters that differ from their defaults, ``k=v, ...`` (or "all defaults")."""
+    base = as_dict(type(params)())
+    diff = [f"{k}={v}" for k, v in as_dict(params).items() if v != base[k]]
+    return ", ".join(diff) if diff else "all defaults"
+
+
+def steps_for_horizon(horizon: Any, dt: float) -> int:
+    """Steps of ``dt`` that cover ``horizon`` seconds: round(horizon / dt), at least one."""
+    try:
+        h = float(horizon)
+    except (TypeError, ValueError):
+        raise ConfigError(f"horizon must be a number of seconds, got {horizon!r}") from None
+    if not (h > 0 and np.isfinite(h)):
+        raise ConfigError(f"horizon must be finite and > 0 s, got {horizon!r}")
+    steps = round(h / dt)
+    if steps > 100_000_000:
+        raise ConfigError(f"horizon {h:g} s is {steps:.3g} steps of dt = {dt:g} s; at most 1e8")
+    return max(1, int(steps))
 
 
 def _identity(x: np.ndarray) -> np.ndarray:

@@ -186,6 +186,14 @@ class Scenario:
             d["goal"]["path"] = [list(p) for p in self.path]
         return d
 
+    def to_toml(self) -> str:
+        """The scene as scene-file text: ``load_file`` / ``--scenario-file`` read it back as it is."""
+        import tomlkit  # a writer (the standard library's tomllib only reads)
+
+        d = self.to_dict()
+        head = {k: d.pop(k) for k in ("name", "description") if k in d}
+        return "# swarmnav scene file (docs/scenarios.md); run it with --scenario-file\n" + tomlkit.dumps({**head, **d})
+
 
 # --------------------------------------------------------------------------- parsing
 
@@ -528,6 +536,9 @@ def builtin_names() -> list[str]:
 def load_file(path: str | Path) -> Scenario:
     """Load and validate a scene file."""
     p = Path(path)
+    if p.suffix.lower() in (".json", ".yaml", ".yml"):
+        raise ScenarioError(f"{p}: scene files are TOML (.toml), not {p.suffix[1:].upper()}; "
+                            "'swarmnav scenarios show NAME' prints one to start from")
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -566,8 +577,12 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> Scenario:
         text = resources.files("swarmnav.world").joinpath("scenes", f"{s}.toml").read_text("utf-8")
         scn = loads(text, source=f"{s}.toml")
     else:
+        import difflib
+
+        close = difflib.get_close_matches(s, builtin_names() + list(generators.GENERATORS), n=3)
+        hint = f" (did you mean {', '.join(close)}?)" if close else ""
         raise ScenarioError(
-            f"{s}: unknown scene (built-in: {', '.join(builtin_names())}; "
+            f"{s}: unknown scene{hint} (built-in: {', '.join(builtin_names())}; "
             f"generators: {', '.join(generators.GENERATORS)}; or a path to a .toml file)"
         )
     unknown = set(overrides) - {"n"}
