@@ -80,7 +80,7 @@ class _Page(HTMLParser):
             self.tables[-1].append([])
         elif tag in ("td", "th"):
             a = dict(attrs)
-            self._cell = {"tag": tag, "class": (a.get("class") or "").split(), "span": int(a.get("colspan", 1)), "text": ""}
+            self._cell = {"tag": tag, "class": (a.get("class") or "").split(), "text": ""}
             self.tables[-1][-1].append(self._cell)
 
     def handle_endtag(self, tag):
@@ -143,6 +143,29 @@ def test_wide_report_is_split_into_tables_that_fit_a_page(wide_report):
                and any("paper" in c["class"] for c in r))
     assert "6.126" in [c["text"] for c in row if "paper" in c["class"]]
     assert "## Outcome" in md and "| E_mean (paper) |" in md and "R_unsafe (paper)" not in md  # table5 has none
+
+
+def _paper_markers(svg):
+    """A chart's marker positions (x, y in SVG units, y down) by ``paper-<metric>`` group, and its texts."""
+    import xml.etree.ElementTree as ET
+
+    ns = "{http://www.w3.org/2000/svg}"
+    root = ET.parse(svg).getroot()
+    marks = {g.get("id")[len("paper-"):]: [(float(u.get("x")), float(u.get("y"))) for u in g.iter(f"{ns}use")]
+             for g in root.iter(f"{ns}g") if g.get("id", "").startswith("paper-")}
+    return marks, [t.text for t in root.iter(f"{ns}text")]
+
+
+def test_charts_draw_the_papers_values_as_markers(wide_report):
+    out, md, _ = wide_report
+    for chart in ("bars", "boxes"):
+        marks, texts = _paper_markers(out / "report_files" / f"{chart}.svg")
+        assert sorted(marks) == ["E_mean", "R_goal", "S_scene", "Y"]  # what hes.table5 gives; no R_unsafe, ...
+        assert all(len(xy) == 2 for xy in marks.values())  # one diamond per variant
+        (x_dc, y_dc), (x_nag, y_nag) = marks["E_mean"]
+        assert x_dc < x_nag and y_nag < y_dc  # the paper's 44.738 m (gates) is drawn above its 6.126 m
+        assert "paper (hes.table5)" in texts  # and named in the legend
+    assert "![bars.png](report_files/bars.png)" in md
 
 
 def _chromium_flags(tmp_path):

@@ -79,8 +79,8 @@ def _fmt_ref(v: Any, index: int | None) -> str:
     if isinstance(v, dict):
         return ""
     if isinstance(v, list):
-        if index is not None:
-            return _num(v[index]) if index < len(v) else ""
+        if index is not None:  # a per-scene list; its entries may be [mean, std] themselves
+            return _fmt_ref(v[index], None) if index < len(v) else ""
         if len(v) == 2:
             return f"{_num(v[0])} ± {_num(v[1])}"
         if len(v) == 4:
@@ -89,6 +89,18 @@ def _fmt_ref(v: Any, index: int | None) -> str:
     if isinstance(v, bool):
         return "yes" if v else "no"
     return _num(v)
+
+
+def _ref_value(v: Any, index: int | None) -> float | None:
+    """The number a chart draws for a published cell: the mean of ``[mean, std]``, the average of
+    ``[avg, p25, p50, p75]``, entry ``index`` of a per-scene list; None for anything else."""
+    if isinstance(v, list):
+        if index is not None:
+            return _ref_value(v[index], None) if index < len(v) else None
+        v = v[0] if len(v) in (2, 4) else None
+    if isinstance(v, (int, float, np.number)) and not isinstance(v, bool) and np.isfinite(v):
+        return float(v)
+    return None
 
 
 def _num(x: Any) -> str:
@@ -210,13 +222,41 @@ def _metric_groups(metrics: list[str], paper: set[str]) -> list[tuple[str, list[
 
 def figures(t: dict) -> list[tuple[str, bytes]]:
     """PNG figures: bars of mean ± std per metric (HES Fig. 4/9) and per-seed box plots (Fig. 7)."""
+    return [(f"{stem}.png", _png(fig)) for stem, fig in _figures(t)]
+
+
+#: Offset [bar widths] of a paper marker from its variant's bar or box (both 0.6 wide): beside it,
+#: clear of the next variant's.
+_PAPER_DX = 0.42
+
+
+def _figures(t: dict) -> list[tuple[str, Any]]:
+    """The report's matplotlib figures by file stem. A published value is a black diamond beside
+    its variant's bar or box (SVG group ``paper-<metric>``), "paper" in the legend."""
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
     names = [_short(v["name"]) for v in t["variants"]]
     metrics = [m for m in t["metrics"] if any(len(v["values"][m]) for v in t["variants"])]
     out = []
     if not metrics:
         return out
+    index = t.get("reference_index")
+    paper = {m: [_ref_value((v.get("reference") or {}).get(m), index) for v in t["variants"]] for m in metrics}
+
+    def draw_paper(ax, m, x0):
+        i = [k for k, r in enumerate(paper[m]) if r is not None]
+        if i:
+            ax.plot(np.asarray(i) + x0 + _PAPER_DX, [paper[m][k] for k in i], "D", color="k", ms=5,
+                    clip_on=False, zorder=3, gid=f"paper-{m}")  # a 0 on the axis stays whole
+
+    def legend(fig, drawn, ours):
+        if any(r is not None for m in drawn for r in paper[m]):
+            fig.legend(handles=[ours, Line2D([], [], ls="", marker="D", color="k", ms=5,
+                                             label=f"paper ({t['reference']})")],
+                       loc="outside lower center", ncols=2, fontsize=8, frameon=False)
+
     many = len(names) > 12  # one metric per row, so dozens of variants stay legible
     ncol = 1 if many else min(4, len(metrics))
     nrow = int(np.ceil(len(metrics) / ncol))
@@ -227,12 +267,14 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
         means = [np.nan if np.isinf(mu := stats.mean(v["values"][m])) else mu for v in t["variants"]]  # no bar
         stds = [np.nan_to_num(stats.std(v["values"][m])) for v in t["variants"]]
         x = np.arange(len(names))
-        ax.bar(x, means, yerr=stds, capsize=3, color=[f"C{i % 10}" for i in range(len(names))], alpha=0.85)
+        ax.bar(x, means, width=0.6, yerr=stds, capsize=3, color=[f"C{i % 10}" for i in range(len(names))], alpha=0.85)
+        draw_paper(ax, m, 0)
         ax.set_xticks(x, names, rotation=35, ha="right", fontsize=7)
         ax.set_title(_header(m), fontsize=9)
         ax.grid(axis="y", alpha=0.3)
     fig.suptitle(f"{t['title']}: mean ± std over seeds", fontsize=10)
-    out.append(("bars.png", _png(fig)))
+    legend(fig, metrics, Patch(color="0.55", label="ours: mean ± std over seeds"))
+    out.append(("bars", fig))
     box_metrics = metrics[:4]
     shape = (len(box_metrics), 1) if many else (1, len(box_metrics))
     fig = Figure(figsize=(width * shape[1], 3.4 * shape[0]), layout="constrained")
@@ -246,10 +288,12 @@ def figures(t: dict) -> list[tuple[str, bytes]]:
         for i, d in enumerate(data):  # the seeds as dots; a fixed subsample of 200 for big sweeps
             shown = d if len(d) <= 200 else rng.choice(d, 200, replace=False)
             ax.plot(i + 1 + rng.uniform(-0.12, 0.12, len(shown)), shown, ".", ms=3, alpha=0.6, color="k")
+        draw_paper(ax, m, 1)
         ax.set_xticks(np.arange(1, len(names) + 1), names, rotation=35, ha="right", fontsize=7)
         ax.set_title(_header(m), fontsize=9)
     fig.suptitle(f"{t['title']}: per-seed distribution (box: IQR, line: median, triangle: mean)", fontsize=10)
-    out.append(("boxes.png", _png(fig)))
+    legend(fig, box_metrics, Line2D([], [], ls="", marker=".", color="k", label="ours: one dot per seed"))
+    out.append(("boxes", fig))
     return out
 
 
@@ -305,7 +349,7 @@ def _png(fig) -> bytes:
 
 
 def write_report(directory: str | Path, experiment: str | None = None) -> list[Path]:
-    """Write ``report.md`` (+ ``report_files/*.png``) and ``report.html`` into ``directory``."""
+    """Write ``report.md`` (+ ``report_files/*.png``, ``*.svg``) and ``report.html`` into ``directory``."""
     d = Path(directory)
     if not (d / DB_NAME).exists():
         raise SwarmnavError(f"{d}: no results store ({DB_NAME}); run 'swarmnav experiment ... --out {d}' first")
@@ -315,11 +359,17 @@ def write_report(directory: str | Path, experiment: str | None = None) -> list[P
         raise SwarmnavError(f"{d}: the store names no experiment")
     t = build_tables(store, experiment)
     tabs = tables(t)
-    figs = figures(t)
+    from matplotlib import rc_context
+
     files = d / "report_files"
     files.mkdir(exist_ok=True)
-    for name, data in figs:
-        (files / name).write_bytes(data)
+    figs = []
+    for stem, fig in _figures(t):  # PNG for the pages, SVG to print or to read the drawn values from
+        figs.append((f"{stem}.png", _png(fig)))
+        (files / f"{stem}.png").write_bytes(figs[-1][1])
+        fig.set_layout_engine("none")  # keep the layout the PNG computed instead of solving it again
+        with rc_context({"svg.fonttype": "none"}):  # labels stay text: searchable, and no glyph outlines
+            fig.savefig(files / f"{stem}.svg", format="svg", metadata={"Date": None})
     ref_note = (f"Published values: `{t['reference']}` of the packaged paper_results.toml "
                 f"(the papers' figures, copied as published), in a paper column beside ours where the paper "
                 f"gives the metric." if t["reference"] else "No published table to compare.")
