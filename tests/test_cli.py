@@ -71,10 +71,27 @@ def test_scenario_file_and_plot(tmp_path):
     (["plot", "/nonexistent/run"], "not a run directory"),
     (["run", "--method", "apf", "--out", "X", "--bogus-flag"], "unrecognized arguments"),
     (["run", "--bogus-flag"], "arguments are required"),
+    # a newcomer's list (issue 14): APF parameters, scene files of the wrong format, typos
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "X", "--set", "dt=-0.1"], "dt must be in [0.0001, 1] s, got -0.1"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "X", "--set", "dt=0"], "dt must be in [0.0001, 1] s, got 0.0"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "X", "--set", "a_max=-1"], "a_max must be in (0, inf) m/s^2, got -1.0"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "X", "--set", "n_rays=0"], "n_rays must be in [4, 36000], got 0"),
+    (["run", "--method", "apf", "--scenario", "default_corridor", "--out", "X", "--set", "lidar_range=-5"], "lidar_range must be in (0, inf) m, got -5.0"),
+    (["run", "--method", "hes", "--scenario", "default_corridor", "--out", "X", "--set", "k_rep=inf"], "k_rep: expected a finite number"),
+    (["run", "--method", "apf", "--scenario-file", "J", "--out", "X"], "scene files are TOML (.toml), not JSON"),
+    (["run", "--method", "apf", "--scenario", "default_coridor", "--out", "X"], "did you mean default_corridor?"),
+    (["run", "--method", "hse", "--scenario", "default_corridor", "--out", "X"], "did you mean hes?"),
+    (["run", "--method", "hes", "--scenario", "default_corridor", "--out", "X", "--set", "preset=paper"], "unknown preset 'paper'"),
+    (["run", "--method", "sph", "--scenario", "default_corridor", "--out", "X", "--steps", "5", "--horizon", "3"], "not allowed with argument"),
+    (["run", "--method", "sph", "--scenario", "default_corridor", "--out", "X", "--horizon", "-3"], "horizon must be finite and > 0 s"),
+    (["experiment", "apf-scenes", "--set", "k_rep=-1", "--out", "X"], "variant default_corridor: apf: k_rep must be in [0, inf)"),
+    (["methods", "nope"], "unknown method 'nope'"),
 ])
 def test_bad_input_is_one_line_exit_2(args, fragment, tmp_path):
     (tmp_path / "f").write_text("a file where an output directory should go")
-    p = _run(*[a.replace("X", str(tmp_path / "x")).replace("F", str(tmp_path / "f")) for a in args])
+    (tmp_path / "scene.json").write_text('{"name": "a scene in the wrong format"}')
+    p = _run(*[a.replace("X", str(tmp_path / "x")).replace("F", str(tmp_path / "f"))
+               .replace("J", str(tmp_path / "scene.json")) for a in args])
     assert p.returncode == 2, p.stderr
     assert "Traceback" not in p.stderr
     lines = [l for l in p.stderr.splitlines() if l.strip()]
@@ -176,3 +193,80 @@ def test_only_a_broken_stdout_counts_as_the_reader_leaving(monkeypatch):
         os.close(r)
         assert _stdout_closed()
         monkeypatch.undo()
+
+
+def test_methods_name_lists_every_parameter_with_unit_range_and_source(capsys):
+    from swarmnav.methods import registry
+    from swarmnav.params import describe
+
+    for name in registry.names():
+        assert main(["methods", name]) == 0
+        out = capsys.readouterr().out
+        rows = {line.split()[0]: line for line in out.splitlines() if line and not line.startswith(" ")}
+        for info in describe(registry.spec(name).params):
+            row = rows[info.name]  # one row per parameter
+            assert info.valid.split(" (")[0] in row and info.source in row, row
+            assert f" {info.unit} " in row if info.unit else " - " in row
+    main(["methods", "hes"])
+    out = capsys.readouterr().out
+    assert "faithful   passage_mode=false agent_guard=false stall_plan=false trail_follow=false" in out
+    assert "dt" in out and "[0.0001, 1]" in out and "Section 5.1" in out
+
+
+def test_horizon_is_the_same_simulated_time_for_every_method(tmp_path, capsys):
+    steps = {}
+    for method in ("sph", "apf", "hwvem"):
+        out = tmp_path / method
+        assert main(["run", "--method", method, "--scenario", "hwvem_mission", "--horizon", "2", "--out", str(out),
+                     "--set", "n=4", "--quiet"]) == 0
+        cfg = json.loads((out / "config.json").read_text())
+        assert cfg["horizon"] == pytest.approx(2.0) and cfg["steps"] * cfg["dt"] == pytest.approx(2.0)
+        steps[method] = cfg["steps"]
+    assert steps == {"sph": 200, "apf": 20, "hwvem": 2}
+    capsys.readouterr()
+    assert main(["run", "--method", "apf", "--scenario", "default_corridor", "--steps", "7", "--out",
+                 str(tmp_path / "s"), "--quiet"]) == 0
+    cfg = json.loads((tmp_path / "s" / "config.json").read_text())
+    assert cfg["steps"] == 7 and cfg["horizon"] == pytest.approx(0.7)  # both recorded either way
+
+
+def _scene_names():
+    from swarmnav.world.scenario import builtin_names
+
+    return builtin_names() + ["random_forest:density=0.25,seed=4", "random_forest_3d:density=0.15,seed=2",
+                              "periodic_box:n=50,rho=4.102"]
+
+
+@pytest.mark.parametrize("name", _scene_names())
+def test_scenarios_show_prints_a_scene_file_that_loads_back(name, tmp_path, capsys):
+    from swarmnav.world.scenario import load_scenario
+
+    assert main(["scenarios", "show", name]) == 0
+    f = tmp_path / "scene.toml"
+    f.write_text(capsys.readouterr().out)
+    assert load_scenario(f).to_dict() == load_scenario(name).to_dict()
+
+
+def test_a_shown_scene_flies_exactly_as_the_built_in(tmp_path, capsys):
+    assert main(["scenarios", "show", "narrow_alternating_gates"]) == 0
+    (tmp_path / "gates.toml").write_text(capsys.readouterr().out)
+    for src, out in ((["--scenario", "narrow_alternating_gates"], "a"), (["--scenario-file", str(tmp_path / "gates.toml")], "b")):
+        assert main(["run", "--method", "hes", *src, "--steps", "40", "--out", str(tmp_path / out), "--quiet"]) == 0
+    a, b = (np.load(tmp_path / d / "trajectory.npz") for d in "ab")
+    np.testing.assert_array_equal(a["positions"], b["positions"])
+
+
+def test_first_run_says_it_compiles_and_a_warm_run_does_not(tmp_path):
+    """A fresh Numba cache: one notice line while the kernels compile; the next run loads them."""
+    import os
+
+    env = {**_env(), "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    args = ["run", "--method", "vem", "--scenario", "periodic_box:n=20,rho=4.102", "--steps", "2", "--out"]
+    cold = subprocess.run([sys.executable, "-m", "swarmnav.cli", *args, str(tmp_path / "a")], env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert cold.returncode == 0, cold.stderr
+    assert cold.stderr.count("compiling numerical kernels, first run only") == 1
+    warm = subprocess.run([sys.executable, "-m", "swarmnav.cli", *args, str(tmp_path / "b")], env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert warm.returncode == 0 and "compiling" not in warm.stderr, warm.stderr
+    assert os.listdir(tmp_path / "cache")

@@ -154,12 +154,31 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         raise ConfigError(f"{source}: scenario_vars must map new names (not {sorted(_RUN_KEYS | {'seed'})}) "
                           f"to numbers or strings")
     variants = _apply_overrides(variants, overrides, svars)
+    _check_params(variants, source)
     seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
     names = [v.name for v in variants]
     if len(set(names)) != len(names):
         raise ConfigError(f"{source}: variant names must be unique, got {names}")
     return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants),
                       seeds=seed_list, report=dict(report))
+
+
+def _check_params(variants: list[Variant], source: str) -> None:
+    """Build every variant's method once, so a bad parameter fails the whole experiment before
+    its first run (one line naming the variant), not every run of it."""
+    from swarmnav.methods import registry
+    from swarmnav.sim.rollout import RUN_OPTIONS
+
+    seen = set()
+    for v in variants:
+        key = (v.method, tuple(sorted((k, str(x)) for k, x in v.params.items())))
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            registry.make(v.method, **{k: x for k, x in v.params.items() if k not in RUN_OPTIONS})
+        except ConfigError as e:
+            raise ConfigError(f"{source}: variant {v.name}: {e}") from None
 
 
 def _fill_scenario(template: str, values: dict[str, Any]) -> str:
