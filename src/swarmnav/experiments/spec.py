@@ -206,9 +206,12 @@ def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: 
             cfg = {"method": v.method, "scenario": v.scenario, "steps": v.steps, "n": v.n}
             params = dict(v.params)
             values = dict(svars)
+            horizon = v.horizon if "steps" not in keys else None
             for k, val in zip(keys, combo):
                 if k in svars:
                     values[k] = val
+                elif k == "horizon":  # [s], for every method in its own steps
+                    horizon = coerce(val, float, "--set horizon")
                 elif k in ("steps", "n"):
                     cfg[k] = coerce(val, int, f"--set {k}")
                 elif k in ("method", "scenario"):
@@ -216,7 +219,8 @@ def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: 
                 else:
                     params[k] = val
             cfg["scenario"] = _fill_scenario(cfg["scenario"], values)
-            horizon = v.horizon if "steps" not in keys else None
+            if "steps" in keys and "horizon" in keys:
+                raise ConfigError("--set steps and --set horizon exclude each other")
             if horizon is not None:  # the method may have changed: its dt sets the step count
                 cfg["steps"] = steps_for(cfg["method"], params, horizon)
             suffix = ",".join(f"{k}={val}" for k, val in zip(keys, combo) if k in swept)
