@@ -136,6 +136,8 @@ def _print_params(spec, out) -> None:
     if dims:
         planar = " (a 3-D scene is flown in its horizontal slice at z_fly)" if tuple(dims) == (2,) else ""
         print(f"worlds: {' and '.join(f'{d}-D' for d in dims)}{planar}", file=out)
+    print("run options (--set): n = swarm size [-]" + (", z_fly = altitude of the slice flown in a 3-D scene [m]"
+                                                      if tuple(dims) == (2,) else ""), file=out)
     table = presets(spec.params)
     if table:
         print("presets (--set preset=NAME):", file=out)
