@@ -30,8 +30,9 @@ UNITS = {"E_mean": "m", "E_90": "m", "sigma_E": "m", "d_clr_min": "m", "L_mean":
          "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%"}
 #: Tables of the report in reading order; a metric not named here goes to OTHER_GROUP.
 METRIC_GROUPS = (
-    ("Outcome", ("Y", "R_goal", "success_rate", "arrived_fraction", "P_s", "converged", "S_scene",
-                 "E_mean", "E_90", "sigma_E")),
+    ("Outcome", ("Y", "R_goal", "sph_success", "sph_arrived_fraction", "P_s", "converged", "S_scene",
+                 "E_mean", "E_90", "sigma_E",
+                 "success_rate", "arrived_fraction")),  # the sph_ pair's names in stores written before the rename
     ("Safety and clearance", ("R_unsafe", "R_unsafe_agent", "d_clr_min", "R_below_0_75", "R_below_0_30",
                               "min_inter_agent_distance", "min_inter_robot_distance",
                               "min_robot_obstacle_distance", "D_obs", "D_ind", "collisions")),
