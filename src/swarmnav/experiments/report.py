@@ -26,8 +26,9 @@ from swarmnav.experiments.store import DB_NAME, Store
 #: Columns shown when a spec's [report] does not list its own.
 DEFAULT_METRICS = ("Y", "R_goal", "E_mean", "R_unsafe", "d_clr_min", "L_mean", "N_swarm", "S_scene")
 UNITS = {"E_mean": "m", "E_90": "m", "sigma_E": "m", "d_clr_min": "m", "L_mean": "m",
-         "min_inter_agent_distance": "m", "flight_distance": "m", "flight_time": "s", "average_velocity": "m/s",
-         "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%"}
+         "min_inter_agent_distance": "m", "flight_distance": "m", "flight_time": "s", "avg_velocity": "m/s",
+         "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%", "min_inter_robot_distance": "m",
+         "min_robot_obstacle_distance": "m", "jerk_energy": "m^2/s^5", "comm_mbps": "Mbit/s", "coordination_time": "s"}
 #: Tables of the report in reading order; a metric not named here goes to OTHER_GROUP.
 METRIC_GROUPS = (
     ("Outcome", ("Y", "R_goal", "sph_success", "sph_arrived_fraction", "P_s", "converged", "S_scene",
@@ -37,7 +38,7 @@ METRIC_GROUPS = (
                               "min_inter_agent_distance", "min_inter_robot_distance",
                               "min_robot_obstacle_distance", "D_obs", "D_ind", "collisions")),
     ("Path, time and velocity", ("L_mean", "path_stretch", "flight_distance", "flight_time", "avg_velocity",
-                                 "average_velocity", "jerk_energy", "k_con", "coordination_time")),
+                                 "jerk_energy", "k_con", "coordination_time")),
 )
 OTHER_GROUP = "Method-specific"
 #: Value columns (ours and the paper's) in one table: eight cells like "6.001 ± 0.021" beside a
