@@ -1,21 +1,28 @@
-"""The decision layer on a dict state: trigger eq. (20), projection eq. (22), fallback counting,
-delayed latency modes, transcript, replay."""
+"""The decision layer on z(k): trigger eq. (20), HES's projection eq. (22) applied to the
+model's answers, fallback counting, delayed latency modes, transcript, replay."""
 
 import json
+from dataclasses import replace
 
 import pytest
 
-from swarmnav.llm import LatencyMode, LlmDecider, LlmError, project
+from swarmnav.llm import LatencyMode, LlmDecider, LlmError
 from swarmnav.llm.backends import ReplayBackend, ReplayMismatch
+from swarmnav.methods.hes.decision import DecisionState, project
 
-OPEN = {"k": 0, "dt": 0.1, "S": 1, "path_count": 2, "w_max": 5.0, "w_min": 4.0, "avg_goal_distance": 50.0,
-        "near_goal_subswarms": 0, "d_swarm_min": float("inf"), "can_split": True, "can_merge": False}
-SHUT = dict(OPEN, can_split=False, can_merge=False)
+OPEN = DecisionState(k=0, dt=0.1, S=1, n_c=2, w_max=5.0, w_min=4.0, d_goal_avg=50.0, n_near=0,
+                     d_swarm_min=float("inf"), can_split=True, can_merge=False)
+SHUT = replace(OPEN, can_split=False, can_merge=False)
 SPLIT = '{"decision": "split", "reason": "two corridors"}'
 
 
+def decide(decider, z, k, rule, reason="rule says so"):
+    """One step as HES's LLM source takes it: the dict of z(k) and Pi_feas bound to z(k)."""
+    return decider.decide(z.to_dict(), k, rule, reason, lambda a: project(a, z))
+
+
 def drive(decider, steps, state_at=lambda k: OPEN, rule="keep"):
-    return [decider.decide(dict(state_at(k), k=k), k, rule, "rule says so") for k in range(steps)]
+    return [decide(decider, replace(state_at(k), k=k), k, rule) for k in range(steps)]
 
 
 def test_calls_at_first_step_and_every_interval_and_rule_in_between(scripted):
@@ -31,7 +38,7 @@ def test_calls_at_first_step_and_every_interval_and_rule_in_between(scripted):
 
 def test_infeasible_answer_is_projected_to_keep_not_a_fallback(scripted):
     d = LlmDecider(scripted([SPLIT]), interval=50)
-    out = d.decide(SHUT, 0, "keep")
+    out = decide(d, SHUT, 0, "keep")
     assert (out.action, out.executed, out.source) == ("split", "keep", "llm") and "infeasible" in out.reason
     s = d.summary()
     assert s["llm_fallback_used"] == 0 and s["llm_projected"] == 1
@@ -57,7 +64,7 @@ def test_every_failure_falls_back_to_the_rule_and_is_counted(scripted, answer, k
 
 def test_fallback_rule_action_is_projected_too(scripted):
     d = LlmDecider(scripted([""]))
-    out = d.decide(SHUT, 0, "split")
+    out = decide(d, SHUT, 0, "split")
     assert (out.action, out.executed) == ("split", "keep")
 
 
@@ -88,18 +95,10 @@ def test_latency_mode_parsing():
         LatencyMode.parse("fixed:-1")
 
 
-def test_projection_is_eq_22():
-    for a in ("split", "merge", "keep", "explode", None):
-        for cs in (True, False):
-            for cm in (True, False):
-                want = a if (a == "split" and cs) or (a == "merge" and cm) else "keep"
-                assert project(a, {"can_split": cs, "can_merge": cm}) == want
-
-
 def test_transcript_records_every_call_and_replay_reproduces_it(scripted, tmp_path):
     answers = [SPLIT, "", LlmError("timeout", "slow"), '{"decision": "merge", "reason": "x"}', "Keep it."]
     d = LlmDecider(scripted(answers, latency=0.5), interval=4, latency="real")
-    states = lambda k: dict(OPEN, can_merge=k > 10)  # noqa: E731
+    states = lambda k: replace(OPEN, can_merge=k > 10)  # noqa: E731
     first = drive(d, 20, states)
     lines = d.transcript().splitlines()
     assert len(lines) == len(d.records) == d.summary()["llm_calls"]
@@ -118,4 +117,4 @@ def test_transcript_records_every_call_and_replay_reproduces_it(scripted, tmp_pa
         drive(r2, 6, states)
     r3 = LlmDecider(ReplayBackend(str(tmp_path)), interval=4, latency="real")
     with pytest.raises(ReplayMismatch, match="avg_goal_distance"):
-        drive(r3, 1, lambda k: dict(OPEN, avg_goal_distance=49.0))
+        drive(r3, 1, lambda k: replace(OPEN, d_goal_avg=49.0))

@@ -9,6 +9,7 @@ import pytest
 
 import swarmnav
 from swarmnav.cli import main
+from swarmnav.methods.hes import Hes, Proposal
 
 STEPS = 300  # the rule policy splits within these steps on this scene and seed
 SCENE, SEED = "default_corridor", 1
@@ -68,6 +69,36 @@ def test_infeasible_answers_are_projected_not_counted(fake_server):
     for x in recs:
         assert x["executed"] == ("merge" if x["state"]["can_merge"] else "keep")
     assert r.metrics["hes_projected_to_keep"] >= r.metrics["llm_projected"]
+
+
+class AlwaysSplit:
+    """A non-LLM decision source that proposes split every step: its proposals reach Pi_feas
+    only through Hes, the rule path."""
+
+    def propose(self, z, step):
+        return Proposal("split", "always split", "rule")
+
+
+def test_llm_answers_are_projected_exactly_as_the_rule_path_projects(fake_server, tmp_path):
+    # a model that answers split at every step (infeasible at most steps: one sub-swarm only
+    # splits once, then max_subswarms and the cooldown forbid it), recorded and then replayed
+    s = fake_server("answer", answer='{"decision": "split", "reason": "always split"}')
+    live = llm_run(s, "ollama", llm_interval=1, llm_timeout=5)
+    replayed = swarmnav.run("hes", SCENE, seed=SEED, steps=STEPS, decision="replay",
+                            llm_replay=str(live.save(tmp_path / "a")), llm_interval=1)
+    rule = swarmnav.run(Hes().use_source(AlwaysSplit()), SCENE, seed=SEED, steps=STEPS)
+    n_keep = rule.metrics["hes_projected_to_keep"]
+    assert 0 < n_keep < STEPS  # both feasible and infeasible proposals were made
+    for r in (live, replayed):
+        assert r.metrics["llm_fallback_used"] == 0
+        np.testing.assert_array_equal(r.positions, rule.positions)
+        assert [{**e, "reason": "", "source": ""} for e in r.events] == \
+               [{**e, "reason": "", "source": ""} for e in rule.events]
+        # the LLM layer's record of what it executed is the method's projection, step by step
+        assert r.metrics["llm_projected"] == r.metrics["hes_projected_to_keep"] == n_keep
+        recs = [json.loads(line) for line in r.artifacts["llm_transcript.jsonl"].splitlines()]
+        splits = {e["step"] for e in rule.events if e["action"] == "split"}
+        assert [x["executed"] for x in recs] == ["split" if x["step"] in splits else "keep" for x in recs]
 
 
 def test_mixed_faults_count_only_the_faults(fake_server):

@@ -6,14 +6,15 @@ from hypothesis import strategies as st
 
 from swarmnav.llm import ACTIONS, LlmDecider, LlmError, parse_answer
 from swarmnav.llm.backends import Reply
+from swarmnav.methods.hes.decision import DecisionState, project
 
 finite = st.floats(min_value=0, max_value=1e4, allow_nan=False)
-states = st.fixed_dictionaries({
-    "k": st.integers(0, 10**6), "dt": st.sampled_from([0.05, 0.1]), "S": st.integers(1, 20),
-    "path_count": st.integers(0, 10), "w_max": finite, "w_min": finite | st.just(float("nan")),
-    "avg_goal_distance": finite, "near_goal_subswarms": st.integers(0, 20),
-    "d_swarm_min": finite | st.just(float("inf")), "can_split": st.booleans(), "can_merge": st.booleans(),
-})
+states = st.builds(
+    DecisionState, k=st.integers(0, 10**6), dt=st.sampled_from([0.05, 0.1]), S=st.integers(1, 20),
+    n_c=st.integers(0, 10), w_max=finite, w_min=finite | st.just(float("nan")), d_goal_avg=finite,
+    n_near=st.integers(0, 20), d_swarm_min=finite | st.just(float("inf")), can_split=st.booleans(),
+    can_merge=st.booleans(),
+)
 fragments = st.sampled_from(['{"decision": "split"}', '{"decision": "merge", "reason": "r"}', "keep", "Split",
                              "merging", '"decision": "', "{", "}", "|", "```json", "null", '{"decision": 3}'])
 answers = st.one_of(
@@ -40,10 +41,10 @@ class One:
 @given(answer=answers, state=states, rule=st.sampled_from(ACTIONS), latency=st.sampled_from(["blocking", "fixed:0"]))
 def test_executed_action_is_in_the_action_set_and_feasible(answer, state, rule, latency):
     d = LlmDecider(One(answer), interval=1, latency=latency)
-    out = d.decide(state, 0, rule)
+    out = d.decide(state.to_dict(), 0, rule, "", lambda a: project(a, state))
     assert out.action in ACTIONS and out.executed in ACTIONS
-    assert out.executed != "split" or state["can_split"]
-    assert out.executed != "merge" or state["can_merge"]
+    assert out.executed != "split" or state.can_split
+    assert out.executed != "merge" or state.can_merge
     assert d.records[0]["executed"] == out.executed
     s = d.summary()
     assert s["llm_calls"] == 1

@@ -1,7 +1,9 @@
 """The LLM decision layer of HES Section 3.3, on a plain dict of the state z(k).
 
 Per step k the caller gives the state, the rule action a_k^rule and the feasibility
-projection Pi_feas. The decider:
+projection Pi_feas. Pi_feas is the method's own (for HES, ``methods.hes.decision.project``,
+the one the rule's proposals go through too): this layer never writes a feasibility rule of
+its own, so an LLM and the rule cannot disagree about what is feasible. The decider:
 
 - calls the model when I_llm(k) = 1, eq. (20): at the first step it is asked about and then
   whenever k - k_llm >= T_llm (k_llm = the previous call's step);
@@ -37,16 +39,6 @@ from swarmnav.llm.prompt import build_prompt, jsonable
 TRANSCRIPT = "llm_transcript.jsonl"
 
 
-def project(action: str, state: Mapping[str, Any]) -> str:
-    """Pi_feas of eq. (22) on the state dict: split only if can_split, merge only if
-    can_merge, keep otherwise (anything outside A_str included)."""
-    if action == "split" and state.get("can_split"):
-        return "split"
-    if action == "merge" and state.get("can_merge"):
-        return "merge"
-    return "keep"
-
-
 @dataclass(frozen=True, slots=True)
 class Decision:
     """The structural action of one step and where it came from."""
@@ -74,34 +66,33 @@ class LlmDecider:
             return False
         return self._k_llm is None or step - self._k_llm >= self.interval
 
-    def decide(self, state: Mapping[str, Any], step: int, rule_action: str, rule_reason: str = "",
-               projection: Callable[[str], str] | None = None) -> Decision:
+    def decide(self, state: Mapping[str, Any], step: int, rule_action: str, rule_reason: str,
+               projection: Callable[[str], str]) -> Decision:
         """The candidate action at step ``step`` and its projection.
 
         Args:
             state: z(k) as a dict (``DecisionState.to_dict()``).
             rule_action: a_k^rule, the rule policy's action now.
-            projection: Pi_feas bound to this step's state; default :func:`project`.
+            projection: the method's Pi_feas, eq. (22), bound to this step's state.
         """
-        proj = projection or (lambda a: project(a, state))
         if self._pending is not None and step >= self._pending[0]:
             _, rec = self._pending
             self._pending = None
-            return self._apply(rec, step, proj)
+            return self._apply(rec, step, projection)
         if not self.due(step):
-            return Decision(rule_action, proj(rule_action), rule_reason, "rule")
+            return Decision(rule_action, projection(rule_action), rule_reason, "rule")
         self._k_llm = step
         rec = self._call(state, step, rule_action)
         if rec["fallback"] is not None:
-            action = proj(rule_action)
+            action = projection(rule_action)
             rec.update(apply_step=step, executed=action)
             why = f"LLM fallback ({rec['fallback']})"
             return Decision(rule_action, action, f"{why}; rule: {rule_reason}" if rule_reason else why, "rule")
         delay = self.latency.delay_steps(rec["latency_s"], float(state["dt"]))
         if delay == 0:
-            return self._apply(rec, step, proj)
+            return self._apply(rec, step, projection)
         self._pending = (step + delay, rec)
-        return Decision(rule_action, proj(rule_action), rule_reason, "rule")
+        return Decision(rule_action, projection(rule_action), rule_reason, "rule")
 
     def _call(self, state: Mapping[str, Any], step: int, rule_action: str) -> dict[str, Any]:
         prompt = build_prompt(state)

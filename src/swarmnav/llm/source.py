@@ -26,17 +26,17 @@ class LlmDecisionSource:
         rule: the rule source (``propose(z, step)`` -> a proposal with ``action``, ``reason``,
             ``source``), asked every step: its action is a_k^rule and the fallback.
         decider: the :class:`LlmDecider` that calls the model.
-        project: Pi_feas as ``project(action, z)``; default the decider's eq. (22) on the dict.
+        project: the method's Pi_feas, eq. (22), as ``project(action, z)``: the very function
+            the method projects the rule's proposals with (this layer has none of its own).
     """
 
-    def __init__(self, rule: Any, decider: LlmDecider, project: Callable[[str, Any], str] | None = None):
+    def __init__(self, rule: Any, decider: LlmDecider, project: Callable[[str, Any], str]):
         self.rule, self.decider, self.project = rule, decider, project
 
     def propose(self, z: Any, step: int) -> Any:
         r = self.rule.propose(z, step)
         state = z.to_dict() if hasattr(z, "to_dict") else dict(z)
-        proj = (lambda a: self.project(a, z)) if self.project is not None else None
-        d = self.decider.decide(state, step, r.action, r.reason, proj)
+        d = self.decider.decide(state, step, r.action, r.reason, lambda a: self.project(a, z))
         if d.source == "rule" and d.action == r.action and d.reason == r.reason:
             return r
         return type(r)(action=d.action, reason=d.reason, source=d.source)
@@ -48,9 +48,12 @@ class LlmDecisionSource:
         return {TRANSCRIPT: self.decider.transcript()}
 
 
-def decision_source(params: Any, rule: Any, project: Callable[[str, Any], str] | None = None) -> Any:
+def decision_source(params: Any, rule: Any, project: Callable[[str, Any], str]) -> Any:
     """``rule`` itself for ``params.decision == "rule"``, else an :class:`LlmDecisionSource`
-    on the back end the ``llm_*`` fields of ``params`` describe (raises ConfigError)."""
+    on the back end the ``llm_*`` fields of ``params`` describe (raises ConfigError).
+
+    ``project`` is the method's Pi_feas (eq. 22), which the LLM's answers go through as the
+    rule's do."""
     p = llm_params(params)
     if p.decision == "rule":
         return rule

@@ -94,7 +94,9 @@ class DecisionState:
 def project(action: str, z: DecisionState) -> str:
     """Pi_feas of eq. (22): split only if I_split, merge only if I_merge, otherwise keep.
 
-    Anything outside A_str (an unparsable suggestion) also becomes keep.
+    Anything outside A_str (an unparsable suggestion) also becomes keep. The one projection of
+    the package: the rule's proposals and every LLM back end's answers (``swarmnav.llm`` is
+    handed this function; it has no feasibility rule of its own) go through it.
     """
     if action == "split" and z.can_split:
         return "split"
