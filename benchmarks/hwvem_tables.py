@@ -157,8 +157,8 @@ def losses(n: int, seeds: str | None, variants: list[str] | None, extra: dict[st
     from swarmnav.methods import registry
     from swarmnav.sensing import signed_distance
     from swarmnav.sim.rollout import run as rollout
+    from swarmnav.world.catalog import load_scenario
     from swarmnav.world.obstacles import Geometry
-    from swarmnav.world.scenario import load_scenario
 
     exp = load_experiment("hwvem-mission", overrides={"n": str(n), **extra}, seeds=seeds)
     chosen = [v for v in exp.variants if not variants or v.name.split("[")[0] in variants]

@@ -239,7 +239,7 @@ def _scene_names():
 
 @pytest.mark.parametrize("name", _scene_names())
 def test_scenarios_show_prints_a_scene_file_that_loads_back(name, tmp_path, capsys):
-    from swarmnav.world.scenario import load_scenario
+    from swarmnav.world.catalog import load_scenario
 
     assert main(["scenarios", "show", name]) == 0
     f = tmp_path / "scene.toml"

@@ -87,8 +87,9 @@ def _writable_file(path, flag: str) -> Path:
 
 
 def _cmd_scenarios(args) -> int:
+    from swarmnav.world.catalog import load_scenario
     from swarmnav.world.generators import GENERATORS
-    from swarmnav.world.scenario import builtin_names, load_scenario
+    from swarmnav.world.scenario import builtin_names
 
     if args.action is None:
         for name in builtin_names():
@@ -159,7 +160,7 @@ def _print_params(spec, out) -> None:
 
 def _cmd_run(args) -> int:
     from swarmnav.sim import run
-    from swarmnav.world.scenario import load_scenario
+    from swarmnav.world.catalog import load_scenario
 
     if (args.scenario is None) == (args.scenario_file is None):
         raise ConfigError("run: give exactly one of --scenario NAME or --scenario-file PATH")

@@ -81,7 +81,7 @@ def test_failed_runs_are_retried(tmp_path):
     jobs = plan(exp)
     store = Store(tmp_path)
     store.set_meta("x", 1)
-    from swarmnav.experiments.runner import failed_row
+    from swarmnav.experiments.jobs import failed_row
 
     store.put(failed_row(jobs[0], "boom"))
     seen = []

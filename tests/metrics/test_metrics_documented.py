@@ -12,7 +12,7 @@ import pytest
 
 import swarmnav
 from swarmnav.methods import registry
-from swarmnav.world.scenario import load_scenario
+from swarmnav.world.catalog import load_scenario
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "metrics.md"
 N, STEPS = 6, 5  # a few steps of a small swarm write every key a full run writes

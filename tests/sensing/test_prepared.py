@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from _helpers.scenes import random_scene
-from swarmnav.sensing import PreparedGeometry, lidar_ring, segments_blocked
-from swarmnav.sensing.lidar import _ray_table
+from swarmnav.sensing import PreparedGeometry, lidar_ring, ray_table, segments_blocked
 from swarmnav.world.obstacles import Geometry
 
 
@@ -17,7 +16,7 @@ def test_prepared_queries_equal_the_public_ones(seed):
     geom = Geometry.from_obstacles(random_scene(rng))
     prep = PreparedGeometry(geom)
     x = rng.uniform(-18, 28, (15, 2))
-    cos_t, sin_t = _ray_table(90)
+    cos_t, sin_t = ray_table(90)
     ring = prep.lidar_into(x, cos_t, sin_t, 12.0, np.empty((15, 90)))
     np.testing.assert_array_equal(ring, lidar_ring(geom, x, n_rays=90, max_range=12.0))
     p, q = rng.uniform(-18, 28, (40, 2)), rng.uniform(-18, 28, (40, 2))
@@ -46,4 +45,4 @@ def test_prepared_3d_queries_equal_the_public_ones():
     np.testing.assert_allclose(prep.range_into(p[:5], u, 6.0, np.empty((5, 50))), range_scan(geom, p[:5], u, 6.0),
                                rtol=0, atol=1e-12)
     with pytest.raises(ValueError):
-        prep.lidar_into(p[:, :2].copy(), *_ray_table(8), 6.0, np.empty((60, 8)))
+        prep.lidar_into(p[:, :2].copy(), *ray_table(8), 6.0, np.empty((60, 8)))

@@ -18,8 +18,10 @@ from swarmnav.sim.result import RunResult  # noqa: E402
 import swarmnav.viz.animate as animate_mod  # noqa: E402
 from swarmnav.viz import animate_run, draw_scene, plot_run, plot_scene  # noqa: E402
 from swarmnav.viz.animate import frame_steps  # noqa: E402
-from swarmnav.viz.draw import GOAL_FACE, OBSTACLE_FACE, event_points, trajectory_segments  # noqa: E402
-from swarmnav.world.scenario import builtin_names, from_dict, load_scenario  # noqa: E402
+from swarmnav.viz.draw import event_points, trajectory_segments  # noqa: E402
+from swarmnav.viz.style import GOAL_FACE, OBSTACLE_FACE  # noqa: E402
+from swarmnav.world.catalog import load_scenario  # noqa: E402
+from swarmnav.world.scenario import builtin_names, from_dict  # noqa: E402
 
 SCENE = {
     "name": "viz_test",

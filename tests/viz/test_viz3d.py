@@ -20,9 +20,10 @@ from swarmnav.sim.result import RunResult  # noqa: E402
 from swarmnav.viz import animate_run, draw_scene, plot_run, plot_scene  # noqa: E402
 from swarmnav.viz import draw3d  # noqa: E402
 from swarmnav.viz.animate import frame_steps  # noqa: E402
-from swarmnav.viz.draw import END_COLOR, GOAL_FACE, START_COLOR  # noqa: E402
+from swarmnav.viz.style import END_COLOR, GOAL_FACE, START_COLOR  # noqa: E402
+from swarmnav.world.catalog import load_scenario  # noqa: E402
 from swarmnav.world.obstacles import Box, Cylinder, Polygon, Sphere  # noqa: E402
-from swarmnav.world.scenario import builtin_names, from_dict, load_scenario  # noqa: E402
+from swarmnav.world.scenario import builtin_names, from_dict  # noqa: E402
 
 SCENE = {
     "name": "viz3d_test",

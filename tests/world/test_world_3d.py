@@ -8,9 +8,10 @@ import pytest
 
 from swarmnav.errors import ScenarioError
 from swarmnav.sensing import points_inside, signed_distance
+from swarmnav.world.catalog import load_scenario
 from swarmnav.world.generators import random_forest_3d
 from swarmnav.world.obstacles import Box, Circle, Cylinder, Polygon, Sphere
-from swarmnav.world.scenario import builtin_names, from_dict, load_scenario
+from swarmnav.world.scenario import builtin_names, from_dict
 
 L, W, H = 26.0, 18.0, 6.0  # the generator's default forest box [m]
 

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Callable
 
 from swarmnav.errors import ConfigError
-from swarmnav.experiments.runner import Job, execute, failed_row
+from swarmnav.experiments.jobs import Job, execute, failed_row
 
 #: How many times a job whose worker process died under it is run again before it is recorded
 #: as failed (to be retried by the next rerun of the sweep).

@@ -4,9 +4,9 @@ All functions take flat arrays (a ``Geometry`` and (N, d) positions, ``d = geom.
 return arrays; the ESDF is a grid of the same signed distance with an interpolating query.
 """
 
-from swarmnav.sensing.esdf import Esdf
+from swarmnav.sensing.esdf import Esdf, esdf3d_query_kernel, esdf_query_kernel
 from swarmnav.sensing.geometry import nearest_obstacle, points_inside, segments_blocked, signed_distance
-from swarmnav.sensing.lidar import lidar_ring
+from swarmnav.sensing.lidar import lidar_ring, ray_table
 from swarmnav.sensing.neighbors import neighbor_lists, neighbor_pairs, pairwise_min_distance
 from swarmnav.sensing.prepared import PreparedGeometry
 from swarmnav.sensing.scan import range_scan
@@ -14,6 +14,8 @@ from swarmnav.sensing.scan import range_scan
 __all__ = [
     "Esdf",
     "PreparedGeometry",
+    "esdf3d_query_kernel",
+    "esdf_query_kernel",
     "lidar_ring",
     "nearest_obstacle",
     "neighbor_lists",
@@ -21,6 +23,7 @@ __all__ = [
     "pairwise_min_distance",
     "points_inside",
     "range_scan",
+    "ray_table",
     "segments_blocked",
     "signed_distance",
 ]

@@ -3,6 +3,10 @@
 Node values are the exact signed distance of :func:`swarmnav.sensing.signed_distance` (so the
 grid and the exact queries share one definition); between nodes the field is the bilinear
 (2-D) or trilinear (3-D) interpolant, whose gradient is returned analytically.
+
+For compiled (numba) callers that query a field inside their own kernels, the query kernels
+are public here: :func:`esdf_query_kernel` (2-D, bilinear) and :func:`esdf3d_query_kernel`
+(3-D, trilinear), on ``Esdf.values``, ``origin`` and ``resolution``.
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
 
 @lru_cache(maxsize=16)
-def _ray_table(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
+def ray_table(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
     """Unit ray directions (cos, sin) for ``n_rays`` evenly spaced angles, read-only.
 
     Axis-aligned rays (angles that are multiples of pi/2) get exact 0/+-1 components, so a
@@ -70,7 +70,7 @@ def lidar_ring(geom: Geometry, positions: np.ndarray, n_rays: int = 360, max_ran
     # A non-finite position would turn the ray-index arithmetic into garbage indices.
     if not np.isfinite(pos).all():
         raise ValueError("positions must be finite")
-    cos_t, sin_t = _ray_table(n_rays)
+    cos_t, sin_t = ray_table(n_rays)
     out = np.empty((pos.shape[0], n_rays), dtype=np.float64)
     lidar_kernel(*geom_arrays(geom), pos, cos_t, sin_t, max_range, out)
     return out

@@ -16,7 +16,8 @@ from swarmnav.metrics.navigation import MetricParams, navigation_metrics
 from swarmnav.params import as_dict
 from swarmnav.sensing import signed_distance
 from swarmnav.sim.result import RunResult
-from swarmnav.world.scenario import Scenario, load_scenario
+from swarmnav.world.catalog import load_scenario
+from swarmnav.world.scenario import Scenario
 
 
 #: Options of the run itself, accepted by :func:`run` beside the method's parameters (and by

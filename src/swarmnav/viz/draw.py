@@ -19,18 +19,10 @@ from matplotlib.collections import PatchCollection
 from matplotlib.lines import Line2D
 
 from swarmnav.errors import SwarmnavError
+from swarmnav.viz.draw3d import draw_scene_3d
+from swarmnav.viz.style import EVENT_MARKERS, GOAL_FACE, OBSTACLE_EDGE, OBSTACLE_FACE, PATH_COLOR, SPAWN_COLOR
 from swarmnav.world.obstacles import Circle
 from swarmnav.world.scenario import Scenario, from_dict
-
-OBSTACLE_FACE = "#b3d9f2"  # light blue, as the obstacles of HES Figure 3
-OBSTACLE_EDGE = "#4d7ea8"
-GOAL_FACE = "#ffd400"
-SPAWN_COLOR = "tab:green"
-PATH_COLOR = "tab:purple"
-START_COLOR = "tab:green"
-END_COLOR = "tab:red"
-#: Marker of each structural event action in trajectory figures.
-EVENT_MARKERS = {"split": ("^", "black"), "merge": ("D", "white")}  # outside tab10/tab20
 
 
 def draw_scene(
@@ -53,8 +45,6 @@ def draw_scene(
         Legend handles of what was drawn (obstacle, periodic cell, spawn, path, goal).
     """
     if scenario.dim == 3:
-        from swarmnav.viz.draw3d import draw_scene_3d  # it reads this module's colours
-
         return draw_scene_3d(ax, scenario, show_spawn=show_spawn, show_goal=show_goal, show_path=show_path)
     handles: list[Artist] = []
     shapes = [

@@ -25,6 +25,7 @@ from mpl_toolkits.mplot3d import Axes3D, proj3d
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
 from swarmnav.errors import SwarmnavError
+from swarmnav.viz.style import GOAL_FACE, PATH_COLOR, SPAWN_COLOR
 from swarmnav.world.obstacles import Box, Cylinder, Polygon, Sphere
 from swarmnav.world.scenario import Scenario
 
@@ -172,8 +173,6 @@ def draw_scene_3d(
     """
     if not isinstance(ax, Axes3D):
         raise SwarmnavError(f"{scenario.name}: a 3-D scene is drawn on a 3-D axes (projection='3d')")
-    from swarmnav.viz.draw import GOAL_FACE, PATH_COLOR, SPAWN_COLOR  # draw imports this module
-
     handles: list[Artist] = []
     lo, hi = scenario.lower, scenario.upper
     shell = [enclosing(o, lo, hi) for o in scenario.obstacles]

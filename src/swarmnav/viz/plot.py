@@ -22,9 +22,10 @@ from mpl_toolkits.mplot3d.art3d import Line3DCollection
 from swarmnav.metrics import MetricParams
 from swarmnav.viz import draw3d
 from swarmnav.viz.draw import (
-    END_COLOR, EVENT_MARKERS, START_COLOR, dot_size, draw_scene, event_handles, event_points, fig_size,
-    fmt_metric, label_colors, output_path, period_of, scenario_of, trajectory_segments,
+    dot_size, draw_scene, event_handles, event_points, fig_size, fmt_metric, label_colors, output_path, period_of,
+    scenario_of, trajectory_segments,
 )
+from swarmnav.viz.style import END_COLOR, EVENT_MARKERS, START_COLOR
 from swarmnav.world.scenario import Scenario
 
 if TYPE_CHECKING:

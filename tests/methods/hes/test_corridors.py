@@ -5,11 +5,10 @@ import numpy as np
 import pytest
 
 from swarmnav.methods.hes.corridors import corridors_toward, detect_gaps, ring_anchors, segment_clear
-from swarmnav.sensing import lidar_ring
-from swarmnav.sensing.lidar import _ray_table
+from swarmnav.sensing import lidar_ring, ray_table
 from swarmnav.world.obstacles import Box, Geometry
 
-COS, SIN = _ray_table(360)
+COS, SIN = ray_table(360)
 # Ray spacing at ~10 m is 0.17 m: a throat end point can be missed by up to one spacing.
 TOL = 0.25
 

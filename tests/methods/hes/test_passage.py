@@ -11,12 +11,11 @@ from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.corridors import detect_gaps, seen_passages
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.passage import passage_dsafe
-from swarmnav.sensing import lidar_ring
-from swarmnav.sensing.lidar import _ray_table
-from swarmnav.world.scenario import load_scenario
+from swarmnav.sensing import lidar_ring, ray_table
+from swarmnav.world.catalog import load_scenario
 
 P = HesParams()
-COS, SIN = _ray_table(P.n_rays)
+COS, SIN = ray_table(P.n_rays)
 GATES = "narrow_alternating_gates"
 MID, NORMAL, W = np.array([11.6, -9.25]), np.array([1.0, 0.0]), 2.3  # gate 1's 2.3 m gap (x = 11.6..12.4)
 

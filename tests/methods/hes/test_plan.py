@@ -13,7 +13,7 @@ from scipy.sparse.csgraph import dijkstra
 
 import swarmnav
 from swarmnav.methods.hes.plan import clearance, cost_to_go, descend, lookahead, mark_hits
-from swarmnav.sensing.lidar import _ray_table
+from swarmnav.sensing import ray_table
 
 FOREST = "random_forest:density=0.25,seed=2,length=12,r_min=1.0,r_max=2.0,min_passage=1.0"
 
@@ -109,7 +109,7 @@ def test_descend_and_lookahead_follow_the_field_to_the_goal_through_the_wide_gap
 
 def test_mark_hits_matches_a_plain_loop():
     rng = np.random.default_rng(3)
-    cos, sin = _ray_table(36)
+    cos, sin = ray_table(36)
     x = rng.uniform(-3.0, 3.0, (4, 2))
     ring = rng.uniform(0.5, 25.0, (4, 36))
     occ = np.zeros((40, 50), dtype=bool)

@@ -10,8 +10,7 @@ import swarmnav
 from swarmnav.methods.base import Observation
 from swarmnav.methods.hes import Hes
 from swarmnav.methods.hes.corridors import newest_visible
-from swarmnav.sensing import lidar_ring
-from swarmnav.sensing.lidar import _ray_table
+from swarmnav.sensing import lidar_ring, ray_table
 from swarmnav.world import from_dict
 
 GOAL = np.array([30.0, 8.0])
@@ -28,7 +27,7 @@ PATH = np.vstack([np.column_stack([np.linspace(-8.0, -3.0, 6), np.zeros(6)]),
 
 
 def test_newest_visible_is_the_latest_trail_point_in_straight_reach():
-    cos, sin = _ray_table(360)
+    cos, sin = ray_table(360)
     ring = lidar_ring(CUP.geometry, IN_CUP[None, :], 360, 20.0)[0]
     trail = np.zeros((len(PATH), 2, 2))
     trail[:, 0] = PATH

@@ -292,7 +292,7 @@ def test_mission_success_counts_agents_that_never_join():
 @pytest.mark.parametrize("scene, clearance", [("hwvem_mission", 0.6), ("hwvem_mission_v1", 1.2)])
 def test_mission_scene_has_the_paper_ingredients(scene, clearance):
     from swarmnav.sensing import signed_distance
-    from swarmnav.world.scenario import load_scenario
+    from swarmnav.world.catalog import load_scenario
 
     for n, side in ((5, 1.2375), (20, 2.4749), (50, 3.9132)):  # HWVEM Sec. 3.2 initial squares
         s = load_scenario(scene, n=n)
@@ -312,7 +312,7 @@ def test_mission_scene_has_the_paper_ingredients(scene, clearance):
 def test_shipped_mission_scenes_are_members_of_the_family(scene, params):
     """The scene files are the fitted / the default member of hwvem_mission_family (the geometry
     the calibration in benchmarks/hwvem_scene_fit.py ran on), at every Table 2 size."""
-    from swarmnav.world.scenario import load_scenario
+    from swarmnav.world.catalog import load_scenario
 
     def geometry(s):
         d = s.to_dict()
@@ -325,7 +325,7 @@ def test_shipped_mission_scenes_are_members_of_the_family(scene, params):
 
 def test_experiment_specs_resize_the_periodic_box():
     from swarmnav.experiments import load_experiment
-    from swarmnav.world.scenario import load_scenario
+    from swarmnav.world.catalog import load_scenario
 
     e = load_experiment("hwvem-alignment", overrides={"n": "100|500"})
     assert [v.name for v in e.variants][:2] == ["VEM[n=100]", "VEM[n=500]"]
@@ -357,7 +357,7 @@ def test_mission_losses_match_the_component_test_replayed_from_the_trajectory():
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
-    from swarmnav.world.scenario import load_scenario
+    from swarmnav.world.catalog import load_scenario
 
     scn = load_scenario("hwvem_mission", n=20)
     m = VicsekFamily("hwvem", p1=0.0, p2=100.0)

@@ -282,7 +282,7 @@ def seen_passages(gaps: np.ndarray, ring: np.ndarray, px: float, py: float, cos_
 
 
 def _rays(n: int) -> tuple[np.ndarray, np.ndarray]:
-    from swarmnav.sensing.lidar import _ray_table
+    from swarmnav.sensing import ray_table as _ray_table
 
     return _ray_table(max(n, 1))
 

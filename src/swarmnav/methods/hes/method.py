@@ -65,7 +65,7 @@ from swarmnav.methods.hes.passage import passage_dsafe, throat_dsafe
 from swarmnav.methods.hes.plan import clearance, cost_to_go, descend, lookahead, mark_hits, nearest_reachable
 from swarmnav.params import build
 from swarmnav.sensing import PreparedGeometry
-from swarmnav.sensing.lidar import _ray_table
+from swarmnav.sensing import ray_table as _ray_table
 from swarmnav.world.scenario import Scenario
 
 _NEVER = -(10**9)

@@ -17,9 +17,7 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
-from swarmnav.sensing._kernels import esdf_query_kernel
-from swarmnav.sensing._kernels3d import esdf3d_query_kernel
-from swarmnav.sensing.esdf import Esdf
+from swarmnav.sensing.esdf import Esdf, esdf3d_query_kernel, esdf_query_kernel
 
 #: Uniform cubic B-spline basis: position on segment s at local u in [0, 1) is
 #: ``[1, u, u^2, u^3] @ M @ C[s:s + 4]``.

@@ -1,0 +1,119 @@
+"""One job of an experiment: what to run (:class:`Job`, :func:`plan`) and running it
+(:func:`execute`, :func:`failed_row`).
+
+Shared by the runner (which plans jobs and stores their rows) and the back ends (which
+execute them), so neither has to import the other.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import time
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from swarmnav._version import __version__
+from swarmnav.errors import ConfigError, SwarmnavError
+from swarmnav.experiments.spec import Experiment, Variant
+from swarmnav.experiments.store import config_key
+
+
+@dataclass(frozen=True, slots=True)
+class Job:
+    """One run to do: a variant, a seed, and the key of its full configuration."""
+
+    key: str
+    experiment: str
+    variant: Variant
+    seed: int
+    config: dict[str, Any]
+
+
+def plan(exp: Experiment) -> list[Job]:
+    """The experiment's jobs in spec order, each keyed by the hash of its configuration.
+
+    Fails fast (before any worker starts) on a bad method, parameter or scene. The key covers
+    the method, its fully resolved parameters (defaults included), the scene's identity (the
+    text of a scene file, or a generator spec), swarm size, steps and seed.
+    """
+    from swarmnav.methods import registry
+    from swarmnav.params import as_dict
+    from swarmnav.sim.rollout import RUN_OPTIONS
+    from swarmnav.world.catalog import load_scenario
+
+    jobs = []
+    for v in exp.variants:
+        try:
+            method_params = {k: x for k, x in v.params.items() if k not in RUN_OPTIONS}
+            params = as_dict(registry.make(v.method, **method_params).params)
+            params.update({k: v.params[k] for k in RUN_OPTIONS if k in v.params})
+            load_scenario(v.scenario.replace("{seed}", str(exp.seeds[0])), n=v.n)
+        except SwarmnavError as e:
+            raise ConfigError(f"{exp.name} variant '{v.name}': {e}") from None
+        for s in exp.seeds:
+            scenario = v.scenario.replace("{seed}", str(s))
+            config = {"method": v.method, "params": params, "scene": _scene_identity(scenario),
+                      "n": v.n, "steps": v.steps, "seed": s}
+            jobs.append(Job(config_key(config), exp.name, v, s, config))
+    return jobs
+
+
+def _scene_identity(scenario: str) -> str:
+    """A file's or built-in scene's content hash; a generator spec is its own identity."""
+    from swarmnav.world.scenario import builtin_names
+
+    if scenario in builtin_names():
+        text = resources.files("swarmnav.world").joinpath("scenes", f"{scenario}.toml").read_bytes()
+        return f"{scenario}@{hashlib.sha256(text).hexdigest()[:16]}"
+    p = Path(scenario)
+    if scenario.endswith(".toml") and p.is_file():
+        return f"{p.name}@{hashlib.sha256(p.read_bytes()).hexdigest()[:16]}"
+    return scenario
+
+
+def execute(job: Job, keep_trajectory: bool = True) -> dict[str, Any]:
+    """Run one job (in a worker) -> the store row. Never raises: a failed run is a row too.
+
+    The trajectory travels back to the driver as compressed ``.npz`` bytes (``row["_npz"]``),
+    so workers need no shared filesystem (a Ray cluster) and only the driver writes files.
+    """
+    from swarmnav.sim import run
+    from swarmnav.world.catalog import load_scenario
+
+    v = job.variant
+    row: dict[str, Any] = {
+        "key": job.key, "experiment": job.experiment, "variant": v.name,
+        "scenario": v.scenario.replace("{seed}", str(job.seed)), "method": v.method, "seed": job.seed,
+        "n": v.n, "steps": v.steps, "params": v.params, "config": job.config, "version": __version__,
+        "metrics": {}, "trajectory": "", "error": "",
+    }
+    t0 = time.perf_counter()
+    try:
+        res = run(v.method, load_scenario(row["scenario"], n=v.n), seed=job.seed, steps=v.steps, **v.params)
+        if keep_trajectory:
+            buf = io.BytesIO()
+            np.savez_compressed(buf, positions=res.positions.astype(np.float32), labels=res.labels,
+                                min_clearance=res.min_clearance.astype(np.float32))
+            row["_npz"] = buf.getvalue()
+        if res.artifacts:  # e.g. the LLM transcript: kept beside the trajectory
+            row["_artifacts"] = dict(res.artifacts)
+        timings = {f"time.{k}": v for k, v in res.timings.items()}  # wall clock, stored beside the metrics
+        row.update(status="done", metrics={**res.metrics, **timings})
+    except Exception as e:  # noqa: BLE001 - a failed run is recorded, never fatal to the sweep
+        row.update(status="failed", error=f"{type(e).__name__}: {e}".splitlines()[0][:500])
+    row["wall_time_s"] = time.perf_counter() - t0
+    return row
+
+
+def failed_row(job: Job, error: str) -> dict[str, Any]:
+    """The row of a run whose worker never returned (it died, or the back end lost it)."""
+    v = job.variant
+    return {"key": job.key, "experiment": job.experiment, "variant": v.name,
+            "scenario": v.scenario.replace("{seed}", str(job.seed)), "method": v.method, "seed": job.seed,
+            "n": v.n, "steps": v.steps, "params": v.params, "config": job.config, "version": __version__,
+            "metrics": {}, "trajectory": "", "status": "failed", "error": error[:500], "wall_time_s": None}

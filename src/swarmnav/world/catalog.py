@@ -1,0 +1,54 @@
+"""Any scene by name: a built-in scene, a generator spec or a scene file.
+
+The one place that knows every source of scenes, so the scenario model (``scenario``) and
+the generators (which build scenarios) need not import each other.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from swarmnav.errors import ScenarioError
+from swarmnav.world import generators
+from swarmnav.world.scenario import Scenario, builtin_names, load_file, loads
+
+
+def load_scenario(name_or_path: str | Path, **overrides: Any) -> Scenario:
+    """Load a scene by built-in name, generator spec or file path.
+
+    Args:
+        name_or_path: a built-in scene name (``swarmnav scenarios``), a generator spec
+            ``GEN:key=value,...`` (``random_forest:density=0.25,seed=3``,
+            ``periodic_box:n=100,rho=4.102``), or a path to a ``.toml`` scene file.
+        **overrides: ``n=`` resizes the swarm.
+    """
+    s = str(name_or_path)
+    if isinstance(name_or_path, Path) or s.endswith(".toml") or "/" in s:
+        scn = load_file(s)
+    elif ":" in s or s in generators.GENERATORS:
+        scn = generators.from_spec(s, n=overrides.get("n"))
+    elif s in builtin_names():
+        text = resources.files("swarmnav.world").joinpath("scenes", f"{s}.toml").read_text("utf-8")
+        scn = loads(text, source=f"{s}.toml")
+    else:
+        import difflib
+
+        close = difflib.get_close_matches(s, builtin_names() + list(generators.GENERATORS), n=3)
+        hint = f" (did you mean {', '.join(close)}?)" if close else ""
+        raise ScenarioError(
+            f"{s}: unknown scene{hint} (built-in: {', '.join(builtin_names())}; "
+            f"generators: {', '.join(generators.GENERATORS)}; or a path to a .toml file)"
+        )
+    unknown = set(overrides) - {"n"}
+    if unknown:
+        raise ScenarioError(f"{s}: unknown scene override(s) {sorted(unknown)}")
+    if "n" in overrides and overrides["n"] is not None:
+        n = overrides["n"]
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ScenarioError(f"{s}: n must be an integer >= 1, got {n!r}")
+        scn = scn.with_n(int(n))
+    return scn
