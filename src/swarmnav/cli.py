@@ -257,7 +257,7 @@ def _cmd_experiment(args) -> int:
 def _cmd_report(args) -> int:
     from swarmnav.experiments.report import write_report
 
-    for path in write_report(args.dir, experiment=args.experiment):
+    for path in write_report(args.dir, experiment=args.experiment, compare=args.compare):
         print(f"wrote {path}")
     return 0
 
@@ -324,6 +324,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("report", help="write report.md and report.html for a results directory")
     s.add_argument("dir")
     s.add_argument("--experiment", help="which experiment of the store (default: the last one run)")
+    s.add_argument("--compare", nargs=2, metavar=("A", "B"),
+                   help="add the per-seed %% change of variant B against variant A (HES Fig. 5); "
+                        "default: the spec's [report] compare, if any")
     s.set_defaults(fn=_cmd_report)
 
     s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question")

@@ -3,7 +3,9 @@
 Tables are in the papers' format (mean ± population std over seeds) with the published
 values beside them when the experiment's spec names a reference table of the packaged
 ``paper_results.toml``; figures are bars with error bars (HES Figures 4 and 9) and per-seed
-box plots (HES Figure 7). Reads the store only; never runs a simulation.
+box plots (HES Figure 7). For two variants, the paired-seed percent change of one against the
+other (HES Figure 5, :mod:`swarmnav.experiments.paired`). Reads the store only; never runs a
+simulation.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav.errors import SwarmnavError
+from swarmnav.experiments import paired
 from swarmnav.experiments import stats
 from swarmnav.experiments.store import DB_NAME, Store
 
@@ -115,6 +118,16 @@ def _num(x: Any) -> str:
     return f"{x:.2f}" if a >= 100 else f"{x:.3f}" if a >= 0.01 or a == 0 else f"{x:.2e}"
 
 
+def report_metrics(meta: dict, rows: list[dict]) -> list[str]:
+    """The report's columns: the spec's ``[report] metrics``, else those of :data:`DEFAULT_METRICS`
+    that some finished run has."""
+    names = list((meta.get("report") or {}).get("metrics") or [])
+    if not names:
+        present = set().union(*(r["metrics"] for r in rows if r["status"] == "done")) if rows else set()
+        names = [m for m in DEFAULT_METRICS if m in present]
+    return names
+
+
 def build_tables(store: Store, experiment: str) -> dict[str, Any]:
     """Per-variant statistics and the matching published values (pure data, no formatting)."""
     meta = store.meta(f"experiment:{experiment}")
@@ -124,10 +137,7 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
 
     rows = job_rows(store, meta)
     spec = meta.get("report") or {}
-    metric_names = list(spec.get("metrics") or [])
-    if not metric_names:
-        present = set().union(*(r["metrics"] for r in rows if r["status"] == "done")) if rows else set()
-        metric_names = [m for m in DEFAULT_METRICS if m in present]
+    metric_names = report_metrics(meta, rows)
     ref_root = _lookup(paper_results(), spec["reference"]) if spec.get("reference") else None
     vmap = spec.get("variant_map") or {}
     variants = []
@@ -144,7 +154,7 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
                          "seeds": [r["seed"] for r in done], "reference": ref if isinstance(ref, dict) else None})
     return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
             "variants": variants, "reference": spec.get("reference"), "reference_index": spec.get("reference_index"),
-            "title": spec.get("title") or experiment, "n_runs": len(rows)}
+            "title": spec.get("title") or experiment, "n_runs": len(rows), "compare": spec.get("compare")}
 
 
 def _cell(vals: np.ndarray) -> str:
@@ -324,6 +334,7 @@ def _html_table(tab: dict) -> str:
         else:
             top.append(f'<th class="num"{rs}>{e(c["label"])}</th>')
     head = "<tr>" + "".join(top) + "</tr>" + (f"<tr>{''.join(sub)}</tr>" if two else "")
+    note = f"<p>{_inline_html(tab['note'])}</p>\n" if tab.get("note") else ""
     body = []
     for r in tab["rows"]:
         cells = []
@@ -335,7 +346,7 @@ def _html_table(tab: dict) -> str:
             inner = e(mean) + (f'<span class="sd"> ± {e(sd)}</span>' if pm else "")
             cells.append(f'<td class="num{" paper" if c["kind"] == "paper" else ""}">{inner}</td>')
         body.append("<tr>" + "".join(cells) + "</tr>")
-    return (f'<h2>{e(tab["title"])}</h2>\n<div class="scroll"><table>\n<thead>{head}</thead>\n<tbody>\n'
+    return (f'<h2>{e(tab["title"])}</h2>\n{note}<div class="scroll"><table>\n<thead>{head}</thead>\n<tbody>\n'
             + "\n".join(body) + "\n</tbody></table></div>\n")
 
 
@@ -350,8 +361,7 @@ def _png(fig) -> bytes:
     return buf.getvalue()
 
 
-def write_report(directory: str | Path, experiment: str | None = None) -> list[Path]:
-    """Write ``report.md`` (+ ``report_files/*.png``, ``*.svg``) and ``report.html`` into ``directory``."""
+def _open(directory: str | Path, experiment: str | None) -> tuple[Store, str]:
     d = Path(directory)
     if not (d / DB_NAME).exists():
         raise SwarmnavError(f"{d}: no results store ({DB_NAME}); run 'swarmnav experiment ... --out {d}' first")
@@ -359,14 +369,64 @@ def write_report(directory: str | Path, experiment: str | None = None) -> list[P
     experiment = experiment or store.meta("last_experiment")
     if experiment is None:
         raise SwarmnavError(f"{d}: the store names no experiment")
+    return store, experiment
+
+
+def paired_changes(directory: str | Path, a: str, b: str, *, experiment: str | None = None,
+                   metrics: list[str] | None = None) -> paired.Paired:
+    """Variant ``b`` against variant ``a`` of a results directory, seed by seed (HES Figure 5).
+
+    ``metrics`` defaults to the report's columns. The per-seed table is ``.rows`` (see
+    :class:`swarmnav.experiments.paired.Paired`); an unknown variant is a one-line ConfigError.
+    """
+    store, experiment = _open(directory, experiment)
+    meta = store.meta(f"experiment:{experiment}")
+    if meta is None:
+        raise SwarmnavError(f"{store.root}: no experiment '{experiment}' in the store")
+    from swarmnav.experiments.runner import job_rows
+
+    a, b = paired.check_variants((a, b), [v["name"] for v in meta["variants"]])
+    rows = job_rows(store, meta)
+    return paired.pair_rows(rows, experiment, a, b, list(metrics) if metrics else report_metrics(meta, rows))
+
+
+def write_report(directory: str | Path, experiment: str | None = None,
+                 compare: tuple[str, str] | None = None) -> list[Path]:
+    """Write ``report.md`` (+ ``report_files/*.png``, ``*.svg``) and ``report.html`` into ``directory``.
+
+    ``compare = (A, B)`` adds the paired-seed comparison of B against A (table, figure
+    ``paired``, per-seed ``paired.csv``); without it, the pair the spec's ``[report] compare``
+    declares, if any.
+    """
+    store, experiment = _open(directory, experiment)
+    d = store.root
     t = build_tables(store, experiment)
     tabs = tables(t)
+    names = [v["name"] for v in t["variants"]]
+    pair, pair_note = None, ""
+    if compare is not None:
+        pair = paired.check_variants(tuple(compare), names)  # before anything is written
+    elif t["compare"]:
+        if all(n in names for n in t["compare"]):
+            pair = tuple(t["compare"])
+        else:  # a --set sweep appends its values to every variant name
+            pair_note = (f"The spec's comparison pair ({', '.join(t['compare'])}) is not among this store's "
+                         f"variants; `swarmnav report DIR --compare A B` names one.")
+    comparison = paired_changes(d, *pair, experiment=experiment, metrics=t["metrics"]) if pair else None
     from matplotlib import rc_context
 
     files = d / "report_files"
     files.mkdir(exist_ok=True)
+    charts = _figures(t)
+    if comparison is not None:
+        tabs.append(paired.table(comparison, UNITS))
+        charts.append(("paired", paired.figure(comparison, t["title"])))
+        (files / "paired.csv").write_text(comparison.to_csv(), encoding="utf-8")
+    else:  # an earlier report's comparison would otherwise stay beside this one
+        for ext in ("png", "svg", "csv"):
+            (files / f"paired.{ext}").unlink(missing_ok=True)
     figs = []
-    for stem, fig in _figures(t):  # PNG for the pages, SVG to print or to read the drawn values from
+    for stem, fig in charts:  # PNG for the pages, SVG to print or to read the drawn values from
         figs.append((f"{stem}.png", _png(fig)))
         (files / f"{stem}.png").write_bytes(figs[-1][1])
         fig.set_layout_engine("none")  # keep the layout the PNG computed instead of solving it again
@@ -377,8 +437,11 @@ def write_report(directory: str | Path, experiment: str | None = None) -> list[P
                 f"gives the metric." if t["reference"] else "No published table to compare.")
     md = [f"# {t['title']}", "", t["description"], "",
           f"Experiment `{experiment}`, {t['n_runs']} runs. Cells are mean ± population std over seeds.", ref_note]
+    if pair_note:
+        md += ["", pair_note]
     for tab in tabs:
-        md += ["", f"## {tab['title']}", "", "| " + " | ".join(c["label"] for c in tab["columns"]) + " |",
+        md += ["", f"## {tab['title']}", ""] + ([tab["note"], ""] if tab.get("note") else [])
+        md += ["| " + " | ".join(c["label"] for c in tab["columns"]) + " |",
                "|" + "".join("---|" if c["kind"] == "name" else "--:|" for c in tab["columns"])]
         md += ["| " + " | ".join(r) + " |" for r in tab["rows"]]
     md += [""] + [f"![{n}](report_files/{n})" for n, _ in figs] + [""]
@@ -408,6 +471,7 @@ img {{ max-width: 100%; }}
 <p>{_inline_html(t['description'])}</p>
 <p>Experiment <code>{e(experiment)}</code>, {t['n_runs']} runs. Cells are mean ± population std over seeds.
 {_inline_html(ref_note)}</p>
+{f"<p>{_inline_html(pair_note)}</p>" if pair_note else ""}
 <section id="results">
 {"".join(_html_table(tab) for tab in tabs)}</section>
 {imgs}
