@@ -10,7 +10,7 @@ import pytest
 
 from swarmnav.cli import main
 from swarmnav.errors import ConfigError
-from swarmnav.experiments import Store
+from swarmnav.experiments import Store, load_experiment
 from swarmnav.experiments.report import paired_changes, write_report
 
 SIM2_METRICS = ["E_mean", "L_mean", "path_stretch", "d_clr_min", "R_unsafe", "R_below_0_75", "R_below_0_30"]
@@ -91,6 +91,16 @@ def test_compare_gives_the_percentages_computed_by_hand_from_runs_csv(sim2, caps
         (r["metric"], int(r["seed"]), float(r["change_pct"]) if r["change_pct"] else None) for r in got]
 
 
+def test_report_draws_the_pair_the_spec_declares(sim2, capsys):
+    """hes-sim2 declares [report] compare = [safety_stack_on, safety_stack_off]: Table 3's toggle."""
+    assert main(["report", str(sim2)]) == 0
+    md = (sim2 / "report.md").read_text()
+    assert "## Paired by seed: safety_stack_off vs safety_stack_on" in md
+    html = (sim2 / "report.html").read_text()
+    assert "<h2>Paired by seed: safety_stack_off vs safety_stack_on</h2>" in html
+    assert html.count("data:image/png;base64,") == 3  # bars, boxes, paired
+
+
 @pytest.mark.parametrize("pair, fragment", [
     (["safety_stack_on", "safty_stack_of"], "unknown variant 'safty_stack_of' (did you mean safety_stack_off"),
     (["safety_stack_on", "safety_stack_on"], "two different variants"),
@@ -101,6 +111,15 @@ def test_a_bad_compare_pair_is_one_line_exit_2(sim2, capsys, pair, fragment):
     assert err.count("\n") == 1 and fragment in err
     with pytest.raises(ConfigError, match="unknown variant"):
         paired_changes(sim2, "safety_stack_on", "nope")
+
+
+def test_spec_compare_names_are_checked_at_load(tmp_path):
+    spec = tmp_path / "s.toml"
+    spec.write_text('name = "s"\nmethod = "apf"\nscenario = "default_corridor"\nsteps = 5\n'
+                    '[[variants]]\nname = "base"\n[[variants]]\nname = "strong"\nparams = { k_att = 3.0 }\n'
+                    '[report]\ncompare = ["base", "strnog"]\n')
+    with pytest.raises(ConfigError, match=r"\[report\] compare: unknown variant 'strnog' \(did you mean strong"):
+        load_experiment(str(spec))
 
 
 def _synthetic_store(d):

@@ -20,7 +20,8 @@ A ``[matrix]`` table crosses lists into variants named ``a/b``: ``matrix = {meth
 ``[[variants]]``). A ``[report]`` table tells ``swarmnav report`` which published table the
 experiment reproduces: ``reference = "hes.table3"`` (a table of the packaged
 ``paper_results.toml``), ``metrics = [...]`` (columns, in order), optional ``title`` and
-``variant_map = {variant = "reference_key"}`` when names differ.
+``variant_map = {variant = "reference_key"}`` when names differ, and ``compare = ["A", "B"]``,
+the pair of variants whose paired-seed percent changes (B against A) the report draws.
 
 ``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
 ``n`` (swarm size), a declared scenario variable, or a method parameter. ``key=a|b|c`` sweeps:
@@ -42,12 +43,13 @@ from pathlib import Path
 from typing import Any
 
 from swarmnav.errors import ConfigError
+from swarmnav.experiments.paired import check_variants
 from swarmnav.params import coerce
 
 _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "seeds", "n", "params", "variants",
               "matrix",
               "report", "scenario_vars"}
-_REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "figures"}
+_REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "figures", "compare"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "horizon", "n", "params"}
 _RUN_KEYS = {"method", "scenario", "steps", "horizon", "n"}
@@ -153,6 +155,10 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
             isinstance(x, (int, float, str)) and not isinstance(x, bool) for x in svars.values()):
         raise ConfigError(f"{source}: scenario_vars must map new names (not {sorted(_RUN_KEYS | {'seed'})}) "
                           f"to numbers or strings")
+    if "compare" in report:
+        if not isinstance(report["compare"], list) or not all(isinstance(x, str) for x in report["compare"]):
+            raise ConfigError(f"{source}: [report] compare must be a list of two variant names")
+        check_variants(report["compare"], [v.name for v in variants], where=f"{source}: [report] compare")
     variants = _apply_overrides(variants, overrides, svars)
     _check_params(variants, source)
     seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
