@@ -2,7 +2,8 @@
 
 Run: ``python benchmarks/bench_store.py``. Builds a synthetic store of 10,000 runs (10
 variants x 1000 seeds, the metric set of a real run, random values) in a temporary directory,
-then times the export and ``swarmnav report`` on it.
+then times the export and ``swarmnav report`` on it, without and with ``--compare`` (the
+paired-seed figure of two variants over their 1000 seeds).
 """
 
 from __future__ import annotations
@@ -52,9 +53,13 @@ def main(n_variants: int = 10, n_seeds: int = 1000) -> None:
         t0 = time.perf_counter()
         write_report(d)
         t_report = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        write_report(d, compare=("variant0", "variant1"))
+        t_compare = time.perf_counter() - t0
         print(f"store of {len(runs)} runs ({size / 2**20:.1f} MiB) built in {t_build:.1f} s")
         print(f"export runs.csv + summary.csv: {t_export:.2f} s")
         print(f"report.md + report.html:      {t_report:.2f} s   (target: seconds)")
+        print(f"  with --compare variant0 variant1: {t_compare:.2f} s")
 
 
 if __name__ == "__main__":
