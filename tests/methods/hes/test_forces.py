@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from swarmnav.methods.hes import barriers as B
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.params import HesParams
 
@@ -194,10 +195,10 @@ def test_safety_filter_bounds_speed_and_closing_speed():
     ring = np.full((1, R), 20.0)
     ring[0, 0] = 1.0  # a wall 1 m ahead on +x
     v = np.array([[3.0, 0.0]])
-    a = F.safety_filter(np.zeros((1, 2)), v, ring, COS, SIN, 0.1, 10.0, 1.5, 0.5, 20.0)
+    a = B.safety_filter(np.zeros((1, 2)), v, ring, COS, SIN, 0.1, 10.0, 1.5, 0.5, 20.0)
     v_next = v + 0.1 * a
     assert v_next[0, 0] <= math.sqrt(2 * 1.5 * 0.5) + 1e-12  # stoppable within d - margin
-    a2 = F.safety_filter(np.array([[0.0, 50.0]]), np.array([[0.0, 0.0]]), np.full((1, R), 20.0), COS, SIN, 0.1,
+    a2 = B.safety_filter(np.array([[0.0, 50.0]]), np.array([[0.0, 0.0]]), np.full((1, R), 20.0), COS, SIN, 0.1,
                          3.9, 1.5, 0.5, 20.0)
     assert np.linalg.norm(0.1 * a2) == pytest.approx(3.9)  # speed cap
 
@@ -217,7 +218,7 @@ def test_safety_filter_meets_every_ray_bound_between_obstacles():
                 row[idx] = np.minimum(row[idx], rng.uniform(0.2, 2.0) + 0.3 * np.abs(np.arange(-w, w + 1)) / w)
         v = rng.normal(0.0, 1.0, (3, 2))
         a = rng.normal(0.0, 30.0, (3, 2))
-        out = F.safety_filter(a, v, ring, COS, SIN, 0.1, 1.3, 1.5, 0.5, 20.0)
+        out = B.safety_filter(a, v, ring, COS, SIN, 0.1, 1.3, 1.5, 0.5, 20.0)
         w = v + 0.1 * out
         closing = w @ np.vstack([COS, SIN])  # (3, R)
         bound = np.sqrt(2 * 1.5 * np.maximum(ring - 0.5, 0.0))
@@ -237,7 +238,7 @@ def _follow(lead_brake_step, v0=3.0, gap0=4.0, steps=200):
         a = np.array([[P.a_max, 0.0], [0.0, 0.0]])
         if k >= lead_brake_step:
             a[1, 0] = -min(P.a_max, v[1, 0] / P.dt)
-        a = F.saturate(F.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max), P.a_max)
+        a = F.saturate(B.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max), P.a_max)
         v = v + P.dt * a
         x = x + P.dt * v
         d_min = min(d_min, x[1, 0] - x[0, 0])
@@ -254,7 +255,7 @@ def test_agent_barrier_follower_never_reaches_the_contact_distance(brake_at):
     x = np.array([[0.0, 0.0], [4.0, 0.0]])
     a = np.array([[P.a_max, 0.0], [0.0, 0.0]])
     v = np.array([[3.0, 0.0], [2.0, 0.0]])
-    out = F.agent_barrier(a, x, v, np.array([False, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    out = B.agent_barrier(a, x, v, np.array([False, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
     np.testing.assert_allclose(out, a, atol=1e-12)
 
 
@@ -264,16 +265,16 @@ def test_agent_barrier_only_brakes():
     x = np.array([[0.0, 0.0], [0.8, 0.0]])
     v = np.array([[0.0, 0.0], [-3.0, 0.0]])
     a = np.zeros((2, 2))
-    out = F.agent_barrier(a, x, v, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    out = B.agent_barrier(a, x, v, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
     np.testing.assert_array_equal(out[0], [0.0, 0.0])
     v2 = np.array([[-1.0, 2.0], [0.0, 0.0]])
-    out2 = F.agent_barrier(a, x, v2, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    out2 = B.agent_barrier(a, x, v2, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
     np.testing.assert_allclose(out2[0], [0.0, 0.0], atol=1e-12)
     # closing at 2 m/s from 1 m: the closing part is cut to sqrt(2 a_brake (1 - agent_margin)),
     # the sideways part is kept
     v3 = np.array([[2.0, 1.0], [0.0, 0.0]])
     x3 = np.array([[0.0, 0.0], [1.0, 0.0]])
-    out3 = F.agent_barrier(a, x3, v3, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    out3 = B.agent_barrier(a, x3, v3, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
     w = v3[0] + P.dt * out3[0]
     assert w[0] == pytest.approx(math.sqrt(2 * P.agent_brake * (1.0 - P.agent_margin)))
     assert w[1] == pytest.approx(1.0)
@@ -289,7 +290,7 @@ def _guarded_rollout(x, v, target_acc, steps=150, guard=True):
     for _ in range(steps):
         a = F.saturate(target_acc(x, v), P.a_max)
         if guard:
-            a = F.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
+            a = B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
         a_top = max(a_top, float(np.linalg.norm(a, axis=1).max()))
         v = v + P.dt * a
         x = x + P.dt * v
@@ -347,7 +348,7 @@ def test_agent_guard_priority_over_the_clip():
     x = np.array([[0.0, 0.0], [1.0, 0.0]])
     v = np.array([[1.6, 0.0], [0.0, 0.0]])
     a = np.array([[0.0, P.a_max], [0.0, 0.0]])
-    out = F.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    out = B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
     c_max = math.sqrt(2 * P.guard_brake * (1.0 - P.guard_margin))
     b = (c_max - v[0, 0]) / P.dt
     assert 0.0 < -b < P.a_max
@@ -356,13 +357,13 @@ def test_agent_guard_priority_over_the_clip():
     assert out[0, 1] == pytest.approx(math.sqrt(P.a_max**2 - b * b))  # the rest scaled, lam < 1
     assert (v[0] + P.dt * out[0])[0] == pytest.approx(c_max)
     # braking beyond a_max (2.5 m/s closing from 1 m): a_max of pure braking, nothing else
-    out2 = F.agent_guard(a, x, np.array([[2.5, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    out2 = B.agent_guard(a, x, np.array([[2.5, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
     np.testing.assert_allclose(out2[0], [-P.a_max, 0.0], atol=1e-12)
     # an agent at rest, one it closes on at rest beside it, and a pair moving apart: untouched
     x2 = np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]])
     v2 = np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]])
     a2 = np.array([[0.0, 0.0], [0.5, 0.0], [1.0, 0.0]])
-    np.testing.assert_allclose(F.agent_guard(a2, x2, v2, P.dt, P.guard_brake, P.guard_margin, P.a_max), a2, atol=1e-12)
+    np.testing.assert_allclose(B.agent_guard(a2, x2, v2, P.dt, P.guard_brake, P.guard_margin, P.a_max), a2, atol=1e-12)
 
 
 def test_agent_guard_counts_the_neighbours_own_stopping_distance():
@@ -370,15 +371,15 @@ def test_agent_guard_counts_the_neighbours_own_stopping_distance():
     # moving away at the same speed leaves i free to follow; one closing in tightens i's bound.
     x = np.array([[0.0, 0.0], [1.5, 0.0]])
     a = np.zeros((2, 2))
-    away = F.agent_guard(a, x, np.array([[3.0, 0.0], [3.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    away = B.agent_guard(a, x, np.array([[3.0, 0.0], [3.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
     np.testing.assert_allclose(away[0], [0.0, 0.0], atol=1e-12)
     # at 0.9 m, i closing at 1 m/s: free beside a neighbour at rest (bound sqrt(1.6) m/s), cut to
     # sqrt(1.6 - 1) m/s when the neighbour closes in at 1 m/s
     x = np.array([[0.0, 0.0], [0.9, 0.0]])
-    rest = F.agent_guard(a, x, np.array([[1.0, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    rest = B.agent_guard(a, x, np.array([[1.0, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
     np.testing.assert_allclose(rest[0], [0.0, 0.0], atol=1e-12)
     v = np.array([[1.0, 0.0], [-1.0, 0.0]])
-    out = F.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    out = B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
     c_max = math.sqrt(2 * P.guard_brake * (0.9 - P.guard_margin) - 1.0)
     w = v[0] + P.dt * out[0]
     assert w[0] == pytest.approx(c_max)

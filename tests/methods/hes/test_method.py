@@ -8,7 +8,9 @@ import swarmnav
 from swarmnav.methods import registry
 from swarmnav.methods.base import Observation
 from swarmnav.methods.hes import Hes, Proposal
+from swarmnav.methods.hes.control import occlusion
 from swarmnav.methods.hes.decision import project
+from swarmnav.methods.hes.step import Step
 from swarmnav.sim import RunResult
 from swarmnav.world import from_dict
 
@@ -75,6 +77,13 @@ def test_decision_state_reads_reports_and_matches_feasibility():
     assert project("split", z) == "split" and project("merge", z) == "keep"
 
 
+def _occlusion(m, x, slot, nn, sl_idx, cent):
+    """Eq. (30) as the control stage computes it, for the given couplings."""
+    step = Step(0, x, np.zeros_like(x), np.zeros((len(x), 1)), slot=slot, nn=nn, sl_idx=sl_idx, cent=cent)
+    occlusion(m, step)
+    return step.sig
+
+
 def test_occlusion_factor_of_each_target():
     scn = from_dict({**OPEN, "swarm": {"n": 2, "spawn": [-3.0, -3.0, 3.0, 3.0]},
                      "obstacles": [{"type": "box", "min": [1.0, -5.0], "max": [2.0, 5.0]}]})
@@ -82,12 +91,12 @@ def test_occlusion_factor_of_each_target():
     x = np.array([[0.0, 0.0], [3.0, 0.0]])
     m.reset(scn, x, np.zeros_like(x), np.random.default_rng(0))
     slot = np.array([[-1.0, 0.0], [4.0, 0.0]])  # both slots on the near side
-    sig = m._occlusion(x, slot, np.array([1, 0]), np.array([0, 0]), np.array([[1.5, 12.0], [1.5, 12.0]]))
+    sig = _occlusion(m, x, slot, np.array([1, 0]), np.array([0, 0]), np.array([[1.5, 12.0], [1.5, 12.0]]))
     # columns: slot, nearest neighbour, subleader, centroid (agent 1's subleader is agent 0)
     np.testing.assert_array_equal(sig, [[1.0, 0.2, 1.0, 1.0], [1.0, 0.2, 0.2, 1.0]])
     m2 = Hes(occlusion_attenuation=False)
     m2.reset(scn, x, np.zeros_like(x), np.random.default_rng(0))
-    assert np.all(m2._occlusion(x, slot, np.array([1, 0]), np.array([0, 0]), x) == 1.0)
+    assert np.all(_occlusion(m2, x, slot, np.array([1, 0]), np.array([0, 0]), x) == 1.0)
 
 
 def test_ablation_switches():

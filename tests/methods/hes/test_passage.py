@@ -7,6 +7,11 @@ import numpy as np
 import pytest
 
 import swarmnav
+from swarmnav.methods.base import Observation
+from swarmnav.methods.hes.control import control
+from swarmnav.methods.hes.report import sense
+from swarmnav.methods.hes.step import Step
+from swarmnav.methods.hes.targets import references
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.corridors import detect_gaps, seen_passages
 from swarmnav.methods.hes.params import HesParams
@@ -91,14 +96,14 @@ def test_the_d_safe_actually_used_is_d_safe_outside_passages():
     for scene, kw in (("default_corridor", {}), (GATES, {"passage_mode": False})):
         m = registry.make("hes", **kw)
         seen = []
-        orig = m._dsafe
+        orig = m.act
 
-        def spy(x, orig=orig, seen=seen):
-            d = orig(x)
-            seen.append(float(d.min()))
-            return d
+        def spy(obs, rng, orig=orig, seen=seen, m=m):
+            out = orig(obs, rng)
+            seen.append(float(m.last_step.dsafe.min()))  # the d_safe of eq. (36) the step used
+            return out
 
-        m._dsafe = spy
+        m.act = spy
         swarmnav.run(m, scene, seed=1, steps=250)
         assert min(seen) == P.d_safe, scene
 
@@ -124,7 +129,7 @@ def _chain_method(crossed_1, crossed_2, route_is_2, mode=None):
     gate 1's gap (11.6, -9.25), normal +x, and gate 2's gap (21.6, +9.25), normal +x."""
     from swarmnav.methods import registry
     from swarmnav.methods.hes.corridors import Corridor
-    from swarmnav.methods.hes.method import Passage
+    from swarmnav.methods.hes.passage import Passage
 
     scene = load_scenario(GATES, n=6)
     x = np.array([[8.0, -8.0], [9.0, -9.0], [14.0, -8.0], [16.0, 0.0], [18.0, 6.0], [24.0, 8.0]])
@@ -134,7 +139,7 @@ def _chain_method(crossed_1, crossed_2, route_is_2, mode=None):
     mid2 = np.array([21.6, 9.25])
     g2 = Corridor(mid2, NORMAL.copy(), W, mid2 + 3.0 * NORMAL, 0.0)
     sub = m.subs[0]
-    sub.passages = [Passage(g1, 0, np.asarray(crossed_1)), Passage(g2, 0, np.asarray(crossed_2))]
+    m.part("passage").set_passages(0, [Passage(g1, 0, np.asarray(crossed_1)), Passage(g2, 0, np.asarray(crossed_2))])
     sub.route = g2 if route_is_2 else None
     if mode is not None:
         sub.mode = mode
@@ -148,7 +153,7 @@ def test_an_agent_through_throat_k_targets_throat_k_plus_1():
     c1 = [False, False, True, True, True, True]
     c2 = [False, False, False, False, False, True]
     m, x, g1, g2 = _chain_method(c1, c2, route_is_2=False)
-    q_idx, q_tgt = m._queue(x)
+    q_idx, q_tgt = m.part("passage").queue(x, m.labels, m.subs)
     np.testing.assert_array_equal(q_idx, [0, 0, 1, 1, 1, -1])
     np.testing.assert_allclose(q_tgt[:2], np.tile(g1.mid + P.through * g1.normal, (2, 1)))
     np.testing.assert_allclose(q_tgt[2:5], np.tile(g2.mid + P.through * g2.normal, (3, 1)))
@@ -162,7 +167,7 @@ def test_the_routes_throat_queues_its_tail_once_a_head_is_through(n_through, que
     c1 = [True] * 6
     c2 = [False] * (6 - n_through) + [True] * n_through
     m, x, _, _ = _chain_method(c1, c2, route_is_2=True)
-    q_idx, _ = m._queue(x)
+    q_idx, _ = m.part("passage").queue(x, m.labels, m.subs)
     near = np.hypot(*(x - np.array([21.6, 9.25])).T) <= P.passage_queue  # agents 2-4 (0-1 are > 20 m away)
     behind = np.flatnonzero(~np.asarray(c2) & near)
     assert len(behind) >= 2
@@ -176,11 +181,11 @@ def test_the_queue_holds_in_encircle_mode():
     from swarmnav.methods.hes.decision import ENCIRCLE
 
     m, x, _, _ = _chain_method([True] * 6, [False, False, False, False, True, True], route_is_2=True, mode=ENCIRCLE)
-    q_idx, _ = m._queue(x)
+    q_idx, _ = m.part("passage").queue(x, m.labels, m.subs)
     np.testing.assert_array_equal(q_idx, [-1, -1, 1, 1, -1, -1])  # agents 0-1 are beyond passage_queue
     x2 = x.copy()
     x2[3] = [20.5, 9.25]  # in gate 2's mouth: the tube relaxation stays available in encircle mode
-    d = m._dsafe(x2)
+    d = m.part("passage").safe_distance(x2, m.labels, np.full(6, P.d_safe), np.zeros((6, 2)))
     assert d[3] == pytest.approx(0.5 * W - P.passage_margin) and d[0] == P.d_safe
 
 
@@ -204,7 +209,7 @@ def test_the_head_does_not_wait_for_the_tail():
             seen["wp_x"] = max(float(s.waypoint[0]) for s in m.subs.values())
         for s, sub in m.subs.items():
             for c in m.last_reports[s].corridors:
-                for q in sub.passages:
+                for q in m.part("passage").passages(s):
                     if q.crossed[sub.subleader] and not c.direct:
                         assert float(np.dot(c.mid - q.throat.mid, q.throat.normal)) >= 0.0
         return a, info
@@ -228,11 +233,7 @@ def test_the_last_member_of_a_queue_is_not_held_at_the_mouth(monkeypatch):
     m, x, _, _ = _chain_method(c1, [False] * 5 + [True], route_is_2=False, mode=ENCIRCLE)
     x[0], x[1] = [20.0, -2.0], [10.6, -8.93]  # agent 1 alone in front of gate 1
     v = np.zeros_like(x)
-    m._k = 0
-    ring = m._sense(x)
-    m._qidx, m._qtgt = m._queue(x)
-    assert m._qidx[1] == 0
-    slot, speed = m._references(x, 0)
+    assert m.part("passage").queue(x, m.labels, m.subs)[0][1] == 0  # queued for gate 1
     seen = {}
     terms = F.force_terms
 
@@ -241,7 +242,11 @@ def test_the_last_member_of_a_queue_is_not_held_at_the_mouth(monkeypatch):
         return terms(*args)
 
     monkeypatch.setattr(F, "force_terms", spy)
-    a = m._control(x, v, ring, slot, speed)
+    step = Step(0, x, v, sense(m, x))  # stages 4-5 of the step, with the sub-swarm kept in encircle mode
+    m.part("passage").targets(step, m.subs, m.labels, final=True)
+    assert step.own[1] == 0
+    references(m, step)
+    a = control(m, step)
     assert seen["t"][:, 1].sum(axis=0) @ NORMAL <= 0.0  # the paper's sum holds it at the mouth
     assert a[1] @ NORMAL > 1.0  # passage mode lets it in
     assert seen["t"][7, 1] @ NORMAL < -1.0  # the corner's push-back is there, and is what was dropped
@@ -255,14 +260,12 @@ def test_a_waypoint_behind_a_wall_restarts_from_the_subleader_after_a_chain(chai
     passage keeps the paper's waypoint (it only advances toward its target)."""
     m, _, _, _ = _chain_method([True] * 6, [False] * 6, route_is_2=False)
     sub = m.subs[0]
-    sub.passages, sub.chained, sub.subleader = [], chained, 0
+    m.part("passage").set_passages(0, [], chained=chained)
+    sub.subleader = 0
     x = np.array([[14.0, -2.0], [15.0, -1.0], [14.5, 0.5], [13.5, -0.5], [9.0, 0.0], [15.5, 1.0]])  # 4 in front
     sub.waypoint = np.array([10.0, -1.0])  # in front of gate 1's wall (x = 11.6..12.4), the head beyond it
-    v = np.zeros_like(x)
-    m._k = 0
-    ring = m._sense(x)
-    m._qidx, m._qtgt = m._queue(x)
-    m._navigate(sub, m._report(0, x, v, ring), x, 0)
+    m.act(Observation(0, 0.0, x, np.zeros_like(x)), np.random.default_rng(0))
+    assert m.subs[0] is sub and sub.subleader == 0
     if chained:
         assert sub.waypoint[0] > 12.4  # on the head's side of the wall
     else:
@@ -276,11 +279,11 @@ def test_a_passage_outlives_its_memory_while_members_are_in_front_of_it(front):
     forgotten once every member has crossed it; gate 2, crossed by all, lapses."""
     c1 = [not front, not front, True, True, True, True]  # agents 0-1 at (8, -8), (9, -9): in front of gate 1
     m, x, g1, g2 = _chain_method(c1, [True] * 6, route_is_2=False)
-    sub = m.subs[0]
+    part = m.part("passage")
     k = int(100.0 / P.dt)
-    m._remember_passage(sub, None, None, x, k)
-    assert any(q.throat is g1 for q in sub.passages) == front
-    assert not any(q.throat is g2 for q in sub.passages)
+    part.remember(0, None, None, x, k)
+    assert any(q.throat is g1 for q in part.passages(0)) == front
+    assert not any(q.throat is g2 for q in part.passages(0))
 
 
 def test_passage_relief_widens_a_4m_throat_and_leaves_narrow_ones_alone():

@@ -1,4 +1,4 @@
-"""The throat hold of ``Hes._choose_route`` (docs/methods/hes.md, "Route hold"): a throat is held
+"""The throat hold (``routes.RouteHold``) (docs/methods/hes.md, "Route hold"): a throat is held
 for members still in front of it, in line with the gap, not for a member stuck elsewhere."""
 
 from __future__ import annotations
@@ -9,7 +9,9 @@ import swarmnav
 from swarmnav.methods.hes import Hes
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.hierarchy import Report, make_pack
-from swarmnav.methods.hes.method import SubSwarm
+from swarmnav.methods.hes.navigate import choose_route
+from swarmnav.methods.hes.report import sense
+from swarmnav.methods.hes.step import Step, SubSwarm
 
 # dense_cross_blocks: the 9 m gap between cross 2 (x = 39) and the top wall, exit +x
 GAP = Corridor(mid=np.array([38.5, 5.9]), normal=np.array([1.0, 0.0]), width=9.0,
@@ -26,11 +28,12 @@ def _route(last):
     m = Hes()
     x = np.array(HEAD + [last], dtype=float)
     m.reset(swarmnav.load_scenario("dense_cross_blocks"), x, np.zeros_like(x), np.random.default_rng(0))
-    ring = m._sense(x)
-    sub = SubSwarm(0, 1, x.mean(axis=0), route=GAP, hold_step=100)
+    step = Step(110, x, np.zeros_like(x), sense(m, x))
+    sub = SubSwarm(0, 1, x.mean(axis=0), route=GAP)
     m.subs = {0: sub}
-    rep = Report(make_pack(0, 1, np.arange(len(x)), x, np.zeros_like(x)), (NEXT,), float(ring.min()))
-    return m._choose_route(sub, rep, x, 110)
+    m.part("hold").since[0] = 100
+    rep = Report(make_pack(0, 1, np.arange(len(x)), x, np.zeros_like(x)), (NEXT,), float(step.ring.min()))
+    return choose_route(m, step, sub, rep)
 
 
 def test_a_member_in_front_of_the_gap_holds_it():
@@ -42,3 +45,16 @@ def test_a_member_stuck_beside_the_gap_does_not_hold_it():
     not queued for this gap: holding the route for it for 15 s led the rest of the sub-swarm
     along the old exit direction into the closed pocket left of cross 3 (seeds 16, 26)."""
     assert _route([37.0, -4.0]) is NEXT
+
+
+def test_route_hold_off_moves_on_at_once():
+    """route_hold=false: the next corridor is chosen even with a member in front of the gap."""
+    m = Hes(route_hold=False)
+    x = np.array(HEAD + [[36.5, 6.0]], dtype=float)
+    m.reset(swarmnav.load_scenario("dense_cross_blocks"), x, np.zeros_like(x), np.random.default_rng(0))
+    assert m.part("hold") is None
+    step = Step(110, x, np.zeros_like(x), sense(m, x))
+    sub = SubSwarm(0, 1, x.mean(axis=0), route=GAP)
+    m.subs = {0: sub}
+    rep = Report(make_pack(0, 1, np.arange(len(x)), x, np.zeros_like(x)), (NEXT,), float(step.ring.min()))
+    assert choose_route(m, step, sub, rep) is NEXT

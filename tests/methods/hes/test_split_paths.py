@@ -9,7 +9,12 @@ import numpy as np
 import swarmnav
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.hierarchy import Pack, Report
-from swarmnav.methods.hes.method import Hes
+from swarmnav.methods.hes.params import HesParams
+from swarmnav.methods.hes.report import split_paths
+from swarmnav.methods.hes.step import in_view
+
+P = HesParams()
+GOAL = np.array([66.0, 0.0])
 
 
 def _corridor(mid, width, normal=(1.0, 0.0)):
@@ -21,14 +26,11 @@ def test_a_gap_behind_the_swarm_is_not_a_split_path():
     """The situation traced on hes_gates_4p5m: the swarm threads a gate at x = 26 m; its subleader
     reports the bay ahead (toward gate 3) and the bay it has just crossed, seen back through the
     gate (mouth at x = 19 m). Only the first leads to the goal at (66, 0)."""
-    hes = Hes()
-    hes.goal = np.array([66.0, 0.0])
-    hes._ring = np.full((2, 360), hes.params.lidar_range)  # nothing in view blocks either exit
-    hes._cos, hes._sin = np.cos(2 * np.pi * np.arange(360) / 360), np.sin(2 * np.pi * np.arange(360) / 360)
+    ring = np.full(360, P.lidar_range)  # nothing in view blocks either exit
     pos = np.array([[26.6, -8.2], [28.8, -7.2]])
     pack = Pack(0, 0, np.array([0, 1]), pos, np.zeros_like(pos), pos.mean(axis=0))
     ahead, behind, narrow = _corridor([36.7, 8.0], 7.5), _corridor([19.0, -5.9], 13.2, (0.0, 1.0)), _corridor([35, 0], 3.0)
-    paths = hes._split_paths(Report(pack, (ahead, behind, narrow), 5.0))
+    paths = split_paths(Report(pack, (ahead, behind, narrow), 5.0), GOAL, ring, P.w_split, P.rho_vis, P.lidar_range)
     assert paths == [ahead]  # behind: farther from the goal than the swarm; narrow: under w_split
 
 
@@ -46,12 +48,13 @@ def test_a_path_whose_exit_lies_in_an_obstacles_shadow_is_not_a_split_path():
     from swarmnav.sensing import lidar_ring
     from swarmnav.world.obstacles import Box, Geometry
 
-    hes = Hes()
-    hes.goal = np.array([66.0, 0.0])
     sensor = np.array([38.95, 8.24])
     ring = lidar_ring(Geometry.from_obstacles([Box((39.6, -10.4), (40.4, 5.9)), Box((-12.0, -11.4), (65.0, -10.4))]),
-                      sensor[None], n_rays=hes.params.n_rays, max_range=hes.params.lidar_range)[0]
-    hes._cos, hes._sin = np.cos(2 * np.pi * np.arange(360) / 360), np.sin(2 * np.pi * np.arange(360) / 360)
-    assert not hes._in_view(ring, *sensor, np.array([42.4, -7.5]))  # behind the gate's wall
-    assert hes._in_view(ring, *sensor, np.array([46.5, 2.9]))  # over the gate's top, in view
-    assert hes._in_view(ring, *sensor, np.array([39.0, -7.0]))  # down the near side of the wall
+                      sensor[None], n_rays=P.n_rays, max_range=P.lidar_range)[0]
+
+    def seen(q):
+        return in_view(ring, *sensor, np.array(q), P.rho_vis, P.lidar_range)
+
+    assert not seen([42.4, -7.5])  # behind the gate's wall
+    assert seen([46.5, 2.9])  # over the gate's top, in view
+    assert seen([39.0, -7.0])  # down the near side of the wall

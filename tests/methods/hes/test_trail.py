@@ -47,9 +47,10 @@ def _fly(steps, **kw):
     v = np.zeros_like(x)
     rng = np.random.default_rng(0)
     m.reset(CUP, x.copy(), v.copy(), rng)
+    trail = m.part("trail")  # None when switched off
     for p in PATH:
-        m._trail[m._trail_n, :7], m._trail[m._trail_n, 7] = p, IN_CUP
-        m._trail_n += 1
+        if trail is not None:
+            trail.record(np.vstack([np.tile(p, (7, 1)), IN_CUP]))
     for k in range(steps):
         a, _ = m.act(Observation(k, k * m.dt, x, v), rng)
         x, v = m.dynamics.step(x, v, a, m.dt)

@@ -1,9 +1,15 @@
 """HES: hierarchical embodied swarm navigation (Wu & Wei, Drones 2026), registered as ``hes``.
 
-Modules: ``params`` (Table A1 and our documented choices), ``forces`` (eq. 23-39),
-``corridors`` (Section 3.2 gap detection), ``decision`` (eq. 11-22, decision sources),
-``hierarchy`` (eq. 1-3, split / merge, eq. 41), ``formation`` (templates, encircle slots),
-``method`` (the wiring). See ``docs/methods/hes.md``.
+The paper's method: ``params`` (Table A1 and our documented choices); the pure equation modules
+``forces`` (eq. 23-39), ``corridors`` (Section 3.2 gap detection), ``decision`` (eq. 11-22,
+decision sources), ``hierarchy`` (eq. 1-3, split / merge, eq. 41), ``formation`` (templates,
+encircle slots); the step's stages ``report`` (1-2), ``structure`` (3), ``navigate`` and
+``targets`` (4), ``control`` (5), passing one ``step.Step``; ``method`` (the wiring, ``Hes.act``).
+
+Our extensions, each a part with its own switch plugged in at the hooks of ``part``:
+``routes`` (split commitment, route hold), ``trail`` (trail following), ``passage`` (passage
+mode), ``stall`` with ``plan`` (stall planner), ``safety`` with ``barriers`` (wall barrier,
+contact guard). See ``docs/methods/hes.md``.
 """
 
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, Proposal, RulePolicy, project

@@ -83,6 +83,13 @@ class HesParams:
         "encircle radius: paper's E_mean = 6.1 m with R_goal = 1 (r_succ = 8 m)")
     enc_clear: float = param(2.0, "m", "[0, inf)", "ours",
         "encircle slots keep this clearance from LiDAR returns (> d_safe)")
+    enc_samples: int = param(72, "", "[1, 36000]", "ours",
+        "candidate angles of the encircle slots on the circle of r_enc (72: every 5 deg)")
+    slot_refresh: int = param(10, "steps", "[1, inf)", "ours",
+        "steps between two solutions of the slot assignment (10: 1 s at dt = 0.1 s)")
+    stray: float = param(4.0, "m", "(0, inf)", "ours",
+        "a subleader farther than this from its sub-swarm's centroid (or cut off from it) hands "
+        "its role to the member nearest the centroid (the paper fixes no rule for who leads)")
 
     # ---------------------------------------------------------------- interaction radii (ours)
     r_sep: float = param(1.6, "m", "(0, inf)", "ours",
@@ -114,6 +121,24 @@ class HesParams:
         "at a grazing angle (<= one ray spacing, 0.35 m at R_L) is no passage")
     switch_margin: float = param(3.0, "m", "[0, inf)", "ours",
         "route-cost margin before a sub-swarm switches corridor (hysteresis)")
+    rho_vis: float = param(0.4, "m", "[0, inf)", "ours",
+        "half-width of the straight line from the centroid to a throat (or from a member to a trail "
+        "point) that must be free of LiDAR returns for it to count as reachable / in view")
+    width_penalty: bool = param(True, "", None, "ours",
+        "route cost of a narrow corridor grows by m (penalty_width - w) / penalty_width for a "
+        "sub-swarm of m agents (the queue of funnelling them through); False = route length only")
+    penalty_width: float = param(6.0, "m", "(0, inf)", "ours",
+        "corridors at least this wide carry no width penalty (three abreast at 2 m)")
+    split_commit: bool = param(True, "", None, "ours",
+        "a split's corridor is followed until the centroid has passed its throat or commit_time "
+        "has lapsed; False = the route is re-chosen every step from the split on")
+    commit_time: float = param(20.0, "s", "[0, inf)", "ours",
+        "a split's corridor assignment lapses after this long if the throat is not passed")
+    route_hold: bool = param(True, "", None, "ours",
+        "a throat stays the route while members in line with it are still in front of it (at most "
+        "hold_time after the first passed); False = the next corridor is chosen at once")
+    hold_time: float = param(15.0, "s", "[0, inf)", "ours",
+        "longest a sub-swarm waits at a throat for its last members")
     max_subswarms: int = param(3, "", "[1, 1000]", "ours", "a split creates at most this many sub-swarms")
     min_size: int = param(4, "", "[1, inf)", "ours", "smallest sub-swarm a split may create")
 
@@ -145,11 +170,23 @@ class HesParams:
         "dense_cross_blocks R_unsafe 0.228)")
     guard_margin: float = param(0.5, "m", "[0, inf)", "ours",
         "contact guard: a closing pair stops this far apart (contact 0.4 m + 0.1 m)")
+    wall_passes: int = param(3, "", "[1, 1000]", "ours",
+        "braking barrier: sweeps over the rays before what is left is scaled away (one is not "
+        "enough between two obstacles)")
     trail_follow: bool = param(True, "", None, "ours",
         "a member cut off from its sub-swarm (slot, subleader and centroid behind obstacles, > "
         "d_c from the centroid) retraces its teammates' trail instead of pulling at its slot "
-        "through the wall (Hes._follow_trail); False = eqs. (24)/(32) toward the slot and c_s "
+        "through the wall (trail.py); False = eqs. (24)/(32) toward the slot and c_s "
         "always")
+    trail_every: int = param(10, "steps", "[1, inf)", "ours",
+        "trail following: steps between two samples of the members' positions (10: 1 s)")
+    trail_len: int = param(200, "", "[1, 100000]", "ours",
+        "trail following: samples kept (200 at 1 s: longer than a run)")
+    trail_reach: float = param(10.0, "m", "[0, inf)", "ours",
+        "trail following: a cut-off member looks for trail points this close (half R_L)")
+    cut_time: float = param(2.0, "s", "[0, inf)", "ours",
+        "trail following: a member cut off this long follows the trail (not one briefly behind a "
+        "corner)")
     wp_clear: float = param(2.0, "m", "[0, inf)", "ours",
         "the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if "
         "narrower)")
@@ -192,6 +229,8 @@ class HesParams:
     passage_reach: float = param(1.5, "m", "[0, inf)", "ours",
         "tube half-width beyond w/2: an agent approaching within d_safe of the throat's corners "
         "is inside")
+    passage_count: int = param(3, "", "[1, 1000]", "ours",
+        "throats remembered per sub-swarm (the current one and the two before)")
 
     # ---------------------------------------------------------------- stall planner (ours, beyond the paper; docs "Stall planner")
     stall_plan: bool = param(True, "", None, "ours",
@@ -217,6 +256,10 @@ class HesParams:
         "path point")
     plan_every: float = param(1.0, "s", "(0, inf)", "ours",
         "replanning interval while engaged (the map grows as the swarm moves)")
+    plan_map_every: int = param(5, "steps", "[1, inf)", "ours",
+        "steps between two updates of the map of returns (0.5 s; every step while engaged)")
+    plan_margin: float = param(20.0, "m", "[0, 200]", "ours",
+        "the map covers the box of the start and the goal plus this margin (R_L)")
 
     # ---------------------------------------------------------------- ablations (Simulation 2)
     safety_stack_off: bool = param(False, "", None, "ours",

@@ -18,11 +18,26 @@ centre), and the term never pushes a member out of a throat it fits through. Eve
 and as soon as the member leaves the tube, d_safe applies unchanged. ``relief`` lowers d_safe a
 little even where w/2 - margin >= d_safe, for throats that leave a narrow band without being
 narrower than 2 (d_safe + margin) (which throats are passages at all: ``HesParams.passage_band``).
+
+:class:`PassageMode` is the part (switch ``passage_mode``): it remembers the narrow throats a
+sub-swarm is routed through (:meth:`PassageMode.remember`), queues the members still in front of
+one for it (:meth:`PassageMode.queue`), lowers their safety distance in its tube
+(:meth:`PassageMode.safe_distance`), drops the LiDAR push-back against the way out for queued
+members lined up with the gap, and brakes queued members for the neighbour in front
+(:meth:`PassageMode.queue_barrier`, switch ``agent_brake`` > 0). The parameters are the
+``passage_*`` fields of :class:`HesParams` and ``gap_depth``, ``agent_brake``, ``agent_margin``.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, field
+
 import numpy as np
+
+from swarmnav.methods.hes.barriers import agent_barrier
+from swarmnav.methods.hes.corridors import GAP_W, Corridor, seen_passages, segment_clear
+from swarmnav.methods.hes.part import Part
 
 
 def throat_dsafe(half_width, d_safe: float, margin: float, relief: float = 0.0):
@@ -52,3 +67,272 @@ def passage_dsafe(x: np.ndarray, mid: np.ndarray, normal: np.ndarray, width: flo
     across = np.abs(rel @ np.array([-normal[1], normal[0]]))
     inside = (np.abs(along) <= half_len) & (across <= 0.5 * width + reach)
     return np.where(inside, throat_dsafe(0.5 * width, d_safe, margin, relief), d_safe)
+
+
+@dataclass(slots=True)
+class Passage:
+    """A narrow throat a sub-swarm was routed through."""
+
+    throat: Corridor  # the last detection of the throat while it was the route
+    step: int  # last step it was the route
+    crossed: np.ndarray  # (N,) bool: the agent has been beyond the throat (along its normal)
+
+
+@dataclass(slots=True)
+class Memory:
+    """Passage mode's memory of one sub-swarm."""
+
+    passages: list = field(default_factory=list)  # list[Passage], oldest first
+    narrow_steps: int = 0  # consecutive steps the route was a narrow throat with no wider candidate
+    chained: bool = False  # the sub-swarm has been routed through a passage
+
+
+class PassageMode(Part):
+    """Passage mode (ours; switch ``passage_mode``): see the module docstring."""
+
+    name = "passage"
+
+    def __init__(self, p, stall=None):
+        self.p = p
+        self.stall = stall  # the stall planner's engaged path is a committed route (or None)
+        # a throat narrower than w_wide [m] is narrow for gap detection and the corridor filter
+        # (w/2 - margin < d_safe); one narrower than w_passage can become a passage (the band the
+        # paper's law leaves in it, w - 2 d_safe, is under passage_band)
+        self.w_wide = 2.0 * (p.d_safe + p.passage_margin)
+        self.w_passage = 2.0 * p.d_safe + max(p.passage_band, 2.0 * p.passage_margin)
+        self.approach, self.approach_w = p.passage_len, self.w_wide
+
+    def reset(self, hes, positions):
+        self.h = hes
+        self.n = len(positions)
+        self.mem = {0: Memory()}
+        self.q_idx = np.full(self.n, -1, dtype=np.int64)  # the last queue (see queue)
+        self.q_tgt = np.zeros((self.n, 2))
+        self.last_dsafe = None  # the safety distances of the last step [m]
+
+    def passages(self, sid: int) -> list[Passage]:
+        """The throats remembered for sub-swarm ``sid``, oldest first."""
+        return self.mem[sid].passages
+
+    def set_passages(self, sid: int, passages: list[Passage], chained: bool | None = None) -> None:
+        """Replace the memory of sub-swarm ``sid`` (scenario set-ups, tests)."""
+        self.mem[sid].passages = list(passages)
+        if chained is not None:
+            self.mem[sid].chained = chained
+
+    # ------------------------------------------------------------ perception and reports
+    def elect(self, step, col):
+        """A subleader queued behind a throat cannot see the head's next corridor: the role goes
+        to the head member nearest the head's centroid."""
+        x = step.x
+        for j, s in enumerate(sorted(self.h.subs)):
+            sub = self.h.subs[s]
+            members = np.flatnonzero(col == j)
+            head = members[self.q_idx[members] < 0]
+            if self.q_idx[sub.subleader] >= 0 and len(head):
+                hc = x[head].mean(axis=0)
+                sub.subleader = int(head[np.argmin(np.sum((x[head] - hc) ** 2, axis=1))])
+
+    def gaps(self, step, sub, gaps):
+        """A narrow opening must be a seen passage, not a concave corner (``gap_depth``)."""
+        narrow = gaps[:, GAP_W] < self.w_wide
+        if not narrow.any():
+            return gaps
+        a, h = sub.subleader, self.h
+        keep = ~narrow
+        keep[narrow] = seen_passages(gaps[narrow], step.ring[a], step.x[a, 0], step.x[a, 1], h.cos, h.sin,
+                                     self.p.gap_depth, self.p.lidar_range)
+        return gaps[keep]
+
+    def corridors(self, step, sub, cors):
+        """A corridor behind a passage the subleader has crossed (a bay seen back through the gap)
+        leads back along the chain, not toward the goal."""
+        passages = self.mem[sub.sid].passages
+        if not passages:
+            return cors
+        crossed = [q.throat for q in passages if q.crossed[sub.subleader]]
+        return [c for c in cors if c.direct or not any(float(np.dot(c.mid - t.mid, t.normal)) < 0.0 for t in crossed)]
+
+    def cruise_mask(self, members):
+        """Members inside a passage's tube (or queued for one) do not slow the sub-swarm's cruise."""
+        if self.last_dsafe is None:
+            return None
+        return (self.last_dsafe[members] >= self.p.d_safe) & (self.q_idx[members] < 0)
+
+    # ------------------------------------------------------------ structure
+    def split(self, old, new, k):
+        gone = self.mem.pop(old)
+        for sid in new:
+            self.mem[sid] = Memory([Passage(q.throat, q.step, q.crossed.copy()) for q in gone.passages])
+
+    def merge(self, keep, drop):
+        """The merged sub-swarm keeps the passages of both parts (members in front of a throat
+        stay queued for it)."""
+        gone, kept = self.mem.pop(drop), self.mem[keep]
+        kept.passages = sorted(gone.passages + kept.passages, key=lambda q: q.step)[-self.p.passage_count:]
+
+    # ------------------------------------------------------------ route
+    def encircle(self, step, sub, rep):
+        for q in self.mem[sub.sid].passages:  # members still crossing keep their queue until through
+            q.crossed |= (step.x - q.throat.mid) @ q.throat.normal > 0.0
+
+    def candidates(self, step, sub, rep, cands, cent):
+        """A route leads forward: a throat the centroid is already ``through`` m beyond, or a
+        passage a member has crossed, is behind the head of the sub-swarm, not a candidate (the
+        members still in front of it queue for it). Replaces the route hold for narrow throats."""
+        behind = [q.throat for q in self.mem[sub.sid].passages if q.crossed[rep.pack.members].any()]
+        return [c for c in cands if c.width >= self.w_wide or (
+            float(np.dot(cent - c.mid, c.normal)) <= self.p.through
+            and not any(math.hypot(*(c.mid - b.mid)) <= 0.5 * b.width for b in behind))]
+
+    def end_route(self, step, sub, prev):
+        """Through the last passage seen: head for the goal until the next throat shows."""
+        return prev is not None and any(q.crossed[sub.subleader] and math.hypot(*(q.throat.mid - prev.mid))
+                                        <= 0.5 * q.throat.width for q in self.mem[sub.sid].passages)
+
+    def engaged(self, sid: int) -> bool:
+        """The sub-swarm is in a chain of passages (its queues replace the route hold)."""
+        return bool(self.mem[sid].passages)
+
+    def chosen(self, step, sub, rep, route):
+        self.remember(sub.sid, route, rep, step.x, step.k)
+
+    def remember(self, sid: int, route: Corridor | None, rep, x: np.ndarray, k: int) -> None:
+        """A narrow throat (w < w_passage) becomes a passage once it has been the sub-swarm's route,
+        with no wider corridor in its report (``rep``), for ``passage_confirm`` s (the planner's
+        committed choice, not a one-step flicker). Passages are kept for ``passage_memory`` s
+        after they stopped being the route (and beyond, while members are still in front of them
+        within ``passage_queue``: they keep their queue), with the agents that have crossed each."""
+        p, mem = self.p, self.mem[sid]
+        w_wide = self.w_passage
+        members = self.h.labels == sid
+        keep = [q for q in mem.passages if (k - q.step) * p.dt <= p.passage_memory or bool(np.any(
+            members & ~q.crossed & (np.hypot(*(x - q.throat.mid).T) <= p.passage_queue)))]
+        narrow = route is not None and not route.direct and route.width < w_wide
+        same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
+        planned = self.stall is not None and self.stall.engaged(sid)
+        # a narrow throat on the stall planner's path is its committed choice: confirmed at once
+        only = narrow and (planned or all(c.width < w_wide for c in rep.corridors))
+        mem.narrow_steps = mem.narrow_steps + 1 if only else 0
+        # in a chain of narrow throats (a passage is remembered) the next narrow route is confirmed at once
+        chain = narrow and only and bool(keep)
+        if narrow and (same or chain or planned or mem.narrow_steps * p.dt >= p.passage_confirm):
+            keep = [q for q in keep if not any(q is r for r in same)]
+            crossed = same[-1].crossed if same else np.zeros(self.n, dtype=bool)
+            keep.append(Passage(route, k, crossed))
+        for q in keep:
+            q.crossed |= (x - q.throat.mid) @ q.throat.normal > 0.0
+        mem.passages = keep[-p.passage_count:]
+
+    def target(self, step, sub, route, target, cent, along):
+        """A narrow throat the subleader does not see straight from the centroid is reached through
+        its mouth (see ``corridors_toward``, approach)."""
+        p, h, a, x = self.p, self.h, sub.subleader, step.x
+        if route.width < self.w_wide and along <= 0.0 and not segment_clear(
+                step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, cent[0], cent[1], route.mid[0], route.mid[1],
+                p.rho_vis, p.lidar_range):
+            return route.mid - p.passage_len * route.normal
+        return target
+
+    def restart(self, step, sub, cent):
+        """In a passage chain, a waypoint the subleader sees behind a wall (the head moved on through
+        a gap) restarts from the head's centroid; once the chain's passages have lapsed, from the
+        subleader (the centroid, with stragglers still in front of the last gate, can lie in the
+        wall itself: pushed off the wall's far side it would hold the head there for good)."""
+        mem, x, h = self.mem[sub.sid], step.x, self.h
+        if self.p.adaptive and (mem.passages or mem.chained):
+            a = sub.subleader
+            start = cent if mem.passages else x[a]
+            if not segment_clear(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, start[0], start[1],
+                                 sub.waypoint[0], sub.waypoint[1], 0.2, self.p.lidar_range):
+                sub.waypoint = start.copy()
+        mem.chained = mem.chained or bool(mem.passages)
+
+    # ------------------------------------------------------------ targets
+    def targets(self, step, subs, labels, final):
+        self.q_idx, q_tgt = self.queue(step.x, labels, subs)
+        step.own = self.q_idx
+        if final:
+            self.q_tgt = q_tgt
+            step.own_target = q_tgt
+            step.routed = (self.q_idx >= 0) | self.chained_agents(step)
+
+    def queue(self, x: np.ndarray, labels: np.ndarray, subs: dict) -> tuple[np.ndarray, np.ndarray]:
+        """Per-agent routing along the chain of remembered throats: a member that has not crossed a
+        passage of its sub-swarm (within ``passage_queue`` of it) is queued for it and targets the
+        point ``through`` m past that throat (the oldest uncrossed throat first) -- for an earlier
+        throat than the route always, for the route's own throat once ``passage_head`` members
+        have crossed it (they are the head, which follows c_s on to the next throat while the tail
+        streams through; in encircle mode too). Returns (N,) int, the index of the agent's throat
+        in its sub-swarm's passages (-1: not queued), and (N, 2) targets [m]."""
+        p = self.p
+        q_idx = np.full(self.n, -1, dtype=np.int64)
+        q_tgt = np.zeros((self.n, 2))
+        if not any(self.mem[s].passages for s in subs):
+            return q_idx, q_tgt
+        for s, sub in subs.items():  # few sub-swarms x at most passage_count throats
+            if self.stall is not None and self.stall.engaged(s):
+                continue  # the stall planner: each member follows its own way down the planned field
+            members = labels == s
+            for j, q in enumerate(self.mem[s].passages):
+                c = q.throat
+                if (sub.route is not None and math.hypot(*(c.mid - sub.route.mid)) <= 0.5 * c.width
+                        and np.count_nonzero(members & q.crossed) < p.passage_head):
+                    continue  # the current route, not yet crossed by a head: its members follow c_s
+                near = np.hypot(*(x - c.mid).T) <= p.passage_queue
+                pend = members & ~q.crossed & near & (q_idx < 0)
+                q_idx[pend] = j
+                q_tgt[pend] = c.mid + p.through * c.normal
+        return q_idx, q_tgt
+
+    def chained_agents(self, step) -> np.ndarray:
+        """(N,) bool: the agent's sub-swarm remembers a passage (it is in a chain of throats)."""
+        ids = sorted(self.h.subs)
+        col = np.searchsorted(np.asarray(ids), self.h.labels)
+        return np.array([bool(self.mem[s].passages) for s in ids])[col]
+
+    # ------------------------------------------------------------ control
+    def steer(self, step):
+        step.dsafe = self.safe_distance(step.x, self.h.labels, step.dsafe, step.exit_dir)
+        self.last_dsafe = step.dsafe
+
+    def safe_distance(self, x: np.ndarray, labels: np.ndarray, out: np.ndarray, exit_dir: np.ndarray) -> np.ndarray:
+        """Safety distance of eq. (36) per agent [m], in place on ``out``: lowered for the members of
+        a sub-swarm inside the tube of a throat it is (or was recently) routed through
+        (:func:`passage_dsafe`; the smallest value where tubes overlap). ``exit_dir`` gets the exit
+        direction of the tube each member is in and lined up with (within w/2 - margin of its
+        centre line)."""
+        p = self.p
+        for s, mem in self.mem.items():  # a loop over (at most a few) sub-swarms and throats, not agents
+            if not mem.passages:
+                continue
+            members = np.flatnonzero(labels == s)
+            for q in mem.passages:
+                c = q.throat
+                eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.d_safe, p.passage_margin,
+                                    p.passage_len, p.passage_reach, p.passage_relief)
+                inside = members[eff < out[members]]
+                rel = x[inside] - c.mid
+                lined = np.abs(rel @ np.array([-c.normal[1], c.normal[0]])) <= 0.5 * c.width - p.passage_margin
+                exit_dir[inside] = np.where(lined[:, None], c.normal, 0.0)
+                out[members] = np.minimum(out[members], eff)
+        return out
+
+    def push_back(self, step):
+        return bool((step.dsafe < self.p.d_safe).any())
+
+    def edit_terms(self, step, t):
+        """For a queued member inside a throat's tube and lined up with the gap, the LiDAR
+        repulsion keeps its lateral (centring) part but loses its part against the exit direction:
+        the base term of eq. (36) from the gate corners ahead (~5 m/s^2 at 1.3 m) otherwise
+        balances the slot attraction and holds the last member of a queue, with nobody behind to
+        push, in front of the mouth for good; the braking barrier still stops it short of any
+        return."""
+        nrm = np.where(((step.own >= 0) | step.exit_free)[:, None], step.exit_dir, 0.0)
+        back = np.minimum(np.sum(t[7] * nrm, axis=1), 0.0)
+        t[7] -= back[:, None] * nrm
+
+    def queue_barrier(self, step, a: np.ndarray, active: np.ndarray) -> np.ndarray:
+        """The agents' braking barrier for the ``active`` members (``barriers.agent_barrier``)."""
+        p = self.p
+        return agent_barrier(a, step.x, step.v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)

@@ -1,5 +1,5 @@
-"""Stall planner (ours, beyond the paper; ``HesParams.plan_stall``): a map of what the swarm's
-LiDAR rings have seen and a shortest path through it that keeps clear of the returns.
+"""Stall planner numerics (ours, beyond the paper; the part is ``stall.StallPlanner``): a map of
+what the swarm's LiDAR rings have seen and a shortest path through it that keeps clear of the returns.
 
 The paper's planner is reactive: each step it picks one of the corridors the subleader's ring
 shows. Where those corridors are pockets (a row of discs whose visible gaps close behind) and the
@@ -16,7 +16,7 @@ the first row. This module gives the planner a memory of the returns instead:
 3. :func:`descend` follows the cost-to-go field down from a start cell: the path.
 
 All three are plain array functions (numba); the method calls them only while a sub-swarm has
-stalled (see ``Hes._planned``).
+stalled (see ``stall.StallPlanner``).
 """
 
 from __future__ import annotations
@@ -57,6 +57,54 @@ def clearance(occ: np.ndarray, cell: float) -> np.ndarray:
 
 
 @njit(cache=True)
+def _cell_cost(clr, clear_min, d_pref, weight):
+    """Cost per metre of every cell: ``1 + weight * max(0, d_pref - clr) / max(clr, clear_min)``."""
+    ny, nx = clr.shape
+    c = np.empty((ny, nx))
+    for i in range(ny):
+        for j in range(nx):
+            c[i, j] = 1.0 + weight * max(0.0, d_pref - clr[i, j]) / max(clr[i, j], clear_min)
+    return c
+
+
+@njit(cache=True)
+def _heap_pop(hk, hv, size):
+    """Pop the smallest entry of the binary heap ``(hk, hv)[:size]``: (key, value, new size)."""
+    key, v = hk[0], hv[0]
+    size -= 1
+    if size > 0:  # move the last entry to the root and sift it down
+        lk, lv = hk[size], hv[size]
+        pos = 0
+        while True:
+            ch = 2 * pos + 1
+            if ch >= size:
+                break
+            if ch + 1 < size and hk[ch + 1] < hk[ch]:
+                ch += 1
+            if hk[ch] >= lk:
+                break
+            hk[pos], hv[pos] = hk[ch], hv[ch]
+            pos = ch
+        hk[pos], hv[pos] = lk, lv
+    return key, v, size
+
+
+@njit(cache=True)
+def _heap_push(hk, hv, size, key, val):
+    """Push ``(key, val)`` onto the binary heap ``(hk, hv)[:size]``; returns the new size."""
+    pos = size
+    size += 1
+    while pos > 0:
+        par = (pos - 1) // 2
+        if hk[par] <= key:
+            break
+        hk[pos], hv[pos] = hk[par], hv[par]
+        pos = par
+    hk[pos], hv[pos] = key, val
+    return size
+
+
+@njit(cache=True)
 def cost_to_go(clr, gi, gj, cell, clear_min, d_pref, weight, need=np.empty((0, 2), dtype=np.int64), slack=0.0):
     """Dijkstra from the goal cell ``(gi, gj)`` (row, column) over the 8-connected grid.
 
@@ -83,10 +131,7 @@ def cost_to_go(clr, gi, gj, cell, clear_min, d_pref, weight, need=np.empty((0, 2
             pending += 1
     bound = np.inf  # the cost up to which the search runs: set once every needed open cell is settled
     stopped = False
-    c = np.empty((ny, nx))
-    for i in range(ny):
-        for j in range(nx):
-            c[i, j] = 1.0 + weight * max(0.0, d_pref - clr[i, j]) / max(clr[i, j], clear_min)
+    c = _cell_cost(clr, clear_min, d_pref, weight)
     # binary heap of (cost, flat index) in two arrays
     cap = 8 * ny * nx + 1
     hk = np.empty(cap)
@@ -97,22 +142,7 @@ def cost_to_go(clr, gi, gj, cell, clear_min, d_pref, weight, need=np.empty((0, 2
     size = 1
     done = np.zeros((ny, nx), dtype=np.bool_)
     while size > 0:
-        key, v = hk[0], hv[0]
-        size -= 1
-        if size > 0:  # move the last entry to the root and sift it down
-            lk, lv = hk[size], hv[size]
-            pos = 0
-            while True:
-                ch = 2 * pos + 1
-                if ch >= size:
-                    break
-                if ch + 1 < size and hk[ch + 1] < hk[ch]:
-                    ch += 1
-                if hk[ch] >= lk:
-                    break
-                hk[pos], hv[pos] = hk[ch], hv[ch]
-                pos = ch
-            hk[pos], hv[pos] = lk, lv
+        key, v, size = _heap_pop(hk, hv, size)
         i, j = v // nx, v % nx
         if done[i, j]:
             continue
@@ -132,15 +162,7 @@ def cost_to_go(clr, gi, gj, cell, clear_min, d_pref, weight, need=np.empty((0, 2
             nd = key + step * 0.5 * (c[i, j] + c[a, b])
             if nd < dist[a, b]:
                 dist[a, b] = nd
-                pos = size  # push and sift up
-                size += 1
-                while pos > 0:
-                    par = (pos - 1) // 2
-                    if hk[par] <= nd:
-                        break
-                    hk[pos], hv[pos] = hk[par], hv[par]
-                    pos = par
-                hk[pos], hv[pos] = nd, a * nx + b
+                size = _heap_push(hk, hv, size, nd, a * nx + b)
     if stopped:  # tentative values are not exact
         for i in range(ny):
             for j in range(nx):

@@ -1,0 +1,90 @@
+"""Stage 5 of a HES step: the eight force terms of eq. (38) and the saturation of eq. (39).
+
+In order: the couplings of each agent (its subleader, the centroid and nearest neighbour of its
+cohesion group, its c_s), the occlusion factors of eq. (30), the parts' ``steer`` hook (single
+members re-targeted, safety distances lowered), the reference velocity of eq. (23), the eight
+terms (``push_back``: a part may edit them), the parts' ``brake`` hook, saturation (eq. 39), the
+parts' ``guard`` hook.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.decision import NAVIGATE
+from swarmnav.methods.hes.step import Step
+
+
+def couplings(h, step: Step) -> None:
+    """Each agent's subleader, c_s, mode, cohesion centroid and nearest neighbour (eq. 26-32).
+
+    An agent routed on its own (``Step.own``) forms a cohesion group with the others routed to
+    the same point, heads for that point (its c_s) and is not coupled to a subleader."""
+    x = step.x
+    ids = sorted(h.subs)
+    col = np.searchsorted(np.asarray(ids), h.labels)
+    sl_idx = np.array([h.subs[s].subleader for s in ids])[col]
+    wp = np.array([h.subs[s].waypoint for s in ids])[col]
+    nav = np.array([h.subs[s].mode == NAVIGATE for s in ids])[col]
+    follower = sl_idx != np.arange(h.n)
+    queued = step.own >= 0
+    if queued.any():
+        cgrp = col * (h.params.passage_count + 1) + step.own + 1
+        uniq, cgrp = np.unique(cgrp, return_inverse=True)
+        cent = F.group_centroids(x, cgrp, len(uniq))[cgrp]
+        wp[queued] = step.own_target[queued]
+        follower &= ~queued
+        nn = F.nearest_in_group(x, cgrp)
+    else:
+        cent = F.group_centroids(x, col, len(ids))[col]
+        nn = F.nearest_in_group(x, h.labels)
+    step.col, step.sl_idx, step.wp, step.nav = col, sl_idx, wp, nav
+    step.follower, step.cent, step.nn = follower, cent, nn
+
+
+def occlusion(h, step: Step) -> None:
+    """Eq. (30): ``step.sig`` (N, 4), sigma_occ where the segment to the slot / nearest neighbour /
+    subleader / centroid meets an obstacle, 1 otherwise; ``step.blocked`` the segments that meet
+    one (computed also with sigma_occ = 1 when a part reads them)."""
+    p = h.params
+    x, n = step.x, h.n
+    step.blocked = np.zeros((n, 4), dtype=np.bool_)
+    if h.geom.is_empty or (p.sigma == 1.0 and not any(part.needs_blocked for part in h.parts)):
+        step.sig = np.ones((n, 4))
+        return
+    q_nn = x[np.where(step.nn >= 0, step.nn, np.arange(n))]
+    P = np.concatenate([x, x, x, x])
+    Q = np.concatenate([step.slot, q_nn, x[step.sl_idx], step.cent])
+    step.blocked = h.obstacles.blocked_into(P, Q, np.empty(4 * n, dtype=np.bool_)).reshape(4, n).T
+    step.sig = np.where(step.blocked, p.sigma, 1.0)
+
+
+def control(h, step: Step) -> np.ndarray:
+    """The commanded acceleration (N, 2) [m/s^2] of eq. (38)-(39) with the parts' hooks."""
+    p = h.params
+    x, v = step.x, step.v
+    couplings(h, step)
+    occlusion(h, step)
+    step.dsafe = np.full(h.n, p.d_safe)
+    step.exit_dir = np.zeros((h.n, 2))
+    step.exit_free = np.zeros(h.n, dtype=np.bool_)
+    for part in h.parts:
+        part.steer(step)
+    vslot = F.slot_velocity(x, step.slot, step.speed, p.eps_v)
+    args = (x, v, h.labels, x[step.sl_idx], v[step.sl_idx], step.follower, step.cent, step.wp, step.nav,
+            step.slot, vslot, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe)
+    edit = [part for part in h.parts if part.push_back(step)]
+    if edit:
+        t = F.force_terms(*args)
+        for part in edit:
+            part.edit_terms(step, t)
+        a = t.sum(axis=0)
+    else:
+        a = F.synthesize(*args)
+    for part in h.parts:
+        a = part.brake(step, a)
+    a = F.saturate(a, p.a_bound)
+    for part in h.parts:
+        a = part.guard(step, a)
+    return a

@@ -1,0 +1,177 @@
+"""Stage 4 of a HES step for one sub-swarm: task mode (eq. 12), corridor choice, waypoint c_s(k).
+
+The reactive route choice of Section 3.2: the direct route when the goal is in clear view, else
+the cheapest reported corridor, kept with a hysteresis while it is still seen. Parts of ours
+plug in at the hooks ``encircle``, ``plan``, ``hold``, ``candidates``, ``end_route``, ``lost``,
+``chosen``, ``target`` and ``restart`` (see ``part.py``). With the safety stack on, c_s advances
+toward its target at the adaptive cruise speed on a leash around the centroid and is kept off the
+walls (Section 5.3 layers, ours).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from swarmnav.methods.hes.barriers import push_clear
+from swarmnav.methods.hes.corridors import Corridor, direct_corridor, segment_clear
+from swarmnav.methods.hes.decision import ENCIRCLE, target_proximity, task_mode
+from swarmnav.methods.hes.formation import hex_template
+from swarmnav.methods.hes.hierarchy import Report
+from swarmnav.methods.hes.step import NEVER, Step, SubSwarm
+
+
+def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
+    """Task mode (eq. 12), corridor choice and waypoint c_s(k) of one sub-swarm."""
+    p = h.params
+    x = step.x
+    cent = rep.pack.centroid
+    head = rep.pack.members[step.own[rep.pack.members] < 0]
+    if 0 < len(head) < len(rep.pack.members):  # members routed on their own: c_s leads the others
+        cent = x[head].mean(axis=0)
+    sl = x[sub.subleader]
+    delta = target_proximity(float(np.hypot(*(cent - h.goal))), float(np.hypot(*(sl - h.goal))))
+    mode = task_mode(sub.mode, delta, p.r_in, p.r_out)
+    if mode != sub.mode:
+        sub.slot_step = NEVER
+        sub.ring_offsets = None
+    sub.mode = mode
+    if mode == ENCIRCLE:
+        sub.waypoint = h.goal.copy()
+        for part in h.parts:
+            part.encircle(step, sub, rep)
+        return
+    planned = None
+    for part in h.parts:
+        planned = part.plan(step, sub, rep, cent) or planned
+    route = choose_route(h, step, sub, rep) if planned is None else planned[0]
+    sub.route = route
+    for part in h.parts:
+        part.chosen(step, sub, rep, route)
+    if planned is not None:
+        target = planned[1]
+    elif route is None:
+        target = h.goal
+    elif route.direct:
+        target = route.target
+    else:  # `through` metres past the throat, or past the centroid once that is beyond the throat
+        along = max(float(np.dot(cent - route.mid, route.normal)), 0.0)
+        target = route.mid + (along + p.through) * route.normal
+        for part in h.parts:
+            target = part.target(step, sub, route, target, cent, along)
+    for part in h.parts:
+        part.restart(step, sub, cent)
+    regulate(h, step, sub, rep, route, target, cent)
+
+
+def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, target: np.ndarray,
+             cent: np.ndarray) -> None:
+    """c_s toward ``target`` and the formation axis and squeeze along the motion of c_s.
+
+    With the safety stack on (ours): c_s advances toward the target at the adaptive cruise speed
+    (a virtual leader), on a leash of length ``lead`` around the centroid, kept ``wp_clear`` off
+    the walls the subleader sees; off: c_s is the target itself."""
+    p = h.params
+    x = step.x
+    if p.adaptive:
+        step_len = cruise(p, rep.clearance) * p.dt
+        d = target - sub.waypoint
+        dn = math.hypot(d[0], d[1])
+        sub.waypoint = target.copy() if dn <= step_len else sub.waypoint + d * (step_len / dn)
+        off = sub.waypoint - cent
+        on = math.hypot(off[0], off[1])
+        if on > p.lead:
+            sub.waypoint = cent + off * (p.lead / on)
+    else:
+        sub.waypoint = np.asarray(target, dtype=float).copy()
+    w = route.width if route is not None else math.inf
+    if p.adaptive:
+        a = sub.subleader
+        clear = min(p.wp_clear, 0.5 * w)
+        sub.waypoint = np.array(push_clear(sub.waypoint[0], sub.waypoint[1], step.ring[a], x[a, 0], x[a, 1],
+                                           h.cos, h.sin, clear, p.lidar_range, 3))
+    # formation axis along the motion of c_s; squeeze across a corridor narrower than the formation
+    hd = target - sub.waypoint
+    hn = math.hypot(hd[0], hd[1])
+    if hn > 0.5:
+        hd = 0.8 * sub.heading + 0.2 * hd / hn
+        sub.heading = hd / max(math.hypot(hd[0], hd[1]), 1e-9)
+    m = len(rep.pack.members)
+    w_iso = float(np.ptp(hex_template(m)[:, 1])) * p.spacing + p.spacing if m > 1 else p.spacing
+    lam = float(np.clip((w - 2 * p.lane_margin) / w_iso, 1 / math.sqrt(p.aspect_max), 1.0)) if math.isfinite(w) else 1.0
+    sub.squeeze += float(np.clip(lam - sub.squeeze, -0.05, 0.05))
+
+
+def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
+    """The corridor this sub-swarm follows: the direct route if the goal is in clear view, else
+    the cheapest candidate (route length plus the width penalty), kept (hysteresis
+    ``switch_margin``) while it is still seen. Parts may keep the previous route (``hold``), drop
+    candidates (``candidates``), send the sub-swarm to the goal (``end_route``)."""
+    p = h.params
+    a = sub.subleader
+    sl = step.x[a]
+    cands = list(rep.corridors)
+    cent = rep.pack.centroid
+    if segment_clear(step.ring[a], sl[0], sl[1], h.cos, h.sin, cent[0], cent[1], h.goal[0], h.goal[1],
+                     p.d_safe, p.lidar_range):
+        cands.insert(0, direct_corridor(cent, h.goal))
+    prev = sub.route
+    for part in h.parts:
+        if part.hold(step, sub, rep, prev):
+            return prev
+    for part in h.parts:
+        cands = part.candidates(step, sub, rep, cands, cent)
+    if not cands:
+        if any(part.end_route(step, sub, prev) for part in h.parts):
+            return None
+        return prev
+    m = len(rep.pack.members)
+    cost = [c.cost + (width_penalty(c.width, m, p.penalty_width) if p.width_penalty else 0.0) for c in cands]
+    best = int(np.argmin(cost))
+    if prev is None:
+        return cands[best]
+    same = match(prev, cands)
+    if same is None:
+        for part in h.parts:
+            part.lost(sub)
+        return cands[best]
+    if cost[best] >= cost[same] - p.switch_margin:
+        return cands[same]
+    return cands[best]
+
+
+def width_penalty(w: float, m: int, w0: float = 6.0) -> float:
+    """Route-cost penalty [m] of a narrow corridor for a sub-swarm of m agents (ours): the
+    extra queue length of funnelling m agents through it, 1 m per agent at w = 0, zero from
+    ``w0`` (6 m: three abreast at 2 m) up."""
+    if not math.isfinite(w):
+        return 0.0
+    return m * max(0.0, w0 - w) / w0
+
+
+def match(prev: Corridor, cands: list[Corridor]) -> int | None:
+    """Index of the candidate that is the same corridor as ``prev`` (None if lost)."""
+    if prev.direct:
+        for j, c in enumerate(cands):
+            if c.direct:
+                return j
+    best, j_best = math.inf, None
+    for j, c in enumerate(cands):
+        if c.direct:
+            continue
+        d = math.hypot(*(c.mid - prev.mid))
+        if d < best:
+            best, j_best = d, j
+    tol = max(3.0, 0.5 * min(prev.width, 20.0)) if math.isfinite(prev.width) else 3.0
+    return j_best if best <= tol else None
+
+
+def cruise(p, clearance: float) -> float:
+    """Cruise speed v_s of a sub-swarm [m/s]; with the safety stack on, scaled down linearly
+    from v_s (clearance >= clr_slow) to v_min_frac v_s (clearance <= d_safe) by the nearest
+    LiDAR return of its members (adaptive cruise, ours)."""
+    if not p.adaptive:
+        return p.v_s
+    f = np.clip((clearance - p.d_safe) / max(p.clr_slow - p.d_safe, 1e-9), 0.0, 1.0)
+    return p.v_s * (p.v_min_frac + (1.0 - p.v_min_frac) * float(f))

@@ -1,0 +1,117 @@
+"""Stages 1-2 of a HES step: perception, the subleaders' reports and the planner's state z(k).
+
+Perception is the fused LiDAR ring of every agent (eq. 8-9). Each subleader reports its Pack
+P_s(k) (eq. 3) and the corridors toward the goal that its own ring shows (Section 3.2); the
+leader's planner reads only these reports, and z(k) of eq. (18) is computed from them alone.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.corridors import Corridor, corridors_toward, detect_gaps
+from swarmnav.methods.hes.decision import DecisionState, merge_feasible, split_feasible
+from swarmnav.methods.hes.hierarchy import Report, make_pack
+from swarmnav.methods.hes.step import Step, in_view
+
+
+def sense(h, x: np.ndarray) -> np.ndarray:
+    """Every agent's LiDAR ring (N, R) [m] (= ``swarmnav.sensing.lidar_ring``)."""
+    p = h.params
+    if h.geom.is_empty:
+        return np.full((len(x), p.n_rays), p.lidar_range)
+    return h.obstacles.lidar_into(x, h.cos, h.sin, p.lidar_range, np.empty((len(x), p.n_rays)))
+
+
+def reelect(h, step: Step) -> None:
+    """Hand a sub-swarm's subleader role to the member nearest its centroid when the current
+    subleader has strayed (farther than ``stray`` from the centroid, or cut off from it by an
+    obstacle): the subleader's ring is the sub-swarm's view of the corridors (ours; the paper
+    fixes no rule for who leads a sub-swarm). Parts may then change subleaders (hook ``elect``)."""
+    x = step.x
+    ids = sorted(h.subs)
+    col = np.searchsorted(np.asarray(ids), h.labels)
+    cents = F.group_centroids(x, col, len(ids))
+    sl = np.array([h.subs[s].subleader for s in ids])
+    far = np.hypot(*(x[sl] - cents).T) > h.params.stray
+    if not h.geom.is_empty:
+        far |= h.obstacles.blocked_into(np.ascontiguousarray(x[sl]), cents, np.empty(len(ids), dtype=np.bool_))
+    for j in np.flatnonzero(far):
+        members = np.flatnonzero(col == j)
+        h.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
+    for part in h.parts:
+        part.elect(step, col)
+
+
+def report(h, step: Step, s: int) -> Report:
+    """Subleader s's report: its Pack and the corridors toward the goal its ring shows (those
+    whose throat is reachable straight from the centroid), and its members' nearest return."""
+    p = h.params
+    x, ring = step.x, step.ring
+    sub = h.subs[s]
+    members = np.flatnonzero(h.labels == s)
+    pack = make_pack(s, sub.subleader, members, x, step.v)
+    a = sub.subleader
+    gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], h.cos, h.sin, p.lidar_range, p.h_open)
+    for part in h.parts:
+        gaps = part.gaps(step, sub, gaps)
+    approach, approach_w = 0.0, math.inf
+    for part in h.parts:
+        if part.approach > 0.0:
+            approach, approach_w = part.approach, part.approach_w
+    cors = corridors_toward(gaps, x[a], h.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
+                            ring=ring[a], sensor=x[a], origin=pack.centroid, rho_vis=p.rho_vis,
+                            max_range=p.lidar_range, rays=(h.cos, h.sin), approach=approach, approach_w=approach_w)
+    for part in h.parts:
+        cors = part.corridors(step, sub, cors)
+    clr = ring[members].min(axis=1)
+    for part in h.parts:
+        free = part.cruise_mask(members)
+        if free is not None:
+            clr = clr[free] if free.any() else clr
+    return Report(pack, tuple(cors), float(clr.min()))
+
+
+def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float, rho_vis: float,
+                max_range: float) -> list[Corridor]:
+    """The split paths n_c counts (eq. 13): reported corridors at least ``w_split`` wide whose
+    mouth is no farther from the goal than the sub-swarm's centroid and whose exit is in view of
+    the subleader's ``ring``. A wider gap seen behind the swarm -- the bay it has just crossed,
+    seen back through the gate it is threading -- does not lead to the target, and a sub-swarm
+    sent there turned back through the gate (alternating 4.5 / 5 m gates: Y 0.3 / 0.7 with such
+    splits, 1 / 1 with none)."""
+    d0 = float(np.hypot(*(rep.pack.centroid - goal)))
+    sx, sy = rep.pack.subleader_position
+    return [c for c in rep.corridors
+            if c.width >= w_split and float(np.hypot(*(c.mid - goal))) <= d0
+            and (c.direct or in_view(ring, sx, sy, c.target, rho_vis, max_range))]
+
+
+def decision_state(h, step: Step) -> DecisionState:
+    """z(k) of eq. (18) from the reports alone."""
+    p = h.params
+    k, reports = step.k, step.reports
+    ids = sorted(reports)
+    cents = np.array([reports[s].pack.centroid for s in ids])
+    S = len(ids)
+    d_goal = np.hypot(*(cents - h.goal).T)
+    widths = [c.width for s in ids for c in reports[s].corridors]
+    n_c = max(len(h.split_paths(step, reports[s])) for s in ids)
+    n_near = int(np.sum(d_goal < p.r_merge))  # eq. (15)
+    d_swarm_min = math.inf
+    if S >= 2:  # eq. (14)
+        diff = cents[:, None, :] - cents[None, :, :]
+        dd = np.hypot(diff[..., 0], diff[..., 1])
+        d_swarm_min = float(dd[np.triu_indices(S, 1)].min())
+    n_all = sum(len(reports[s].pack.members) for s in ids)
+    gbar = sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all  # global centroid, eq. (2)
+    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, float(np.hypot(*(gbar - h.goal))), p.r_merge)
+    can_merge = merge_feasible(S, n_near, d_swarm_min, p.d_merge)
+    return DecisionState(
+        k=int(k), dt=p.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,
+        w_min=float(min(widths)) if widths else 0.0, d_goal_avg=float(d_goal.mean()), n_near=n_near,
+        d_swarm_min=d_swarm_min, can_split=bool(can_split), can_merge=bool(can_merge),
+    )

@@ -1,0 +1,99 @@
+"""Two route parts of ours that keep a throat as the route for longer than the paper's choice does.
+
+- :class:`SplitCommit` (``split_commit``): the corridor a split assigned a sub-swarm is kept
+  (even when the subleader's view of the throat changes) until the centroid has passed the
+  throat or ``commit_time`` has lapsed, and dropped once the corridor is lost from view.
+- :class:`RouteHold` (``route_hold``): a throat is held until the whole sub-swarm is through (at
+  most ``hold_time`` after the first member passed): the next corridor's target would pull the
+  members still in front of this gap away from it, along the wall. Only members in line with the
+  gap count as in front of it: a member stuck beside it (beyond its side wall, e.g. in a block's
+  concave corner) held the route for 15 s while the target ran on along the old exit direction
+  and led the rest into a closed pocket (dense_cross_blocks seeds 16, 26). In a chain of
+  passages (passage mode) the queues replace the hold: a wide bay corridor held for the tail would
+  keep the head behind the last gate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmnav.methods.hes.corridors import segment_clear
+from swarmnav.methods.hes.part import Part
+
+
+class SplitCommit(Part):
+    """Split commitment (see the module docstring)."""
+
+    name = "commit"
+
+    def __init__(self, p):
+        self.p = p
+
+    def reset(self, hes, positions):
+        self.since: dict[int, int] = {}  # sid -> step of the split that assigned its corridor (committed)
+
+    def split(self, old, new, k):
+        self.since.pop(old, None)
+        for sid in new:
+            self.since[sid] = k
+
+    def merge(self, keep, drop):
+        self.since.pop(keep, None)
+        self.since.pop(drop, None)
+
+    def lost(self, sub):
+        self.since.pop(sub.sid, None)
+
+    def committed(self, sid: int) -> bool:
+        return sid in self.since
+
+    def hold(self, step, sub, rep, prev):
+        if sub.sid not in self.since or prev is None:
+            return False
+        passed = float(np.dot(rep.pack.centroid - prev.mid, prev.normal)) > 0.0
+        if passed or (step.k - self.since[sub.sid]) * self.p.dt > self.p.commit_time:
+            del self.since[sub.sid]
+            return False
+        return True
+
+
+class RouteHold(Part):
+    """Route hold (see the module docstring); ``passage``: passage mode (or None), whose queues
+    replace the hold in a chain of passages."""
+
+    name = "hold"
+
+    def __init__(self, p, passage=None):
+        self.p = p
+        self.passage = passage
+
+    def reset(self, hes, positions):
+        self.h = hes
+        self.since: dict[int, int] = {}  # sid -> step since which its route is held
+
+    def split(self, old, new, k):
+        for sid in [old, *new]:
+            self.since.pop(sid, None)
+
+    def merge(self, keep, drop):
+        self.since.pop(drop, None)
+
+    def hold(self, step, sub, rep, prev):
+        p, h = self.p, self.h
+        if prev is None or prev.direct or (self.passage is not None and self.passage.engaged(sub.sid)):
+            return False
+        rel = rep.pack.positions - prev.mid
+        along = rel @ prev.normal
+        across = np.abs(rel @ np.array([-prev.normal[1], prev.normal[0]]))
+        band = across < 0.5 * prev.width + 2.0  # in line with the gap
+        through = int(np.count_nonzero((along > 0.0) & band))  # passed the gap
+        before = int(np.count_nonzero((along <= 0.0) & band))  # still in front of it
+        a, cent = sub.subleader, rep.pack.centroid
+        sl = step.x[a]
+        seen = segment_clear(step.ring[a], sl[0], sl[1], h.cos, h.sin, cent[0], cent[1], prev.mid[0],
+                             prev.mid[1], p.rho_vis, p.lidar_range)
+        if through > 0 and before > 0 and seen:
+            start = self.since.setdefault(sub.sid, step.k)
+            return (step.k - start) * p.dt <= p.hold_time
+        self.since.pop(sub.sid, None)
+        return False

@@ -1,0 +1,58 @@
+"""Our safety parts around eq. (38)-(39): the wall braking barrier and the contact guard.
+
+- :class:`WallBarrier` (on with the safety stack, ``safety_stack_off = false``): before the
+  saturation of eq. (39), every agent's command is projected onto the speed cap
+  ``v_cap_frac v_s`` and the braking barrier of every LiDAR ray (``barriers.safety_filter``).
+  With passage mode's agent braking barrier (``agent_brake`` > 0), the members of a sub-swarm in a
+  chain of narrow throats queue at the gate mouths and brake for the neighbour in front, before
+  and again after the wall barrier, which may turn a member toward its neighbour: the wall
+  barrier has the last word.
+- :class:`ContactGuard` (``agent_guard``, with the safety stack): after the saturation, every
+  agent brakes for its neighbours, with priority over the clip (``barriers.agent_guard``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmnav.methods.hes.barriers import agent_guard, safety_filter
+from swarmnav.methods.hes.part import Part
+
+
+class WallBarrier(Part):
+    """Speed cap and wall braking barrier (see the module docstring); ``queue``: passage mode, whose
+    queue barrier is interleaved with it (or None)."""
+
+    name = "wall"
+
+    def __init__(self, p, queue=None):
+        self.p = p
+        self.queue = queue
+
+    def reset(self, hes, positions):
+        self.h = hes
+
+    def wall(self, step, a: np.ndarray) -> np.ndarray:
+        p, h = self.p, self.h
+        return safety_filter(a, step.v, step.ring, h.cos, h.sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake,
+                             p.brake_margin, p.lidar_range, p.wall_passes)
+
+    def brake(self, step, a):
+        chained = self.queue.chained_agents(step) if self.queue is not None else None
+        if chained is None or not chained.any():
+            return self.wall(step, a)
+        a = self.wall(step, self.queue.queue_barrier(step, a, chained))
+        return self.wall(step, self.queue.queue_barrier(step, a, chained))
+
+
+class ContactGuard(Part):
+    """The contact guard (see the module docstring)."""
+
+    name = "guard"
+
+    def __init__(self, p):
+        self.p = p
+
+    def guard(self, step, a):
+        p = self.p
+        return agent_guard(a, step.x, step.v, p.dt, p.guard_brake, p.guard_margin, p.a_bound)

@@ -1,0 +1,94 @@
+"""What the stages of one HES step pass each other, and the planner's memory of a sub-swarm.
+
+:class:`Step` is the step context: created by perception with the step's positions,
+velocities and LiDAR rings, filled stage by stage (reports and z(k), per-agent routing, slot
+references, the control stage's couplings and safety distances) and read by the parts of ours
+at their hooks. Nothing of one step is kept in hidden fields of the method: what outlives a step
+is the planner's memory (:class:`SubSwarm`, the partition) or a part's own state.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swarmnav.methods.hes.corridors import Corridor
+from swarmnav.methods.hes.decision import NAVIGATE, DecisionState
+
+NEVER = -(10**9)  # step of something that has not happened
+
+
+@dataclass(slots=True)
+class SubSwarm:
+    """Planner memory of one sub-swarm (Sections 2-4): subleader, c_s(k), task mode, route, formation.
+
+    The parts of ours keep their per-sub-swarm state themselves, keyed by ``sid``."""
+
+    sid: int
+    subleader: int
+    waypoint: np.ndarray  # c_s(k) [m]
+    mode: int = NAVIGATE
+    route: Corridor | None = None  # corridor currently followed
+    squeeze: float = 1.0  # lateral factor of the template in a narrow corridor (longitudinal: 1 / squeeze)
+    heading: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))  # formation axis (unit)
+    slot_members: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # agents (sorted) ...
+    slot_index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # ... and their r_i
+    slot_step: int = NEVER  # step of the last slot assignment
+    ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
+
+
+@dataclass(slots=True)
+class Step:
+    """The context of one step, (N, ...) arrays over the agents unless noted.
+
+    Perception: ``k``, ``x``, ``v`` (positions [m], velocities [m/s]), ``ring`` (N, R) fused
+    LiDAR ranges [m] (eq. 8-9). Report and decision: ``reports`` {sid: Report}, ``z`` (eq. 18).
+    Targets: ``own`` (N,) int, >= 0 for an agent a part routes on its own (passage mode's
+    queues: the index of its throat), with ``own_target`` (N, 2) its point [m] and ``routed``
+    (N,) bool the agents a part routes (trail following leaves them alone); ``slot`` (N, 2) p*_i
+    and ``speed`` (N,) v_s of eq. (23). Control (eq. 38): ``col`` column of each agent's
+    sub-swarm, ``sl_idx`` its subleader, ``wp`` (N, 2) its centering target c_s, ``cent`` its
+    cohesion centroid, ``nn`` nearest neighbour, ``follower``, ``nav``, ``sig`` (N, 4) occlusion
+    factors of eq. (30) with ``blocked`` (N, 4) the segments that meet an obstacle, ``dsafe``
+    (N,) the safety distance of eq. (36) [m], and ``exit_dir`` (N, 2) / ``exit_free`` (N,): a
+    member's way out of a narrow place, along which the LiDAR repulsion does not push it back
+    (0 / False: none).
+    """
+
+    k: int
+    x: np.ndarray
+    v: np.ndarray
+    ring: np.ndarray
+    reports: dict = field(default_factory=dict)
+    z: DecisionState | None = None
+    own: np.ndarray | None = None
+    own_target: np.ndarray | None = None
+    routed: np.ndarray | None = None
+    slot: np.ndarray | None = None
+    speed: np.ndarray | None = None
+    col: np.ndarray | None = None
+    sl_idx: np.ndarray | None = None
+    wp: np.ndarray | None = None
+    cent: np.ndarray | None = None
+    nn: np.ndarray | None = None
+    follower: np.ndarray | None = None
+    nav: np.ndarray | None = None
+    sig: np.ndarray | None = None
+    blocked: np.ndarray | None = None
+    dsafe: np.ndarray | None = None
+    exit_dir: np.ndarray | None = None
+    exit_free: np.ndarray | None = None
+
+    @property
+    def n(self) -> int:
+        return len(self.x)
+
+
+def in_view(ring: np.ndarray, sx: float, sy: float, q: np.ndarray, rho: float, max_range: float) -> bool:
+    """The point ``q`` is seen from the sensor at ``(sx, sy)``: the ray toward it reaches at least
+    to within ``rho`` [m] of it (not occluded, not in an obstacle's shadow)."""
+    dx, dy = q[0] - sx, q[1] - sy
+    r = int(round(math.atan2(dy, dx) / (2.0 * math.pi) * len(ring))) % len(ring)
+    return bool(ring[r] >= min(math.hypot(dx, dy) - rho, max_range))

@@ -1,0 +1,69 @@
+"""Stage 4 of a HES step, the references of eq. (23): each agent's slot p*_i and cruise speed.
+
+A navigating sub-swarm's slots are its template around c_s(k) (:func:`template`), assigned to its
+members by the Hungarian method every ``slot_refresh`` steps (or when the members change); an
+encircling one's are points on the circle of ``r_enc`` around the goal that its subleader sees
+free (ours: the paper does not give the encircle slots). Agents a part routes on their own
+(``Step.own``) head for their own target.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmnav.methods.hes.corridors import free_points
+from swarmnav.methods.hes.decision import ENCIRCLE
+from swarmnav.methods.hes.formation import assign_slots, hex_template, ring_slots
+from swarmnav.methods.hes.step import Step, SubSwarm
+
+
+def references(h, step: Step) -> None:
+    """Fill ``step.slot`` (N, 2) p*_i [m] and ``step.speed`` (N,) v_s [m/s]."""
+    p = h.params
+    x, k = step.x, step.k
+    slot = np.empty_like(x)
+    speed = np.empty(h.n)
+    queued = step.own >= 0
+    slot[queued] = step.own_target[queued]
+    speed[queued] = p.v_s
+    for s, sub in h.subs.items():
+        members = np.flatnonzero((h.labels == s) & ~queued)
+        m = len(members)
+        if m == 0:
+            continue
+        if sub.mode == ENCIRCLE:
+            if sub.ring_offsets is None or len(sub.ring_offsets) != m or k - sub.slot_step >= p.slot_refresh:
+                a = sub.subleader
+                ang = h.ring_angles
+                pts = h.goal[None, :] + p.r_enc * np.column_stack([np.cos(ang), np.sin(ang)])
+                free = free_points(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, pts, p.enc_clear, p.lidar_range)
+                ring = ring_slots(h.goal, p.r_enc, m, free, ang)
+                r_i = assign_slots(x[members], ring)
+                sub.ring_offsets = ring[r_i] - h.goal
+                sub.slot_step = k
+            slot[members] = h.goal + sub.ring_offsets
+            speed[members] = p.v_s
+            continue
+        tmpl = template(p, m, sub)
+        if k - sub.slot_step >= p.slot_refresh or not np.array_equal(sub.slot_members, members):
+            sub.slot_members = members
+            sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl)
+            sub.slot_step = k
+        slot[members] = sub.waypoint + tmpl[sub.slot_index]
+        speed[members] = p.v_s
+    step.slot, step.speed = slot, speed
+
+
+def template(p, m: int, sub: SubSwarm) -> np.ndarray:
+    """alpha_s R(psi_s) Delta_f of eq. (23) for a sub-swarm of m agents, (m, 2) [m].
+
+    Delta_f: the unit hex template, squeezed across the formation axis by ``squeeze`` and
+    stretched along it by ``1 / squeeze``; alpha_s = spacing (k_p + k_path) / k_p, so that
+    where the slot attraction (eq. 24) balances the corridor centering toward c_s (eq. 32) the
+    agents sit ``spacing`` apart."""
+    alpha = p.spacing * (p.k_p + p.k_path) / p.k_p
+    t = hex_template(m)
+    hx, hy = sub.heading
+    u = t[:, 0] / sub.squeeze
+    w = t[:, 1] * sub.squeeze
+    return alpha * np.column_stack([hx * u - hy * w, hy * u + hx * w])
