@@ -30,7 +30,7 @@ def couplings(h, step: Step) -> None:
     follower = sl_idx != np.arange(h.n)
     queued = step.own >= 0
     if queued.any():
-        cgrp = col * (h.params.passage_count + 1) + step.own + 1
+        cgrp = col * (int(step.own.max()) + 2) + step.own + 1  # (sub-swarm, own group) pairs, in that order
         uniq, cgrp = np.unique(cgrp, return_inverse=True)
         cent = F.group_centroids(x, cgrp, len(uniq))[cgrp]
         wp[queued] = step.own_target[queued]
