@@ -44,7 +44,7 @@ from swarmnav.methods.hes.targets import references
 from swarmnav.methods.hes.trail import TrailFollow
 from swarmnav.params import build
 from swarmnav.sensing import PreparedGeometry
-from swarmnav.sensing import ray_table as _ray_table
+from swarmnav.sensing import ray_table
 from swarmnav.world.scenario import Scenario
 
 
@@ -88,7 +88,7 @@ class Hes:
         self.dt = self.params.dt
         self.dynamics = DampedDoubleIntegrator()  # eq. (5)-(7): m = 5 kg, c_d = 0.5, inverse model
         self.gains = F.gain_vector(self.params)
-        self.cos, self.sin = _ray_table(self.params.n_rays)
+        self.cos, self.sin = ray_table(self.params.n_rays)
         p = self.params
         self.ring_angles = np.linspace(0.0, 2 * np.pi, p.enc_samples, endpoint=False)  # encircle slot candidates
         self._source_override: DecisionSource | None = None
