@@ -43,8 +43,7 @@ from swarmnav.methods.hes.structure import merge, reassign_followers, split
 from swarmnav.methods.hes.targets import references
 from swarmnav.methods.hes.trail import TrailFollow
 from swarmnav.params import build
-from swarmnav.sensing import PreparedGeometry
-from swarmnav.sensing import ray_table
+from swarmnav.sensing import PreparedGeometry, ray_table
 from swarmnav.world.scenario import Scenario
 
 
