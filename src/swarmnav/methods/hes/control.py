@@ -69,12 +69,12 @@ def control(h, step: Step) -> np.ndarray:
     step.dsafe = np.full(h.n, p.d_safe)
     step.exit_dir = np.zeros((h.n, 2))
     step.exit_free = np.zeros(h.n, dtype=np.bool_)
-    for part in h.parts:
+    for part in h.at["steer"]:
         part.steer(step)
     vslot = F.slot_velocity(x, step.slot, step.speed, p.eps_v)
     args = (x, v, h.labels, x[step.sl_idx], v[step.sl_idx], step.follower, step.cent, step.wp, step.nav,
             step.slot, vslot, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe)
-    edit = [part for part in h.parts if part.push_back(step)]
+    edit = [part for part in h.at["push_back"] if part.push_back(step)]
     if edit:
         t = F.force_terms(*args)
         for part in edit:
@@ -82,9 +82,9 @@ def control(h, step: Step) -> np.ndarray:
         a = t.sum(axis=0)
     else:
         a = F.synthesize(*args)
-    for part in h.parts:
+    for part in h.at["brake"]:
         a = part.brake(step, a)
     a = F.saturate(a, p.a_bound)
-    for part in h.parts:
+    for part in h.at["guard"]:
         a = part.guard(step, a)
     return a

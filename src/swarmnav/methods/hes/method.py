@@ -32,7 +32,7 @@ from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePol
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.navigate import navigate
 from swarmnav.methods.hes.params import HesParams
-from swarmnav.methods.hes.part import Part
+from swarmnav.methods.hes.part import Part, hook_table
 from swarmnav.methods.hes.passage import PassageMode
 from swarmnav.methods.hes.report import decision_state, reelect, report, sense, split_paths
 from swarmnav.methods.hes.routes import RouteHold, SplitCommit
@@ -92,6 +92,7 @@ class Hes:
         self.ring_angles = np.linspace(0.0, 2 * np.pi, p.enc_samples, endpoint=False)  # encircle slot candidates
         self._source_override: DecisionSource | None = None
         self.parts: list[Part] = []
+        self.at: dict[str, list[Part]] = hook_table([])  # hook name -> the parts that override it
 
     def use_source(self, source: DecisionSource) -> Hes:
         """Decide structure with ``source`` instead of the rule policy (from the next reset)."""
@@ -129,6 +130,7 @@ class Hes:
         self.last_reports: dict[int, Report] = {}
         self.last_step: Step | None = None
         self.parts = build_parts(p)
+        self.at = hook_table(self.parts)
         for q in self.parts:
             q.reset(self, positions)
 
@@ -161,7 +163,7 @@ class Hes:
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         # 1. perceive
         step = Step(obs.step, x, v, sense(self, x))
-        for q in self.parts:
+        for q in self.at["observe"]:
             q.observe(step)
         reelect(self, step)
         # 2. report, 3. decide through Pi_feas
@@ -204,5 +206,5 @@ class Hes:
         if final:
             step.own_target = np.zeros((self.n, 2))
             step.routed = np.zeros(self.n, dtype=np.bool_)
-        for q in self.parts:
+        for q in self.at["targets"]:
             q.targets(step, self.subs, self.labels, final)

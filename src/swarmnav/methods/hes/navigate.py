@@ -39,15 +39,15 @@ def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
     sub.mode = mode
     if mode == ENCIRCLE:
         sub.waypoint = h.goal.copy()
-        for part in h.parts:
+        for part in h.at["encircle"]:
             part.encircle(step, sub, rep)
         return
     planned = None
-    for part in h.parts:
+    for part in h.at["plan"]:
         planned = part.plan(step, sub, rep, cent) or planned
     route = choose_route(h, step, sub, rep) if planned is None else planned[0]
     sub.route = route
-    for part in h.parts:
+    for part in h.at["chosen"]:
         part.chosen(step, sub, rep, route)
     if planned is not None:
         target = planned[1]
@@ -58,9 +58,9 @@ def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
     else:  # `through` metres past the throat, or past the centroid once that is beyond the throat
         along = max(float(np.dot(cent - route.mid, route.normal)), 0.0)
         target = route.mid + (along + p.through) * route.normal
-        for part in h.parts:
+        for part in h.at["target"]:
             target = part.target(step, sub, route, target, cent, along)
-    for part in h.parts:
+    for part in h.at["restart"]:
         part.restart(step, sub, cent)
     regulate(h, step, sub, rep, route, target, cent)
 
@@ -117,13 +117,13 @@ def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
                      p.d_safe, p.lidar_range):
         cands.insert(0, direct_corridor(cent, h.goal))
     prev = sub.route
-    for part in h.parts:
+    for part in h.at["hold"]:
         if part.hold(step, sub, rep, prev):
             return prev
-    for part in h.parts:
+    for part in h.at["candidates"]:
         cands = part.candidates(step, sub, rep, cands, cent)
     if not cands:
-        if any(part.end_route(step, sub, prev) for part in h.parts):
+        if any(part.end_route(step, sub, prev) for part in h.at["end_route"]):
             return None
         return prev
     m = len(rep.pack.members)
@@ -133,7 +133,7 @@ def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
         return cands[best]
     same = match(prev, cands)
     if same is None:
-        for part in h.parts:
+        for part in h.at["lost"]:
             part.lost(sub)
         return cands[best]
     if cost[best] >= cost[same] - p.switch_margin:

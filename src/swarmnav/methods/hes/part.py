@@ -109,3 +109,14 @@ class Part:
 
     def summary(self) -> dict:
         return {}
+
+
+HOOKS = ("observe", "elect", "gaps", "corridors", "cruise_mask", "split", "merge", "encircle", "plan", "hold",
+         "candidates", "end_route", "lost", "chosen", "target", "restart", "targets", "steer", "push_back",
+         "brake", "guard")
+
+
+def hook_table(parts: list[Part]) -> dict[str, list[Part]]:
+    """For each hook, the parts that override it, in order: the step calls only these (a part's
+    default hook is a no-op or returns its input, so skipping it changes nothing)."""
+    return {hook: [q for q in parts if getattr(type(q), hook) is not getattr(Part, hook)] for hook in HOOKS}

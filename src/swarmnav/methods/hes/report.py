@@ -42,7 +42,7 @@ def reelect(h, step: Step) -> None:
     for j in np.flatnonzero(far):
         members = np.flatnonzero(col == j)
         h.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
-    for part in h.parts:
+    for part in h.at["elect"]:
         part.elect(step, col)
 
 
@@ -56,7 +56,7 @@ def report(h, step: Step, s: int) -> Report:
     pack = make_pack(s, sub.subleader, members, x, step.v)
     a = sub.subleader
     gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], h.cos, h.sin, p.lidar_range, p.h_open)
-    for part in h.parts:
+    for part in h.at["gaps"]:
         gaps = part.gaps(step, sub, gaps)
     approach, approach_w = 0.0, math.inf
     for part in h.parts:
@@ -65,10 +65,10 @@ def report(h, step: Step, s: int) -> Report:
     cors = corridors_toward(gaps, x[a], h.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
                             ring=ring[a], sensor=x[a], origin=pack.centroid, rho_vis=p.rho_vis,
                             max_range=p.lidar_range, rays=(h.cos, h.sin), approach=approach, approach_w=approach_w)
-    for part in h.parts:
+    for part in h.at["corridors"]:
         cors = part.corridors(step, sub, cors)
     clr = ring[members].min(axis=1)
-    for part in h.parts:
+    for part in h.at["cruise_mask"]:
         free = part.cruise_mask(members)
         if free is not None:
             clr = clr[free] if free.any() else clr

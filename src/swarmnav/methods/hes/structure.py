@@ -41,7 +41,7 @@ def split(h, step: Step, prop: Proposal) -> dict:
         h.subs[sid] = SubSwarm(sid, choose_subleader(x, g, h.leader), wp, mode=old.mode, route=c,
                                squeeze=old.squeeze, heading=old.heading.copy())
         new.append(sid)
-    for part in h.parts:
+    for part in h.at["split"]:
         part.split(s0, new, step.k)
     h.stats["splits"] += 1
     return {"action": "split", "source": prop.source, "reason": prop.reason,
@@ -66,7 +66,7 @@ def merge(h, step: Step, prop: Proposal) -> dict:
     kept = h.subs[keep]
     kept.waypoint = (size[keep] * kept.waypoint + size[drop] * gone.waypoint) / (size[a] + size[b])
     kept.slot_step = NEVER
-    for part in h.parts:
+    for part in h.at["merge"]:
         part.merge(keep, drop)
     kept.mode = min(kept.mode, gone.mode) if kept.mode != gone.mode else kept.mode
     h.stats["merges"] += 1
