@@ -83,11 +83,15 @@ def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float,
     seen back through the gate it is threading -- does not lead to the target, and a sub-swarm
     sent there turned back through the gate (alternating 4.5 / 5 m gates: Y 0.3 / 0.7 with such
     splits, 1 / 1 with none)."""
-    d0 = float(np.hypot(*(rep.pack.centroid - goal)))
+    wide = [c for c in rep.corridors if c.width >= w_split]
+    if not wide:
+        return []
+    cent = rep.pack.centroid
+    mids = np.array([cent] + [c.mid for c in wide])
+    d = np.hypot(mids[:, 0] - goal[0], mids[:, 1] - goal[1]).tolist()  # d[0]: the centroid's
     sx, sy = rep.pack.subleader_position
-    return [c for c in rep.corridors
-            if c.width >= w_split and float(np.hypot(*(c.mid - goal))) <= d0
-            and (c.direct or in_view(ring, sx, sy, c.target, rho_vis, max_range))]
+    return [c for c, dc in zip(wide, d[1:])
+            if dc <= d[0] and (c.direct or in_view(ring, sx, sy, c.target, rho_vis, max_range))]
 
 
 def decision_state(h, step: Step) -> DecisionState:
