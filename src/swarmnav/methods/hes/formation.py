@@ -26,6 +26,12 @@ def hex_template(m: int) -> np.ndarray:
     return out
 
 
+@lru_cache(maxsize=64)
+def hex_width(m: int) -> float:
+    """Extent [m] of :func:`hex_template` (m) across the formation axis (its y coordinates)."""
+    return float(np.ptp(hex_template(m)[:, 1]))
+
+
 def ring_slots(goal: np.ndarray, radius: float, m: int, free: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """Encircle slots: ``m`` points on the circle of ``radius`` around ``goal``, spread evenly over
     the free sample angles (``free`` (A,) bool over ``angles`` (A,)); all angles if none is free."""

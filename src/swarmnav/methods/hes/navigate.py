@@ -17,7 +17,7 @@ import numpy as np
 from swarmnav.methods.hes.barriers import push_clear
 from swarmnav.methods.hes.corridors import Corridor, direct_corridor, segment_clear
 from swarmnav.methods.hes.decision import ENCIRCLE, target_proximity, task_mode
-from swarmnav.methods.hes.formation import hex_template
+from swarmnav.methods.hes.formation import hex_width
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.step import NEVER, Step, SubSwarm
 
@@ -98,9 +98,9 @@ def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, 
         hd = 0.8 * sub.heading + 0.2 * hd / hn
         sub.heading = hd / max(math.hypot(hd[0], hd[1]), 1e-9)
     m = len(rep.pack.members)
-    w_iso = float(np.ptp(hex_template(m)[:, 1])) * p.spacing + p.spacing if m > 1 else p.spacing
-    lam = float(np.clip((w - 2 * p.lane_margin) / w_iso, 1 / math.sqrt(p.aspect_max), 1.0)) if math.isfinite(w) else 1.0
-    sub.squeeze += float(np.clip(lam - sub.squeeze, -0.05, 0.05))
+    w_iso = hex_width(m) * p.spacing + p.spacing if m > 1 else p.spacing
+    lam = _clip((w - 2 * p.lane_margin) / w_iso, 1 / math.sqrt(p.aspect_max), 1.0) if math.isfinite(w) else 1.0
+    sub.squeeze += _clip(lam - sub.squeeze, -0.05, 0.05)
 
 
 def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
@@ -173,5 +173,10 @@ def cruise(p, clearance: float) -> float:
     LiDAR return of its members (adaptive cruise, ours)."""
     if not p.adaptive:
         return p.v_s
-    f = np.clip((clearance - p.d_safe) / max(p.clr_slow - p.d_safe, 1e-9), 0.0, 1.0)
-    return p.v_s * (p.v_min_frac + (1.0 - p.v_min_frac) * float(f))
+    f = _clip((clearance - p.d_safe) / max(p.clr_slow - p.d_safe, 1e-9), 0.0, 1.0)
+    return p.v_s * (p.v_min_frac + (1.0 - p.v_min_frac) * f)
+
+
+def _clip(v: float, lo: float, hi: float) -> float:
+    """``float(np.clip(v, lo, hi))`` for one float, without the array call."""
+    return min(max(float(v), lo), hi)
