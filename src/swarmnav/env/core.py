@@ -1,0 +1,235 @@
+"""The numerics every environment shares: B copies of one scene stepped as (B, N, d) arrays.
+
+One step of all copies is a handful of array calls: the simulator's dynamics
+(:mod:`swarmnav.dynamics`) on the (B N, d) state, one LiDAR call for all B N rings (the sensing
+kernels behind :func:`swarmnav.lidar_scan`, on the geometry prepared once), one signed-distance
+call for the clearance of all B N agents (the simulator's contact and d_safe checks) and one
+compiled k-nearest-neighbour pass. The PettingZoo, Gymnasium and vector environments are thin
+wrappers around :class:`SwarmCore` with B = 1 or B copies.
+
+Observation of agent i (float32, in this order):
+
+- ``n_rays`` LiDAR values in [0, 1]: the ring of ``lidar_rays`` rays pooled by the minimum over
+  ``lidar_rays / n_rays`` adjacent rays (observed ray j covers the ring's sector
+  [2 pi j / n_rays, 2 pi (j + 1) / n_rays) from +x, counter-clockwise), divided by
+  ``lidar_range``; 0 when the agent is inside an obstacle. In a 3-D world the ring is
+  horizontal, at the agent's altitude;
+- its velocity v_i (d) [m/s];
+- the goal vector g - p_i (d) [m];
+- for its ``k_neighbors`` nearest other agents, nearest first: relative positions p_j - p_i
+  (k d) [m], relative velocities v_j - v_i (k d) [m/s], and a mask (k) that is 1 for a real
+  neighbour and 0 for a padding slot (fewer than k other agents; its other entries are 0).
+
+Reward of agent i for a step (every weight an option)::
+
+    r_i = w_progress (|g - p_i(k)| - |g - p_i(k + 1)|)        progress to the goal [m]
+        + w_goal      [arrived at this step]
+        - w_contact   ([clearance_i < body_radius] + [min_j |p_i - p_j| < 2 body_radius])
+        - w_unsafe    [clearance_i < d_safe]
+
+Arrived agents (within ``goal_radius`` of the goal) are terminated and hover where they are
+(velocity 0, actions ignored); they stay in the world as obstacles to the others' neighbour
+and contact checks, as a parked UAV would. Like the simulator, the world does not stop an agent
+at an obstacle: contacts are counted and penalised, not resolved.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from swarmnav.dynamics import DampedDoubleIntegrator, SaturatedDoubleIntegrator, clip_norm
+from swarmnav.env.options import EnvOptions
+from swarmnav.errors import ConfigError
+from swarmnav.sensing import PreparedGeometry, ray_table, signed_distance
+from swarmnav.world.scenario import Scenario
+
+
+@njit(cache=True)
+def knn_kernel(pos, k, out_idx, out_d2, nearest_d2):
+    """The ``k`` nearest other agents of every agent of every copy, by brute force per copy.
+
+    Args:
+        pos: (B, N, d) positions [m].
+        k: neighbours wanted (``out_idx.shape[2]``).
+        out_idx: (B, N, k) int64 <- neighbour indices, nearest first (ties: lower index first);
+            -1 in padding slots (fewer than k other agents).
+        out_d2: (B, N, k) float64 <- their squared distances [m^2] (inf in padding slots).
+        nearest_d2: (B, N) float64 <- squared distance to the nearest other agent (inf: none),
+            whatever k is (the contact check needs it also with k = 0).
+
+    O(B N^2 k) without an N x N matrix: an insertion into a sorted k-list per candidate, cheap
+    for the swarm sizes of the scenes (N <= a few hundred).
+    """
+    B, N, d = pos.shape
+    for b in range(B):
+        for i in range(N):
+            for s in range(k):
+                out_idx[b, i, s] = -1
+                out_d2[b, i, s] = np.inf
+            best = np.inf
+            for j in range(N):
+                if j == i:
+                    continue
+                r2 = 0.0
+                for c in range(d):
+                    t = pos[b, j, c] - pos[b, i, c]
+                    r2 += t * t
+                if r2 < best:
+                    best = r2
+                if k == 0 or r2 >= out_d2[b, i, k - 1]:
+                    continue
+                s = k - 1
+                while s > 0 and out_d2[b, i, s - 1] > r2:
+                    out_d2[b, i, s] = out_d2[b, i, s - 1]
+                    out_idx[b, i, s] = out_idx[b, i, s - 1]
+                    s -= 1
+                out_d2[b, i, s] = r2
+                out_idx[b, i, s] = j
+            nearest_d2[b, i] = best
+
+
+@dataclass(frozen=True, slots=True)
+class StepOutcome:
+    """What one step of B copies produced, (B, N) arrays unless said otherwise."""
+
+    reward: np.ndarray  # float64, 0 for agents that had already arrived
+    arrived: np.ndarray  # bool: within goal_radius after the step (arrived now or before)
+    clearance: np.ndarray  # float64 signed distance to the nearest obstacle [m] (+inf: none)
+    obstacle_contact: np.ndarray  # bool: clearance < body_radius
+    agent_contact: np.ndarray  # bool: another agent nearer than 2 body_radius
+    unsafe: np.ndarray  # bool: clearance < d_safe
+    distance_to_goal: np.ndarray  # float64 [m]
+
+
+class SwarmCore:
+    """Scene, options and the pure step of B copies (the wrappers own the state arrays).
+
+    Args:
+        scenario: the scene (a navigation scene: open world, one goal).
+        options: checked options.
+    """
+
+    def __init__(self, scenario: Scenario, options: EnvOptions):
+        if scenario.periodic:
+            raise ConfigError(f"env: {scenario.name} is a periodic world without a goal region; "
+                              "the environment needs a navigation scene")
+        self.scenario = scenario
+        self.options = o = options
+        self.n = scenario.n
+        self.dim = d = scenario.dim
+        self.goal = scenario.goal_array
+        self.prepared = PreparedGeometry(scenario.geometry)
+        cos_t, sin_t = ray_table(o.lidar_rays)
+        self._cos, self._sin = np.ascontiguousarray(cos_t), np.ascontiguousarray(sin_t)
+        # the 3-D ring: the planar ring's directions, horizontal
+        self._dirs3 = np.ascontiguousarray(np.column_stack([cos_t, sin_t, np.zeros(o.lidar_rays)]))
+        self._pool = o.lidar_rays // o.n_rays
+        if o.dynamics == "damped":
+            self._dyn = DampedDoubleIntegrator()
+        else:
+            self._dyn = SaturatedDoubleIntegrator(np.inf if o.v_max is None else o.v_max, o.a_max)
+        k = o.k_neighbors
+        self.obs_dim = o.n_rays + 2 * d + k * (2 * d + 1)
+        lo = np.full(self.obs_dim, -np.inf, dtype=np.float32)
+        hi = np.full(self.obs_dim, np.inf, dtype=np.float32)
+        lo[: o.n_rays] = 0.0
+        hi[: o.n_rays] = 1.0
+        lo[self.obs_dim - k:] = 0.0
+        hi[self.obs_dim - k:] = 1.0
+        self.obs_low, self.obs_high = lo, hi
+
+    # ------------------------------------------------------------------ episode start
+    def spawn(self, rng: np.random.Generator) -> np.ndarray:
+        """(N, d) start positions [m], as :func:`swarmnav.run` draws them from the same generator."""
+        return self.scenario.spawn_positions(rng)
+
+    # ------------------------------------------------------------------ sensing
+    def lidar(self, pos: np.ndarray) -> np.ndarray:
+        """(B, N, lidar_rays) ranges [m] of every agent of every copy, one kernel call."""
+        B, N, d = pos.shape
+        o = self.options
+        flat = np.ascontiguousarray(pos.reshape(B * N, d))
+        out = np.empty((B * N, o.lidar_rays))
+        if d == 2:
+            self.prepared.lidar_into(flat, self._cos, self._sin, o.lidar_range, out)
+        else:
+            self.prepared.range_into(flat, self._dirs3, o.lidar_range, out)
+        return out.reshape(B, N, o.lidar_rays)
+
+    def clearance(self, pos: np.ndarray) -> np.ndarray:
+        """(B, N) signed distance to the nearest obstacle [m] (+inf without obstacles)."""
+        B, N, d = pos.shape
+        if self.prepared.is_empty:
+            return np.full((B, N), np.inf)
+        return signed_distance(self.scenario.geometry, pos.reshape(B * N, d)).reshape(B, N)
+
+    def neighbours(self, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(idx (B, N, k), d2 (B, N, k), nearest_d2 (B, N)): see :func:`knn_kernel`."""
+        B, N, _ = pos.shape
+        k = self.options.k_neighbors
+        idx = np.empty((B, N, k), dtype=np.int64)
+        d2 = np.empty((B, N, k))
+        near = np.empty((B, N))
+        knn_kernel(np.ascontiguousarray(pos), k, idx, d2, near)
+        return idx, d2, near
+
+    def observe(self, pos: np.ndarray, vel: np.ndarray, idx: np.ndarray | None = None) -> np.ndarray:
+        """(B, N, obs_dim) float32 observations of state (pos, vel), (B, N, d) each."""
+        o = self.options
+        B, N, d = pos.shape
+        if idx is None:
+            idx = self.neighbours(pos)[0]
+        ring = self.lidar(pos)
+        pooled = ring.reshape(B, N, o.n_rays, self._pool).min(axis=3) * (1.0 / o.lidar_range)
+        k = o.k_neighbors
+        valid = idx >= 0
+        safe = np.where(valid, idx, 0)
+        b = np.arange(B)[:, None, None]
+        rel_p = (pos[b, safe] - pos[:, :, None, :]) * valid[..., None]  # (B, N, k, d)
+        rel_v = (vel[b, safe] - vel[:, :, None, :]) * valid[..., None]
+        parts = [pooled, vel, self.goal - pos, rel_p.reshape(B, N, k * d), rel_v.reshape(B, N, k * d),
+                 valid.astype(np.float64)]
+        return np.concatenate(parts, axis=2).astype(np.float32)
+
+    # ------------------------------------------------------------------ one step
+    def step(self, pos: np.ndarray, vel: np.ndarray, arrived: np.ndarray, action: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, StepOutcome, np.ndarray]:
+        """Advance every copy by dt.
+
+        Args:
+            pos, vel: (B, N, d) state [m], [m/s].
+            arrived: (B, N) bool, agents already in the goal region (they hover: unchanged).
+            action: (B, N, d) finite normalised accelerations; a row of norm above 1 is scaled
+                to norm 1 (the commanded acceleration is ``a_max`` times the row).
+
+        Returns:
+            ``(pos, vel, outcome, idx)``: the new state, what the step produced, and the
+            neighbour indices of the new state (for the next observation).
+        """
+        o = self.options
+        B, N, d = pos.shape
+        a = clip_norm(action.reshape(B * N, d).astype(np.float64, copy=False), 1.0) * o.a_max
+        p0 = pos.reshape(B * N, d)
+        v0 = vel.reshape(B * N, d)
+        p1, v1 = self._dyn.step(p0, v0, a, o.dt)
+        p1 = p1.reshape(B, N, d)
+        v1 = v1.reshape(B, N, d)
+        hold = arrived[..., None]
+        p1 = np.where(hold, pos, p1)
+        v1 = np.where(hold, 0.0, v1)
+        dist0 = np.linalg.norm(pos - self.goal, axis=2)
+        dist1 = np.linalg.norm(p1 - self.goal, axis=2)
+        now = dist1 <= o.goal_radius
+        clr = self.clearance(p1)
+        idx, _, near = self.neighbours(p1)
+        obst = clr < o.body_radius
+        agent = near < (2.0 * o.body_radius) ** 2
+        unsafe = clr < o.d_safe
+        reward = (o.w_progress * (dist0 - dist1) + o.w_goal * now
+                  - o.w_contact * (obst.astype(np.float64) + agent) - o.w_unsafe * unsafe)
+        reward = np.where(arrived, 0.0, reward)
+        out = StepOutcome(reward, arrived | now, clr, obst, agent, unsafe, dist1)
+        return p1, v1, out, idx
