@@ -189,6 +189,10 @@ def _cmd_run(args) -> int:
         from swarmnav.viz import plot_run
 
         print(f"  figure: {plot_run(res, out / 'trajectory.png')}")
+    if args.view:
+        from swarmnav.viz.viewer import write_viewer
+
+        print(f"  viewer: {write_viewer(res, out / 'viewer.html')}")
     if m.get("llm_calls", 0) > 0 and "llm_latency_median_s" in m:
         print(f"  LLM: {m['llm_calls']:.0f} calls, {m['llm_fallback_used']:.0f} fallbacks, "
               f"{m['llm_projected']:.0f} projected to keep, latency median {m['llm_latency_median_s']:.2f} s "
@@ -214,6 +218,25 @@ def _cmd_plot(args) -> int:
     res = RunResult.load(args.dir)
     out = _writable_file(args.out or Path(args.dir) / "trajectory.png", "--out")
     print(f"wrote {plot_run(res, out)}")
+    return 0
+
+
+def _cmd_view(args) -> int:
+    from swarmnav.sim import RunResult
+    from swarmnav.viz.viewer import write_viewer
+
+    d = Path(args.dir)
+    if not d.is_dir():
+        raise ConfigError(f"view: {d} is not a run directory (not a directory)")
+    res = RunResult.load(d)
+    out = _writable_file(args.out or d / "viewer.html", "--out")
+    path = write_viewer(res, out)
+    print(f"wrote {path} ({path.stat().st_size / 1e6:.2f} MB)")
+    if args.open:
+        import webbrowser
+
+        if not webbrowser.open(path.resolve().as_uri()):
+            print(f"swarmnav: no browser to open; open {path} yourself", file=sys.stderr)
     return 0
 
 
@@ -292,6 +315,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", required=True, metavar="DIR")
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="method parameter (repeatable); n=N resizes the swarm")
     s.add_argument("--plot", action="store_true", help="also draw DIR/trajectory.png")
+    s.add_argument("--view", action="store_true", help="also write DIR/viewer.html, the replay viewer")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_llm_flags(s)
     s.set_defaults(fn=_cmd_run)
@@ -300,6 +324,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("dir")
     s.add_argument("--out", metavar="PNG")
     s.set_defaults(fn=_cmd_plot)
+
+    s = sub.add_parser("view", help="write a run directory's replay viewer: one self-contained HTML page")
+    s.add_argument("dir")
+    s.add_argument("--out", metavar="HTML", help="default: DIR/viewer.html")
+    s.add_argument("--open", action="store_true", help="open it in the default web browser")
+    s.set_defaults(fn=_cmd_view)
 
     s = sub.add_parser("animate", help="render a run directory as .gif or .mp4")
     s.add_argument("dir")

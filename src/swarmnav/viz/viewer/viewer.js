@@ -1,0 +1,506 @@
+// swarmnav replay viewer: reads the run embedded in the page (#swarmnav-data) and draws it
+// top-down (2-D canvas) or in perspective (three.js r185 + OrbitControls, vendored and loaded
+// from blob URLs: nothing is fetched). window.swarmnav is the hook the tests drive.
+(() => {
+  'use strict';
+  const D = JSON.parse(document.getElementById('swarmnav-data').textContent);
+  const K = D.K, N = D.N, DIM = D.dim, DT = D.dt;
+  const $ = id => document.getElementById(id);
+  const stage = $('stage'), top = $('top'), persp = $('persp'), tip = $('tip'), scrub = $('scrub');
+  const chart = $('chart'), speedSel = $('speed'), viewSel = $('view'), playBtn = $('play');
+  const ctx = top.getContext('2d'), cctx = chart.getContext('2d');
+  const TRAIL_SECONDS = 3, TRAIL_POINTS = 12, BANDS = [0.12, 0.25, 0.45, 0.7];
+  const OBST_FACE = '#b3d9f2', OBST_EDGE = '#4d7ea8', GOAL = '#ffd400', SOLID = '#c5cad3', SOLID_EDGE = '#59606b';
+  const ROLE_NAMES = D.roles || null;
+
+  // ------------------------------------------------------------------ data
+  const TYPES = {uint8: Uint8Array, uint16: Uint16Array, float32: Float32Array};
+  function bytes(s) {
+    if (Uint8Array.fromBase64) return Uint8Array.fromBase64(s);
+    const bin = atob(s), u = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; i++) u[i] = bin.charCodeAt(i);
+    return u;
+  }
+  async function decode(b) {
+    const stream = new Blob([bytes(b.data)]).stream().pipeThrough(new DecompressionStream('gzip'));
+    const a = new TYPES[b.dtype](await new Response(stream).arrayBuffer());
+    if (b.delta) {  // uint16 differences along time: add them back up (Uint16Array wraps mod 2^16)
+      const row = a.length / b.shape[0];
+      for (let i = row; i < a.length; i++) a[i] += a[i - row];
+    }
+    return a;
+  }
+  function dequantise(codes, lo, hi) {
+    const out = new Float32Array(codes.length), L = D.quant.levels;
+    const scale = lo.map((l, j) => (hi[j] > l ? hi[j] - l : 1) / L);
+    for (let i = 0; i < codes.length; i += DIM)
+      for (let j = 0; j < DIM; j++) out[i + j] = lo[j] + codes[i + j] * scale[j];
+    return out;
+  }
+  let P, V, C, LAB, ROLE, MINC, NSUB;
+  async function load() {
+    const A = D.arrays, q = D.quant;
+    const [p, v, c, lab, minc, nsub, role] = await Promise.all(
+      ['positions', 'velocities', 'clearance', 'labels', 'min_clearance', 'n_subswarms', 'roles']
+        .map(k => A[k] ? decode(A[k]) : null));
+    P = dequantise(p, q.lo, q.hi);
+    V = dequantise(v, q.lo.map(() => -q.vmax), q.lo.map(() => q.vmax));
+    C = c; LAB = lab; MINC = minc; NSUB = nsub; ROLE = role;
+  }
+  const clearanceOf = (k, i) => {
+    const code = C[k * N + i];
+    if (code === D.quant.levels) return Infinity;
+    const [a, b] = D.quant.clearance;
+    return a + code * (b - a) / (D.quant.levels - 1);
+  };
+  const speedOf = (k, i) => { let s = 0; for (let j = 0; j < DIM; j++) s += V[(k * N + i) * DIM + j] ** 2; return Math.sqrt(s); };
+  const roleOf = (k, i) => ROLE ? ROLE_NAMES[ROLE[k * N + i]] : 'not recorded';
+  const colourOf = (k, i) => D.palette[LAB[k * N + i]];
+
+  // ------------------------------------------------------------------ state
+  let k = 0, kf = 0, playing = false, rate = 1, view = DIM === 3 ? 'persp' : 'top', showTrails = true;
+  let dirty = true, selected = -1, hovered = -1;
+  const stats = {frames: 0, draws: 0, drawMs: 0, readyMs: null, t0: performance.now()};
+  const fmt = (x, n = 2) => (x === null || x === undefined || !isFinite(x)) ? 'n/a' : x.toFixed(n);
+
+  // ------------------------------------------------------------------ top-down view
+  const T = {s: 1, ox: 0, oy: 0, dpr: 1, bg: null};
+  const lo = D.world.lo, hi = D.world.hi;
+  const X = x => T.ox + (x - lo[0]) * T.s, Y = y => T.oy + (hi[1] - y) * T.s;
+  const drawn = new Float32Array(N * 2);  // screen position of each agent as last drawn [css px]
+  function layoutTop() {
+    const w = stage.clientWidth, h = stage.clientHeight, dpr = window.devicePixelRatio || 1;
+    top.width = Math.max(1, Math.round(w * dpr)); top.height = Math.max(1, Math.round(h * dpr));
+    T.dpr = dpr;
+    const m = 24, wx = hi[0] - lo[0], wy = hi[1] - lo[1];
+    T.s = Math.min((w - 2 * m) / wx, (h - 2 * m) / wy);
+    T.ox = (w - wx * T.s) / 2; T.oy = (h - wy * T.s) / 2;
+    T.bg = document.createElement('canvas');
+    T.bg.width = top.width; T.bg.height = top.height;
+    const g = T.bg.getContext('2d');
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
+    g.strokeStyle = '#999'; g.lineWidth = 1; g.setLineDash(D.periodic ? [3, 3] : []);
+    g.strokeRect(X(lo[0]), Y(hi[1]), wx * T.s, wy * T.s); g.setLineDash([]);
+    for (const o of D.obstacles) {
+      if (o.shell) continue;  // walls, ground and ceiling of a 3-D world box: its outline says it
+      g.beginPath();
+      if (o.t === 'circle' || o.t === 'cylinder' || o.t === 'sphere') g.arc(X(o.c[0]), Y(o.c[1]), o.r * T.s, 0, 2 * Math.PI);
+      else o.v.forEach(([x, y], j) => j ? g.lineTo(X(x), Y(y)) : g.moveTo(X(x), Y(y)));
+      g.closePath();
+      g.globalAlpha = DIM === 3 ? 0.6 : 1; g.fillStyle = DIM === 3 ? SOLID : OBST_FACE; g.fill();
+      g.globalAlpha = 1; g.strokeStyle = DIM === 3 ? SOLID_EDGE : OBST_EDGE; g.lineWidth = 0.8; g.stroke();
+    }
+    star(g, X(D.goal[0]), Y(D.goal[1]), 9);
+    g.font = '11px system-ui, sans-serif'; g.fillStyle = '#555';
+    g.fillText(`${fmt(hi[0] - lo[0], 0)} m x ${fmt(hi[1] - lo[1], 0)} m` + (DIM === 3 ? ' (seen from above)' : ''), X(lo[0]), Y(lo[1]) + 14);
+    dirty = true;
+  }
+  function star(g, x, y, r) {
+    g.beginPath();
+    for (let j = 0; j < 10; j++) {
+      const a = -Math.PI / 2 + j * Math.PI / 5, rr = j % 2 ? r * 0.45 : r;
+      j ? g.lineTo(x + rr * Math.cos(a), y + rr * Math.sin(a)) : g.moveTo(x + rr * Math.cos(a), y + rr * Math.sin(a));
+    }
+    g.closePath(); g.fillStyle = GOAL; g.fill(); g.strokeStyle = '#000'; g.lineWidth = 1; g.stroke();
+  }
+  function trailSteps() {
+    const len = Math.min(k, Math.round(TRAIL_SECONDS / DT));
+    const stride = Math.max(1, Math.ceil(len / TRAIL_POINTS)), out = [];
+    for (let s = k; s >= k - len; s -= stride) out.push(s);
+    return out;  // newest first
+  }
+  function groups() {  // agents by colour index at step k (counting sort)
+    const n = D.palette.length, count = new Int32Array(n + 1), order = new Int32Array(N);
+    for (let i = 0; i < N; i++) count[LAB[k * N + i] + 1]++;
+    for (let c = 0; c < n; c++) count[c + 1] += count[c];
+    const at = count.slice();
+    for (let i = 0; i < N; i++) order[at[LAB[k * N + i]]++] = i;
+    return {count, order};
+  }
+  function drawTop() {
+    const w = top.width / T.dpr, h = top.height / T.dpr;
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.drawImage(T.bg, 0, 0);
+    ctx.setTransform(T.dpr, 0, 0, T.dpr, 0, 0);
+    const {count, order} = groups();
+    const half = D.periodic ? (hi[0] - lo[0]) / 2 : Infinity;
+    if (showTrails) {
+      const steps = trailSteps(), S = steps.length;
+      ctx.lineWidth = N > 200 ? 1 : 1.5;
+      for (let c = 0; c < D.palette.length; c++) {
+        if (count[c + 1] === count[c]) continue;
+        ctx.strokeStyle = D.palette[c];
+        for (let b = 0; b < BANDS.length; b++) {
+          const j0 = Math.floor((BANDS.length - 1 - b) * (S - 1) / BANDS.length);
+          const j1 = Math.floor((BANDS.length - b) * (S - 1) / BANDS.length);
+          if (j1 <= j0) continue;
+          ctx.globalAlpha = BANDS[b];
+          ctx.beginPath();
+          for (let q = count[c]; q < count[c + 1]; q++) {
+            const i = order[q];
+            for (let j = j0; j < j1; j++) {
+              const a = (steps[j] * N + i) * DIM, e = (steps[j + 1] * N + i) * DIM;
+              if (Math.abs(P[a] - P[e]) > half || Math.abs(P[a + 1] - P[e + 1]) > half) continue;  // a wrap, not a move
+              ctx.moveTo(X(P[a]), Y(P[a + 1])); ctx.lineTo(X(P[e]), Y(P[e + 1]));
+            }
+          }
+          ctx.stroke();
+        }
+      }
+      ctx.globalAlpha = 1;
+    }
+    const r = N > 300 ? 2.2 : N > 60 ? 3 : 4.5;
+    for (let c = 0; c < D.palette.length; c++) {
+      if (count[c + 1] === count[c]) continue;
+      ctx.beginPath();
+      for (let q = count[c]; q < count[c + 1]; q++) {
+        const i = order[q], a = (k * N + i) * DIM, x = X(P[a]), y = Y(P[a + 1]);
+        drawn[2 * i] = x; drawn[2 * i + 1] = y;
+        ctx.moveTo(x + r, y); ctx.arc(x, y, r, 0, 2 * Math.PI);
+      }
+      ctx.fillStyle = D.palette[c]; ctx.fill();
+    }
+    if (ROLE) {  // leader: thick black ring; subleaders: thin ring
+      for (const [code, width, rr] of [[1, 1.2, r + 2], [2, 2.2, r + 3.5]]) {
+        ctx.beginPath();
+        for (let i = 0; i < N; i++) if (ROLE[k * N + i] === code) { ctx.moveTo(drawn[2 * i] + rr, drawn[2 * i + 1]); ctx.arc(drawn[2 * i], drawn[2 * i + 1], rr, 0, 2 * Math.PI); }
+        ctx.strokeStyle = '#000'; ctx.lineWidth = width; ctx.stroke();
+      }
+    }
+    for (const [i, col] of [[hovered, '#888'], [selected, '#d00']]) {
+      if (i < 0) continue;
+      ctx.beginPath(); ctx.arc(drawn[2 * i], drawn[2 * i + 1], r + 6, 0, 2 * Math.PI);
+      ctx.strokeStyle = col; ctx.lineWidth = 2; ctx.stroke();
+    }
+  }
+  function pickTop(mx, my) {
+    let best = -1, bd = 100;  // within 10 px
+    for (let i = 0; i < N; i++) {
+      const d = (drawn[2 * i] - mx) ** 2 + (drawn[2 * i + 1] - my) ** 2;
+      if (d < bd) { bd = d; best = i; }
+    }
+    return best;
+  }
+
+  // ------------------------------------------------------------------ perspective view (three.js)
+  let G = null, gPromise = null;
+  function libSource(name) {
+    if (window.SWARMNAV_LIBS && window.SWARMNAV_LIBS[name]) return window.SWARMNAV_LIBS[name];
+    return $('lib-' + name).textContent;
+  }
+  async function loadThree() {
+    const url = s => URL.createObjectURL(new Blob([s], {type: 'text/javascript'}));
+    const core = url(libSource('core'));
+    const mod = libSource('three'), orbit = libSource('orbit');
+    if (!mod.includes('"./three.core.min.js"') || !orbit.includes("from 'three'")) throw new Error('swarmnav viewer: unexpected three.js import lines');
+    const three = url(mod.replaceAll('"./three.core.min.js"', JSON.stringify(core)));
+    const THREE = await import(three);
+    const {OrbitControls} = await import(url(orbit.replace("from 'three'", 'from ' + JSON.stringify(three))));
+    return {THREE, OrbitControls};
+  }
+  function initPersp() {
+    if (!gPromise) gPromise = loadThree().then(({THREE, OrbitControls}) => { G = buildScene(THREE, OrbitControls); dirty = true; return G; });
+    return gPromise;
+  }
+  function buildScene(THREE, OrbitControls) {
+    THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
+    const renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
+    renderer.setPixelRatio(window.devicePixelRatio || 1);
+    renderer.setClearColor(0xf4f6f8);
+    persp.appendChild(renderer.domElement);
+    const scene = new THREE.Scene();
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x8890a0, 2.2));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6); sun.position.set(-0.35, -0.55, 0.76); scene.add(sun);
+    const z0 = DIM === 3 ? lo[2] : 0, altitude = DIM === 3 ? null : D.altitude;
+    const zTop = DIM === 3 ? hi[2] : Math.max(D.slab_height, altitude + 2);
+    const ext = [hi[0] - lo[0], hi[1] - lo[1], zTop - z0], diag = Math.hypot(...ext);
+    const centre = new THREE.Vector3((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, DIM === 3 ? (z0 + zTop) / 2 : altitude / 2);
+    // ground and the world box outline
+    const ground = new THREE.Mesh(new THREE.PlaneGeometry(ext[0], ext[1]), new THREE.MeshLambertMaterial({color: 0xdde1e6}));
+    ground.position.set(centre.x, centre.y, z0 - 0.01); scene.add(ground);
+    const boxEdges = (a, b, color, opacity) => {
+      const geo = new THREE.EdgesGeometry(new THREE.BoxGeometry(b[0] - a[0], b[1] - a[1], b[2] - a[2]));
+      const l = new THREE.LineSegments(geo, new THREE.LineBasicMaterial({color, transparent: opacity < 1, opacity}));
+      l.position.set((a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2); return l;
+    };
+    if (DIM === 3) scene.add(boxEdges(lo, hi, 0x999999, 0.6));
+    // obstacles: a 3-D run's solids; a planar run's obstacles as light-grey slabs (HES Figure A1)
+    const solidMat = new THREE.MeshLambertMaterial({color: DIM === 3 ? SOLID : 0xd3d6db, transparent: DIM === 3, opacity: DIM === 3 ? 0.62 : 1, depthWrite: DIM !== 3});
+    const edgeMat = new THREE.LineBasicMaterial({color: SOLID_EDGE, transparent: true, opacity: 0.7});
+    const addSolid = (geo, x, y, z, rotX) => {
+      const m = new THREE.Mesh(geo, solidMat); if (rotX) m.rotation.x = Math.PI / 2; m.position.set(x, y, z); scene.add(m);
+      const e = new THREE.LineSegments(new THREE.EdgesGeometry(geo, 30), edgeMat); e.rotation.copy(m.rotation); e.position.copy(m.position); scene.add(e);
+    };
+    for (const o of D.obstacles) {
+      const [za, zb] = o.z || [0, D.slab_height];
+      if (o.shell) {
+        const a = [Math.max(o.v[0][0], lo[0]), Math.max(o.v[0][1], lo[1]), Math.max(za, lo[2])];
+        const b = [Math.min(o.v[2][0], hi[0]), Math.min(o.v[2][1], hi[1]), Math.min(zb, hi[2])];
+        scene.add(boxEdges(a, b, 0x59606b, 0.6)); continue;
+      }
+      if (o.t === 'sphere') addSolid(new THREE.SphereGeometry(o.r, 24, 12), o.c[0], o.c[1], o.c[2]);
+      else if (o.t === 'circle' || o.t === 'cylinder') addSolid(new THREE.CylinderGeometry(o.r, o.r, zb - za, 28), o.c[0], o.c[1], (za + zb) / 2, true);
+      else {
+        const shape = new THREE.Shape(o.v.map(([x, y]) => new THREE.Vector2(x, y)));
+        addSolid(new THREE.ExtrudeGeometry(shape, {depth: zb - za, bevelEnabled: false}), 0, 0, za);
+      }
+    }
+    // goal: a yellow star (with a drop line to the ground)
+    const gz = DIM === 3 ? D.goal[2] : altitude, rs = Math.max(0.8, 0.02 * Math.max(ext[0], ext[1]));
+    const starShape = new THREE.Shape();
+    for (let j = 0; j < 10; j++) {
+      const a = Math.PI / 2 + j * Math.PI / 5, rr = j % 2 ? rs * 0.45 : rs;
+      j ? starShape.lineTo(rr * Math.cos(a), rr * Math.sin(a)) : starShape.moveTo(rr * Math.cos(a), rr * Math.sin(a));
+    }
+    const starGeo = new THREE.ExtrudeGeometry(starShape, {depth: rs * 0.25, bevelEnabled: false});
+    const goal = new THREE.Mesh(starGeo, new THREE.MeshLambertMaterial({color: GOAL, emissive: 0x554400}));
+    goal.rotation.x = Math.PI / 2; goal.position.set(D.goal[0], D.goal[1], gz); scene.add(goal);
+    const gl = new THREE.LineSegments(new THREE.EdgesGeometry(starGeo), new THREE.LineBasicMaterial({color: 0x000000}));
+    gl.rotation.copy(goal.rotation); gl.position.copy(goal.position); scene.add(gl);
+    const drop = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(D.goal[0], D.goal[1], z0), new THREE.Vector3(D.goal[0], D.goal[1], gz)]);
+    const dropLine = new THREE.Line(drop, new THREE.LineDashedMaterial({color: 0x555555, dashSize: 0.5, gapSize: 0.4}));
+    dropLine.computeLineDistances(); scene.add(dropLine);
+    // agents: arrows along their heading, coloured by sub-swarm
+    const a = N > 300 ? Math.max(0.35, 0.006 * Math.max(ext[0], ext[1])) : Math.max(0.6, 0.014 * Math.max(ext[0], ext[1]));
+    const cone = new THREE.ConeGeometry(a * 0.38, a, 10); cone.rotateZ(-Math.PI / 2);  // along +x
+    const agents = new THREE.InstancedMesh(cone, new THREE.MeshLambertMaterial({color: 0xffffff}), N);
+    agents.instanceMatrix.setUsage(THREE.DynamicDrawUsage); scene.add(agents);
+    const ring = new THREE.Mesh(new THREE.TorusGeometry(a * 0.9, a * 0.09, 6, 24), new THREE.MeshBasicMaterial({color: 0x000000}));
+    ring.visible = false; scene.add(ring);
+    // trails: fading segments (RGBA vertex colours)
+    const maxSeg = N * TRAIL_POINTS;
+    const tPos = new Float32Array(maxSeg * 6), tCol = new Float32Array(maxSeg * 8);
+    const tGeo = new THREE.BufferGeometry();
+    tGeo.setAttribute('position', new THREE.BufferAttribute(tPos, 3).setUsage(THREE.DynamicDrawUsage));
+    tGeo.setAttribute('color', new THREE.BufferAttribute(tCol, 4).setUsage(THREE.DynamicDrawUsage));
+    const trails = new THREE.LineSegments(tGeo, new THREE.LineBasicMaterial({vertexColors: true, transparent: true, depthWrite: false}));
+    trails.frustumCulled = false; scene.add(trails);
+    const camera = new THREE.PerspectiveCamera(40, 1, Math.max(0.05, diag / 2000), diag * 20);
+    // the default camera of the matplotlib 3-D figures (elevation 35, azimuth -60 deg); a planar
+    // run from higher up (50 deg), to see between its slabs
+    const el = (DIM === 3 ? 35 : 50) * Math.PI / 180, az = -60 * Math.PI / 180, R = 0.4 * diag / Math.tan(20 * Math.PI / 180);
+    camera.position.set(centre.x + R * Math.cos(el) * Math.cos(az), centre.y + R * Math.cos(el) * Math.sin(az), centre.z + R * Math.sin(el));
+    const controls = new OrbitControls(camera, renderer.domElement);
+    controls.target.copy(centre); controls.update();
+    controls.addEventListener('change', () => { dirty = true; });
+    const heading = new Float32Array(N * 3); for (let i = 0; i < N; i++) heading[3 * i] = 1;
+    const palette = D.palette.map(c => new THREE.Color(c));
+    const g = {THREE, renderer, scene, camera, controls, agents, trails, tGeo, tPos, tCol, heading, palette, ring, altitude,
+               m: new THREE.Matrix4(), q: new THREE.Quaternion(), p: new THREE.Vector3(), s: new THREE.Vector3(1, 1, 1),
+               ux: new THREE.Vector3(1, 0, 0), u: new THREE.Vector3(), ray: new THREE.Raycaster(), ptr: new THREE.Vector2()};
+    layoutPersp(g);
+    return g;
+  }
+  function layoutPersp(g) {
+    const w = stage.clientWidth, h = stage.clientHeight;
+    g.renderer.setSize(w, h); g.camera.aspect = w / Math.max(h, 1); g.camera.updateProjectionMatrix(); dirty = true;
+  }
+  const zOf = (k, i) => DIM === 3 ? P[(k * N + i) * 3 + 2] : G.altitude;
+  function drawPersp() {
+    const g = G, {m, q, p, s, u, ux, heading} = g;
+    for (let i = 0; i < N; i++) {
+      const a = (k * N + i) * DIM;
+      let vx = V[a], vy = V[a + 1], vz = DIM === 3 ? V[a + 2] : 0;
+      const sp = Math.hypot(vx, vy, vz);
+      if (sp > 1e-6) { heading[3 * i] = vx / sp; heading[3 * i + 1] = vy / sp; heading[3 * i + 2] = vz / sp; }
+      u.set(heading[3 * i], heading[3 * i + 1], heading[3 * i + 2]);
+      q.setFromUnitVectors(ux, u);
+      p.set(P[a], P[a + 1], zOf(k, i));
+      g.agents.setMatrixAt(i, m.compose(p, q, s));
+      g.agents.setColorAt(i, g.palette[LAB[k * N + i]]);
+    }
+    g.agents.instanceMatrix.needsUpdate = true; if (g.agents.instanceColor) g.agents.instanceColor.needsUpdate = true;
+    let n = 0;
+    if (showTrails) {
+      const steps = trailSteps(), S = steps.length, half = D.periodic ? (hi[0] - lo[0]) / 2 : Infinity;
+      for (let i = 0; i < N; i++) {
+        const col = g.palette[LAB[k * N + i]];
+        for (let j = 0; j + 1 < S; j++) {
+          const a = (steps[j] * N + i) * DIM, e = (steps[j + 1] * N + i) * DIM;
+          if (Math.abs(P[a] - P[e]) > half || Math.abs(P[a + 1] - P[e + 1]) > half) continue;
+          const o = n * 6, c = n * 8, alpha = 0.75 * (1 - j / (S - 1));
+          g.tPos[o] = P[a]; g.tPos[o + 1] = P[a + 1]; g.tPos[o + 2] = zOf(steps[j], i);
+          g.tPos[o + 3] = P[e]; g.tPos[o + 4] = P[e + 1]; g.tPos[o + 5] = zOf(steps[j + 1], i);
+          for (const [off, al] of [[0, alpha], [4, 0.75 * (1 - (j + 1) / (S - 1))]]) {
+            g.tCol[c + off] = col.r; g.tCol[c + off + 1] = col.g; g.tCol[c + off + 2] = col.b; g.tCol[c + off + 3] = al;
+          }
+          n++;
+        }
+      }
+    }
+    g.tGeo.setDrawRange(0, 2 * n);
+    g.tGeo.attributes.position.needsUpdate = true; g.tGeo.attributes.color.needsUpdate = true;
+    const pick = selected >= 0 ? selected : hovered;
+    g.ring.visible = pick >= 0;
+    if (pick >= 0) { const a = (k * N + pick) * DIM; g.ring.position.set(P[a], P[a + 1], zOf(k, pick)); }
+    g.renderer.render(g.scene, g.camera);
+  }
+  function pickPersp(mx, my) {
+    const g = G; g.ptr.set(mx / stage.clientWidth * 2 - 1, -my / stage.clientHeight * 2 + 1);
+    g.ray.setFromCamera(g.ptr, g.camera);
+    const hit = g.ray.intersectObject(g.agents, false)[0];
+    return hit ? hit.instanceId : -1;
+  }
+
+  // ------------------------------------------------------------------ strip chart, timeline
+  const CH = {bg: null, pad: 8};
+  const xOfStep = s => CH.pad + (chart.clientWidth - 2 * CH.pad) * (K ? s / K : 0);
+  function layoutChart() {
+    const w = chart.clientWidth, h = chart.clientHeight, dpr = window.devicePixelRatio || 1;
+    chart.width = Math.round(w * dpr); chart.height = Math.round(h * dpr);
+    const bg = CH.bg = document.createElement('canvas'); bg.width = chart.width; bg.height = chart.height;
+    const g = bg.getContext('2d'); g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
+    const y0 = h - 14, y1 = 14;
+    let cmax = 2 * D.d_safe, cmin = 0;
+    for (let s = 0; s <= K; s++) if (isFinite(MINC[s])) { cmax = Math.max(cmax, MINC[s]); cmin = Math.min(cmin, MINC[s]); }
+    const yc = c => y0 - (c - cmin) / (cmax - cmin) * (y0 - y1);
+    let nmax = 1; for (let s = 0; s <= K; s++) nmax = Math.max(nmax, NSUB[s]);
+    const yn = n => y0 - n / (nmax + 1) * (y0 - y1);
+    g.strokeStyle = '#ddd'; g.lineWidth = 1; g.beginPath(); g.moveTo(xOfStep(0), y0); g.lineTo(xOfStep(K), y0); g.stroke();
+    g.strokeStyle = '#888'; g.setLineDash([5, 4]); g.beginPath(); g.moveTo(xOfStep(0), yc(D.d_safe)); g.lineTo(xOfStep(K), yc(D.d_safe)); g.stroke(); g.setLineDash([]);
+    g.strokeStyle = '#1f77b4'; g.lineWidth = 1.3; g.beginPath();
+    for (let s = 0; s <= K; s++) { const x = xOfStep(s), y = yn(NSUB[s]); s ? (g.lineTo(x, g._y ?? y), g.lineTo(x, y)) : g.moveTo(x, y); g._y = y; }
+    g.stroke();
+    g.strokeStyle = '#d62728'; g.lineWidth = 1.3; g.beginPath(); let pen = false;
+    for (let s = 0; s <= K; s++) { if (!isFinite(MINC[s])) { pen = false; continue; } const x = xOfStep(s), y = yc(MINC[s]); pen ? g.lineTo(x, y) : g.moveTo(x, y); pen = true; }
+    g.stroke();
+    g.font = '11px system-ui, sans-serif';
+    g.fillStyle = '#d62728'; g.fillText(`min clearance [m] (0 to ${fmt(cmax, 1)})`, CH.pad + 2, 11);
+    g.fillStyle = '#777'; g.fillText(`d_safe = ${D.d_safe} m`, CH.pad + 190, 11);
+    g.fillStyle = '#1f77b4'; g.fillText(`sub-swarms (0 to ${nmax + 1})`, CH.pad + 290, 11);
+    g.fillStyle = '#555'; g.fillText(`t = 0 to ${fmt(K * DT, 1)} s`, w - CH.pad - 110, h - 2);
+    if (!MINC.some(isFinite)) { g.fillStyle = '#999'; g.fillText('no obstacles: clearance is infinite', w / 2 - 80, h / 2); }
+  }
+  function drawChart() {
+    const dpr = window.devicePixelRatio || 1;
+    cctx.setTransform(1, 0, 0, 1, 0, 0); cctx.drawImage(CH.bg, 0, 0);
+    cctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    const x = xOfStep(k); cctx.strokeStyle = '#000'; cctx.lineWidth = 1; cctx.beginPath(); cctx.moveTo(x, 12); cctx.lineTo(x, chart.clientHeight - 12); cctx.stroke();
+  }
+  function marks() {
+    const box = $('marks');
+    for (const e of D.events) {
+      const b = document.createElement('button'), s = Math.min(e.step + 1, K);
+      b.className = e.action === 'split' ? 'split' : e.action === 'merge' ? 'merge' : 'other';
+      b.textContent = e.action === 'split' ? '\u25B2' : e.action === 'merge' ? '\u25C7' : '\u25CF';
+      b.style.left = (K ? 100 * s / K : 0) + '%';
+      b.title = `${e.action} at step ${e.step} (t = ${fmt(e.step * DT, 1)} s)` + (e.source ? `, ${e.source}` : '') + (e.reason ? `: ${e.reason}` : '');
+      b.addEventListener('click', () => { pause(); seek(s); });
+      box.appendChild(b);
+    }
+  }
+
+  // ------------------------------------------------------------------ controls, loop
+  function seek(s) { k = Math.max(0, Math.min(K, Math.round(s))); kf = k; scrub.value = k; dirty = true; return k; }
+  function play() { if (k >= K) seek(0); playing = true; playBtn.innerHTML = '&#10074;&#10074;'; }
+  function pause() { playing = false; playBtn.innerHTML = '&#9654;'; }
+  function setView(v) {
+    view = v; viewSel.value = v; top.hidden = v !== 'top'; persp.hidden = v !== 'persp'; dirty = true;
+    return v === 'persp' ? initPersp().then(() => { layoutPersp(G); render(); }) : Promise.resolve(render());
+  }
+  function render() {
+    const t = performance.now();
+    if (view === 'persp') { if (!G) return; drawPersp(); } else drawTop();
+    drawChart();
+    const tip = hovered >= 0 ? hovered : selected;
+    if (tip >= 0) showTip(tip);
+    $('clock').textContent = `step ${k} / ${K}   t = ${fmt(k * DT, 1)} s   sub-swarms ${NSUB[k]}`;
+    stats.draws++; stats.drawMs += performance.now() - t; dirty = false;
+  }
+  let lastT = null, tipXY = [0, 0];
+  function frame(t) {
+    stats.frames++;
+    if (playing) {
+      if (lastT !== null) { kf = Math.min(K, kf + rate * (t - lastT) / 1000 / DT); if (Math.floor(kf) !== k) { k = Math.floor(kf); scrub.value = k; dirty = true; } }
+      if (k >= K) pause();
+    }
+    lastT = t;
+    if (dirty) render();
+    requestAnimationFrame(frame);
+  }
+  function showTip(i) {
+    const c = clearanceOf(k, i), ids = D.label_ids[LAB[k * N + i]];
+    tip.textContent = `agent ${i}\nrole: ${roleOf(k, i)}\nsub-swarm: ${ids}\nspeed: ${fmt(speedOf(k, i))} m/s\nclearance: ${isFinite(c) ? fmt(c) + ' m' : 'no obstacle'}`;
+    tip.hidden = false; tip.style.left = (tipXY[0] + 14) + 'px'; tip.style.top = (tipXY[1] + 10) + 'px';
+  }
+  const pick = (x, y) => view === 'persp' ? (G ? pickPersp(x, y) : -1) : pickTop(x, y);
+  stage.addEventListener('mousemove', ev => {
+    const r = stage.getBoundingClientRect(); tipXY = [ev.clientX - r.left, ev.clientY - r.top];
+    const i = pick(tipXY[0], tipXY[1]);
+    if (i !== hovered) { hovered = i; dirty = true; if (i < 0 && selected < 0) tip.hidden = true; }
+  });
+  stage.addEventListener('click', ev => {
+    const r = stage.getBoundingClientRect(); tipXY = [ev.clientX - r.left, ev.clientY - r.top];
+    selected = pick(tipXY[0], tipXY[1]); if (selected < 0) tip.hidden = true; dirty = true;
+  });
+  playBtn.addEventListener('click', () => playing ? pause() : play());
+  $('back').addEventListener('click', () => { pause(); seek(k - 1); });
+  $('fwd').addEventListener('click', () => { pause(); seek(k + 1); });
+  scrub.addEventListener('input', () => { pause(); seek(+scrub.value); });
+  chart.addEventListener('click', ev => { pause(); const r = chart.getBoundingClientRect(); seek((ev.clientX - r.left - CH.pad) / (r.width - 2 * CH.pad) * K); });
+  viewSel.addEventListener('change', () => setView(viewSel.value));
+  $('trails').addEventListener('change', ev => { showTrails = ev.target.checked; dirty = true; });
+  const RATES = [0.25, 0.5, 1, 2, 5, 10, 20, 50, 100];
+  for (const x of RATES) speedSel.add(new Option(`${x}x`, x));
+  speedSel.addEventListener('change', () => { rate = +speedSel.value; });
+  document.addEventListener('keydown', ev => {
+    if (ev.target.tagName === 'SELECT') return;
+    const n = ev.shiftKey ? 10 : 1;
+    if (ev.key === ' ') { ev.preventDefault(); playing ? pause() : play(); }
+    else if (ev.key === 'ArrowRight') { ev.preventDefault(); pause(); seek(k + n); }
+    else if (ev.key === 'ArrowLeft') { ev.preventDefault(); pause(); seek(k - n); }
+    else if (ev.key === 'Home') { pause(); seek(0); }
+    else if (ev.key === 'End') { pause(); seek(K); }
+  });
+  new ResizeObserver(() => { layoutTop(); layoutChart(); if (G) layoutPersp(G); dirty = true; }).observe(document.body);
+
+  function legend() {
+    const parts = [];
+    if (D.palette.length <= 8) D.palette.forEach((c, j) => parts.push(`<span class="sw" style="background:${c}"></span>sub-swarm ${D.label_ids[j]}`));
+    if (ROLE) parts.push('<span class="sw" style="border:2px solid #000"></span>leader (thick ring), subleader (ring)');
+    $('legend').innerHTML = parts.join(' ');
+    const m = D.metrics;
+    $('summary').textContent = `N = ${N}, K = ${K}, dt = ${DT} s` + ('Y' in m ? `  ·  Y = ${fmt(m.Y, 0)}  R_goal = ${fmt(m.R_goal)}  E_mean = ${fmt(m.E_mean)} m  R_unsafe = ${fmt(m.R_unsafe, 3)}` : '') +
+      `  ·  positions within ${fmt(D.quant.error * 1000, 2)} mm`;
+  }
+
+  // ------------------------------------------------------------------ the hook the tests drive
+  const ready = (async () => {
+    await load();
+    scrub.max = K;
+    const target = Math.max(1, K * DT / 20);  // the whole run in about 20 s
+    rate = RATES.reduce((b, x) => Math.abs(Math.log(x / target)) < Math.abs(Math.log(b / target)) ? x : b);
+    speedSel.value = rate;
+    legend(); marks(); layoutTop(); layoutChart();
+    await setView(view);
+    stats.readyMs = performance.now();
+    requestAnimationFrame(frame);
+    return true;
+  })();
+  ready.catch(e => console.error('swarmnav viewer:', e));
+  window.swarmnav = {
+    ready, data: D,
+    /** Go to step s (clamped to 0..K) and draw it; returns the step shown. */
+    seek(s) { pause(); seek(s); render(); return k; },
+    step: () => k,
+    play(x) { if (x) rate = x; play(); }, pause,
+    view: v => v ? setView(v).then(() => view) : view,
+    /** The agents' positions as drawn at the current step [m]: top-down, read back from the
+     * canvas coordinates; perspective, from the arrows' instance matrices (z included). */
+    positions() {
+      if (view === 'top') {
+        const out = [];
+        for (let i = 0; i < N; i++) out.push([(drawn[2 * i] - T.ox) / T.s + lo[0], hi[1] - (drawn[2 * i + 1] - T.oy) / T.s]);
+        return out;
+      }
+      const out = [], e = G.m.elements;
+      for (let i = 0; i < N; i++) { G.agents.getMatrixAt(i, G.m); out.push([e[12], e[13], e[14]]); }
+      return out;
+    },
+    /** What the tooltip says of agent i at the current step. */
+    agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i)}),
+    stats: () => ({...stats, playing}),
+  };
+})();
