@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import os
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -88,8 +90,18 @@ class RunResult:
                 arrays = {k: z[k] for k in z.files}
         except FileNotFoundError as e:
             raise SwarmnavError(f"{d}: not a run directory (missing {Path(e.filename).name})") from None
-        except (json.JSONDecodeError, ValueError, OSError) as e:
+        except (json.JSONDecodeError, ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error) as e:
+            # a truncated or damaged trajectory.npz is bad input, not a bug: one line
             raise SwarmnavError(f"{d}: unreadable run directory: {e}") from None
+        missing = [k for k in ("positions", "velocities", "clearance", "labels") if k not in arrays]
+        if missing:
+            raise SwarmnavError(f"{d}: trajectory.npz lacks {', '.join(missing)}")
+        P = arrays["positions"]
+        if P.ndim != 3 or P.shape[0] < 1 or P.shape[2] not in (2, 3) or arrays["velocities"].shape != P.shape \
+                or arrays["clearance"].shape != P.shape[:2] or arrays["labels"].shape != P.shape[:2]:
+            raise SwarmnavError(f"{d}: trajectory.npz arrays disagree in shape (positions {P.shape}, velocities "
+                                f"{arrays['velocities'].shape}, clearance {arrays['clearance'].shape}, labels "
+                                f"{arrays['labels'].shape})")
         events = []
         ev = d / "events.jsonl"
         if ev.exists():
