@@ -209,7 +209,8 @@ def _episode(env: SwarmParallelEnv, policy: Any, seed: int, label: str) -> RunRe
     events: list[dict] = []
     k = 0
     while env.agents:
-        obs, rew, _, _, infos = env.step(act(obs))
+        live = {a: obs[a] for a in env.agents}  # the step's observations include the just-arrived
+        obs, rew, _, _, infos = env.step(act(live))
         k += 1
         P[k], V[k] = env.positions, env.velocities
         for a, r in rew.items():

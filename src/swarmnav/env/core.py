@@ -24,8 +24,11 @@ Reward of agent i for a step (every weight an option)::
 
     r_i = w_progress (|g - p_i(k)| - |g - p_i(k + 1)|)        progress to the goal [m]
         + w_goal      [arrived at this step]
-        - w_contact   ([clearance_i < body_radius] + [min_j |p_i - p_j| < 2 body_radius])
-        - w_unsafe    [clearance_i < d_safe]
+        - w_contact dt ([clearance_i < body_radius] + [min_j |p_i - p_j| < 2 body_radius])
+        - w_unsafe dt  [clearance_i < d_safe]
+
+The penalties are rates [1/s] times the step dt, so an episode's return does not depend on dt
+(the progress term does not either: it sums to the distance gained).
 
 Arrived agents (within ``goal_radius`` of the goal) are terminated and hover where they are
 (velocity 0, actions ignored); they stay in the world as obstacles to the others' neighbour
@@ -229,7 +232,7 @@ class SwarmCore:
         agent = near < (2.0 * o.body_radius) ** 2
         unsafe = clr < o.d_safe
         reward = (o.w_progress * (dist0 - dist1) + o.w_goal * now
-                  - o.w_contact * (obst.astype(np.float64) + agent) - o.w_unsafe * unsafe)
+                  - o.dt * (o.w_contact * (obst.astype(np.float64) + agent) + o.w_unsafe * unsafe))
         reward = np.where(arrived, 0.0, reward)
         out = StepOutcome(reward, arrived | now, clr, obst, agent, unsafe, dist1)
         return p1, v1, out, idx

@@ -48,9 +48,11 @@ class EnvOptions:
         "contact: clearance below it, or another agent nearer than twice it")
     w_progress: float = param(1.0, "1/m", "[0, inf)", "ours", "reward per metre of progress to the goal")
     w_goal: float = param(10.0, "", "[0, inf)", "ours", "reward on arrival in the goal region")
-    w_contact: float = param(5.0, "", "[0, inf)", "ours",
-        "penalty per step in contact with an obstacle, and again with another agent")
-    w_unsafe: float = param(0.1, "", "[0, inf)", "ours", "penalty per step with clearance below d_safe")
+    w_contact: float = param(50.0, "1/s", "[0, inf)", "ours",
+        "penalty rate in contact with an obstacle, and again with another agent (x dt per step: "
+        "5 per 0.1 s step)")
+    w_unsafe: float = param(1.0, "1/s", "[0, inf)", "ours",
+        "penalty rate with clearance below d_safe (x dt per step: 0.1 per 0.1 s step)")
 
     @property
     def max_steps(self) -> int:
