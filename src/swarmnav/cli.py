@@ -216,6 +216,14 @@ def _cmd_plot(args) -> int:
     from swarmnav.viz import plot_run
 
     res = RunResult.load(args.dir)
+    if args.perspective:
+        from swarmnav.viz.perspective import plot_perspective
+
+        out = _writable_file(args.out or Path(args.dir) / "perspective.png", "--out")
+        print(f"wrote {plot_perspective(res, out, step=args.step)}")
+        return 0
+    if args.step is not None:
+        raise ConfigError("plot: --step applies to --perspective only")
     out = _writable_file(args.out or Path(args.dir) / "trajectory.png", "--out")
     print(f"wrote {plot_run(res, out)}")
     return 0
@@ -323,6 +331,10 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("plot", help="draw a run directory like HES Figure 3")
     s.add_argument("dir")
     s.add_argument("--out", metavar="PNG")
+    s.add_argument("--perspective", action="store_true",
+                   help="one step in perspective (HES Fig. A1: arrows at z = 10 m for a planar run); "
+                        "default file DIR/perspective.png")
+    s.add_argument("--step", type=int, help="the step --perspective draws (default: the middle of the run)")
     s.set_defaults(fn=_cmd_plot)
 
     s = sub.add_parser("view", help="write a run directory's replay viewer: one self-contained HTML page")

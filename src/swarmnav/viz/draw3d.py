@@ -221,15 +221,17 @@ def set_bounds(ax: Axes3D, lo, hi) -> None:
 
 
 def panel_figure(scenario: Scenario, width: float = 9.0, top: float = 1.0, below: float = 0.0,
-                 max_height: float = 7.0) -> tuple[Figure, Axes3D]:
+                 max_height: float = 7.0, camera: tuple[float, float] = CAMERA) -> tuple[Figure, Axes3D]:
     """A figure ``width`` [in] wide holding a 3-D panel of ``scenario``'s box: ``top`` [in] above
-    it for titles and legends, ``below`` [in] under it for other panels (left to the caller).
+    it for titles and legends, ``below`` [in] under it for other panels (left to the caller),
+    seen from ``camera`` = (elevation, azimuth) [deg].
 
     The figure's height follows the box's shape on screen, so a long flat world gets a wide
     low panel and a tower a tall one (at most ``max_height`` [in]).
     """
     fig = Figure(figsize=(width, 4.0))  # height set once the panel's shape is known
     ax = new_axes(fig)
+    ax.view_init(elev=camera[0], azim=camera[1])
     set_bounds(ax, scenario.lower, scenario.upper)
     left, right, bottom, margin_top = MARGINS
     pw = width - left - right
