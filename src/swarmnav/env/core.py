@@ -94,6 +94,96 @@ def knn_kernel(pos, k, out_idx, out_d2, nearest_d2):
             nearest_d2[b, i] = best
 
 
+@njit(cache=True)
+def observe_kernel(ring, pool, inv_range, pos, vel, goal, idx, out):
+    """Fill ``out`` (B, N, obs_dim) float32 with the observation of every agent of every copy
+    (layout in the module docstring) in one pass.
+
+    Args:
+        ring: (B N, R pool) LiDAR ranges [m], agent i of copy b in row b N + i.
+        pool: rays pooled (by the minimum) into one observed ray.
+        inv_range: 1 / lidar_range [1/m].
+        pos, vel: (B, N, d) state [m], [m/s]; goal: (d,) [m].
+        idx: (B, N, k) neighbour indices, -1 in padding slots.
+    """
+    B, N, d = pos.shape
+    R = ring.shape[1] // pool
+    k = idx.shape[2]
+    for b in range(B):
+        for i in range(N):
+            m = b * N + i
+            for j in range(R):
+                v = ring[m, j * pool]
+                for q in range(1, pool):
+                    w = ring[m, j * pool + q]
+                    if w < v:
+                        v = w
+                out[b, i, j] = v * inv_range
+            c = R
+            for e in range(d):
+                out[b, i, c + e] = vel[b, i, e]
+                out[b, i, c + d + e] = goal[e] - pos[b, i, e]
+            c += 2 * d
+            for s in range(k):
+                j = idx[b, i, s]
+                for e in range(d):
+                    if j >= 0:
+                        out[b, i, c + s * d + e] = pos[b, j, e] - pos[b, i, e]
+                        out[b, i, c + k * d + s * d + e] = vel[b, j, e] - vel[b, i, e]
+                    else:
+                        out[b, i, c + s * d + e] = 0.0
+                        out[b, i, c + k * d + s * d + e] = 0.0
+                out[b, i, c + 2 * k * d + s] = 1.0 if j >= 0 else 0.0
+
+
+@njit(cache=True)
+def score_kernel(p0, p1, arrived, clr, near_d2, goal, goal_radius, body_radius, d_safe, w_progress, w_goal,
+                 w_contact_dt, w_unsafe_dt, reward, arrived_out, obst, agent, unsafe, dist1):
+    """The reward and the simulator's checks of every agent after a step (module docstring):
+    (B, N) outputs from the states before (p0) and after (p1) [m], the clearance [m] and the
+    squared distance to the nearest other agent [m^2] after the step."""
+    B, N, d = p0.shape
+    contact2 = (2.0 * body_radius) ** 2
+    for b in range(B):
+        for i in range(N):
+            s0 = 0.0
+            s1 = 0.0
+            for e in range(d):
+                t0 = p0[b, i, e] - goal[e]
+                t1 = p1[b, i, e] - goal[e]
+                s0 += t0 * t0
+                s1 += t1 * t1
+            d0 = np.sqrt(s0)
+            d1 = np.sqrt(s1)
+            now = d1 <= goal_radius
+            o = clr[b, i] < body_radius
+            a = near_d2[b, i] < contact2
+            u = clr[b, i] < d_safe
+            dist1[b, i] = d1
+            obst[b, i] = o
+            agent[b, i] = a
+            unsafe[b, i] = u
+            arrived_out[b, i] = arrived[b, i] or now
+            if arrived[b, i]:
+                reward[b, i] = 0.0
+            else:
+                reward[b, i] = (w_progress * (d0 - d1) + (w_goal if now else 0.0)
+                                - w_contact_dt * ((1.0 if o else 0.0) + (1.0 if a else 0.0))
+                                - w_unsafe_dt * (1.0 if u else 0.0))
+
+
+@njit(cache=True)
+def hold_kernel(p0, p1, v1, arrived):
+    """Arrived agents hover: their position stays ``p0`` and their velocity is 0 (in place)."""
+    B, N, d = p0.shape
+    for b in range(B):
+        for i in range(N):
+            if arrived[b, i]:
+                for e in range(d):
+                    p1[b, i, e] = p0[b, i, e]
+                    v1[b, i, e] = 0.0
+
+
 @dataclass(frozen=True, slots=True)
 class StepOutcome:
     """What one step of B copies produced, (B, N) arrays unless said otherwise."""
@@ -181,21 +271,14 @@ class SwarmCore:
 
     def observe(self, pos: np.ndarray, vel: np.ndarray, idx: np.ndarray | None = None) -> np.ndarray:
         """(B, N, obs_dim) float32 observations of state (pos, vel), (B, N, d) each."""
-        o = self.options
-        B, N, d = pos.shape
+        B, N, _ = pos.shape
         if idx is None:
             idx = self.neighbours(pos)[0]
-        ring = self.lidar(pos)
-        pooled = ring.reshape(B, N, o.n_rays, self._pool).min(axis=3) * (1.0 / o.lidar_range)
-        k = o.k_neighbors
-        valid = idx >= 0
-        safe = np.where(valid, idx, 0)
-        b = np.arange(B)[:, None, None]
-        rel_p = (pos[b, safe] - pos[:, :, None, :]) * valid[..., None]  # (B, N, k, d)
-        rel_v = (vel[b, safe] - vel[:, :, None, :]) * valid[..., None]
-        parts = [pooled, vel, self.goal - pos, rel_p.reshape(B, N, k * d), rel_v.reshape(B, N, k * d),
-                 valid.astype(np.float64)]
-        return np.concatenate(parts, axis=2).astype(np.float32)
+        ring = self.lidar(pos).reshape(B * N, -1)
+        out = np.empty((B, N, self.obs_dim), dtype=np.float32)
+        observe_kernel(ring, self._pool, 1.0 / self.options.lidar_range, np.ascontiguousarray(pos),
+                       np.ascontiguousarray(vel), self.goal, idx, out)
+        return out
 
     # ------------------------------------------------------------------ one step
     def step(self, pos: np.ndarray, vel: np.ndarray, arrived: np.ndarray, action: np.ndarray
@@ -215,24 +298,15 @@ class SwarmCore:
         o = self.options
         B, N, d = pos.shape
         a = clip_norm(action.reshape(B * N, d).astype(np.float64, copy=False), 1.0) * o.a_max
-        p0 = pos.reshape(B * N, d)
-        v0 = vel.reshape(B * N, d)
-        p1, v1 = self._dyn.step(p0, v0, a, o.dt)
-        p1 = p1.reshape(B, N, d)
-        v1 = v1.reshape(B, N, d)
-        hold = arrived[..., None]
-        p1 = np.where(hold, pos, p1)
-        v1 = np.where(hold, 0.0, v1)
-        dist0 = np.linalg.norm(pos - self.goal, axis=2)
-        dist1 = np.linalg.norm(p1 - self.goal, axis=2)
-        now = dist1 <= o.goal_radius
+        p1, v1 = self._dyn.step(pos.reshape(B * N, d), vel.reshape(B * N, d), a, o.dt)
+        p1 = np.ascontiguousarray(p1.reshape(B, N, d))
+        v1 = np.ascontiguousarray(v1.reshape(B, N, d))
+        hold_kernel(pos, p1, v1, arrived)
         clr = self.clearance(p1)
         idx, _, near = self.neighbours(p1)
-        obst = clr < o.body_radius
-        agent = near < (2.0 * o.body_radius) ** 2
-        unsafe = clr < o.d_safe
-        reward = (o.w_progress * (dist0 - dist1) + o.w_goal * now
-                  - o.dt * (o.w_contact * (obst.astype(np.float64) + agent) + o.w_unsafe * unsafe))
-        reward = np.where(arrived, 0.0, reward)
-        out = StepOutcome(reward, arrived | now, clr, obst, agent, unsafe, dist1)
+        out = StepOutcome(np.empty((B, N)), np.empty((B, N), bool), clr, np.empty((B, N), bool),
+                          np.empty((B, N), bool), np.empty((B, N), bool), np.empty((B, N)))
+        score_kernel(pos, p1, arrived, clr, near, self.goal, o.goal_radius, o.body_radius, o.d_safe,
+                     o.w_progress, o.w_goal, o.w_contact * o.dt, o.w_unsafe * o.dt, out.reward, out.arrived,
+                     out.obstacle_contact, out.agent_contact, out.unsafe, out.distance_to_goal)
         return p1, v1, out, idx
