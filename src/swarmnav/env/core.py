@@ -32,7 +32,9 @@ The penalties are rates [1/s] times the step dt, so an episode's return does not
 
 Arrived agents (within ``goal_radius`` of the goal) are terminated and hover where they are
 (velocity 0, actions ignored); they stay in the world as obstacles to the others' neighbour
-and contact checks, as a parked UAV would. Like the simulator, the world does not stop an agent
+and contact checks, as a parked UAV would. With ``terminate_at_goal=False`` nobody is
+terminated: every agent acts until the step limit and is scored at its last state, the
+protocol of ``swarmnav run`` (the arrival bonus is paid once, the other terms every step). Like the simulator, the world does not stop an agent
 at an obstacle: contacts are counted and penalised, not resolved.
 """
 
@@ -137,11 +139,13 @@ def observe_kernel(ring, pool, inv_range, pos, vel, goal, idx, out):
 
 
 @njit(cache=True)
-def score_kernel(p0, p1, arrived, clr, near_d2, goal, goal_radius, body_radius, d_safe, w_progress, w_goal,
-                 w_contact_dt, w_unsafe_dt, reward, arrived_out, obst, agent, unsafe, dist1):
+def score_kernel(p0, p1, arrived, hover, clr, near_d2, goal, goal_radius, body_radius, d_safe, w_progress,
+                 w_goal, w_contact_dt, w_unsafe_dt, reward, arrived_out, obst, agent, unsafe, dist1):
     """The reward and the simulator's checks of every agent after a step (module docstring):
     (B, N) outputs from the states before (p0) and after (p1) [m], the clearance [m] and the
-    squared distance to the nearest other agent [m^2] after the step."""
+    squared distance to the nearest other agent [m^2] after the step. ``arrived`` flags the
+    agents that had arrived before the step: with ``hover`` they score 0, without it they go on
+    scoring (the arrival bonus only once)."""
     B, N, d = p0.shape
     contact2 = (2.0 * body_radius) ** 2
     for b in range(B):
@@ -164,10 +168,10 @@ def score_kernel(p0, p1, arrived, clr, near_d2, goal, goal_radius, body_radius, 
             agent[b, i] = a
             unsafe[b, i] = u
             arrived_out[b, i] = arrived[b, i] or now
-            if arrived[b, i]:
+            if arrived[b, i] and hover:
                 reward[b, i] = 0.0
             else:
-                reward[b, i] = (w_progress * (d0 - d1) + (w_goal if now else 0.0)
+                reward[b, i] = (w_progress * (d0 - d1) + (w_goal if now and not arrived[b, i] else 0.0)
                                 - w_contact_dt * ((1.0 if o else 0.0) + (1.0 if a else 0.0))
                                 - w_unsafe_dt * (1.0 if u else 0.0))
 
@@ -287,7 +291,8 @@ class SwarmCore:
 
         Args:
             pos, vel: (B, N, d) state [m], [m/s].
-            arrived: (B, N) bool, agents already in the goal region (they hover: unchanged).
+            arrived: (B, N) bool, agents that have arrived in the goal region (with
+                ``terminate_at_goal`` they hover: unchanged).
             action: (B, N, d) finite normalised accelerations; a row of norm above 1 is scaled
                 to norm 1 (the commanded acceleration is ``a_max`` times the row).
 
@@ -301,12 +306,13 @@ class SwarmCore:
         p1, v1 = self._dyn.step(pos.reshape(B * N, d), vel.reshape(B * N, d), a, o.dt)
         p1 = np.ascontiguousarray(p1.reshape(B, N, d))
         v1 = np.ascontiguousarray(v1.reshape(B, N, d))
-        hold_kernel(pos, p1, v1, arrived)
+        if o.terminate_at_goal:
+            hold_kernel(pos, p1, v1, arrived)
         clr = self.clearance(p1)
         idx, _, near = self.neighbours(p1)
         out = StepOutcome(np.empty((B, N)), np.empty((B, N), bool), clr, np.empty((B, N), bool),
                           np.empty((B, N), bool), np.empty((B, N), bool), np.empty((B, N)))
-        score_kernel(pos, p1, arrived, clr, near, self.goal, o.goal_radius, o.body_radius, o.d_safe,
-                     o.w_progress, o.w_goal, o.w_contact * o.dt, o.w_unsafe * o.dt, out.reward, out.arrived,
+        score_kernel(pos, p1, arrived, o.terminate_at_goal, clr, near, self.goal, o.goal_radius, o.body_radius,
+                     o.d_safe, o.w_progress, o.w_goal, o.w_contact * o.dt, o.w_unsafe * o.dt, out.reward, out.arrived,
                      out.obstacle_contact, out.agent_contact, out.unsafe, out.distance_to_goal)
         return p1, v1, out, idx

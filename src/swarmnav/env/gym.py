@@ -58,8 +58,9 @@ class SwarmEnv(gymnasium.Env):
     environment's per-agent observations stacked; action (N, d) in [-1, 1], one normalised
     acceleration per agent (a row of norm above 1 is scaled to 1).
 
-    The reward is the mean over the N agents of their rewards (arrived agents contribute 0);
-    ``terminated`` when every agent has arrived, ``truncated`` at the step limit. ``info``
+    The reward is the mean over the N agents of their rewards (hovering arrived agents
+    contribute 0); ``terminated`` when every agent has arrived (never with
+    ``terminate_at_goal=False``), ``truncated`` at the step limit. ``info``
     holds (N,) arrays: the per-agent rewards and the simulator's checks (:data:`INFO_KEYS`).
     """
 
@@ -99,7 +100,7 @@ class SwarmEnv(gymnasium.Env):
         self._k += 1
         obs = c.observe(self._pos, self._vel, idx)[0]
         info = {k: v[0] for k, v in _infos(out).items()}
-        return (obs, float(out.reward[0].mean()), bool(out.arrived[0].all()),
+        return (obs, float(out.reward[0].mean()), bool(out.arrived[0].all() and c.options.terminate_at_goal),
                 self._k >= c.options.max_steps, info)
 
     @property
@@ -180,7 +181,7 @@ class SwarmVectorEnv(VectorEnv):
         self._arrived = out.arrived
         self._k += 1
         reward = out.reward.mean(axis=1)
-        terminated = out.arrived.all(axis=1)
+        terminated = out.arrived.all(axis=1) & c.options.terminate_at_goal
         truncated = self._k >= c.options.max_steps
         reset = np.flatnonzero(self._autoreset)
         if len(reset):  # copies that ended last step start anew: their step above is discarded

@@ -43,6 +43,9 @@ class EnvOptions:
     # ------------------------------------------------------------------ episode and reward
     goal_radius: float = param(_M.r_succ, "m", "(0, inf)", "HES Section 5.1 (r_succ)",
         "an agent within this distance of the goal has arrived: terminated, it hovers there")
+    terminate_at_goal: bool = param(True, "", None, "ours",
+        "true: an arrived agent is terminated and hovers; false: every agent flies to the step "
+        "limit, as swarmnav run scores a run")
     d_safe: float = param(_M.d_safe, "m", "[0, inf)", "HES Table A1", "unsafe obstacle clearance")
     body_radius: float = param(_M.body_radius, "m", "[0, inf)", "ours (as docs/metrics.md)",
         "contact: clearance below it, or another agent nearer than twice it")

@@ -80,8 +80,8 @@ class SwarmParallelEnv(ParallelEnv):
     Observation and action spaces are the same for every agent: ``Box(obs_dim,)`` float32 (see
     :mod:`swarmnav.env.core`) and ``Box(-1, 1, (d,))`` float64, a normalised acceleration (a
     row of norm above 1 is scaled to norm 1: out-of-bound actions are clipped, never rejected).
-    An agent is terminated when it reaches the goal region; every live agent is truncated at
-    the step limit round(horizon / dt).
+    An agent is terminated when it reaches the goal region (unless ``terminate_at_goal=False``);
+    every live agent is truncated at the step limit round(horizon / dt).
 
     Beyond the PettingZoo API, the full state is readable (the privileged path of the
     baselines): ``positions``, ``velocities`` (N, d), ``arrived`` (N,), ``step_count``,
@@ -133,7 +133,8 @@ class SwarmParallelEnv(ParallelEnv):
         self._vel = np.zeros_like(self._pos)
         self._arrived = np.linalg.norm(self._pos - c.goal, axis=2) <= c.options.goal_radius
         self._k = 0
-        self.agents = [a for a, done in zip(self.possible_agents, self._arrived[0]) if not done]
+        hover = self._arrived[0] & c.options.terminate_at_goal
+        self.agents = [a for a, done in zip(self.possible_agents, hover) if not done]
         obs = c.observe(self._pos, self._vel)
         out = initial_outcome(c, self._pos, self._arrived)
         return ({a: obs[0, self._index[a]] for a in self.agents},
@@ -162,14 +163,15 @@ class SwarmParallelEnv(ParallelEnv):
         truncated = self._k >= c.options.max_steps
         obs = c.observe(self._pos, self._vel, idx)
         acting = self.agents
+        done = out.arrived[0] & c.options.terminate_at_goal
         res = (
             {a: obs[0, self._index[a]] for a in acting},
             {a: float(out.reward[0, self._index[a]]) for a in acting},
-            {a: bool(out.arrived[0, self._index[a]]) for a in acting},
+            {a: bool(done[self._index[a]]) for a in acting},
             dict.fromkeys(acting, truncated),
             {a: agent_info(out, 0, self._index[a]) for a in acting},
         )
-        self.agents = [] if truncated else [a for a in acting if not out.arrived[0, self._index[a]]]
+        self.agents = [] if truncated else [a for a in acting if not done[self._index[a]]]
         return res
 
     def state(self) -> np.ndarray:
