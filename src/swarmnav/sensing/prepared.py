@@ -13,11 +13,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, segments_blocked_kernel
-from swarmnav.sensing._kernels3d import geom_arrays3d, range_scan_kernel, segments_blocked3d_kernel
+from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, nearest_kernel, segments_blocked_kernel
+from swarmnav.sensing._kernels3d import geom_arrays3d, nearest3d_kernel, range_scan_kernel, segments_blocked3d_kernel
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
+
+
+_NO_DIR = np.zeros((0, 2))
+_NO_DIR3 = np.zeros((0, 3))
 
 
 class PreparedGeometry:
@@ -54,6 +58,15 @@ class PreparedGeometry:
             segments_blocked3d_kernel(*self._arrays3d, p, q, out)
             return out
         segments_blocked_kernel(*self._arrays, p, q, out)
+        return out
+
+    def distance_into(self, points: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out`` (M,) float64 <- the signed distance [m] of every point (M, d) to the obstacles, as
+        :func:`swarmnav.sensing.signed_distance` (either dimension; the geometry must not be empty)."""
+        if self._arrays3d is not None:
+            nearest3d_kernel(*self._arrays3d, points, out, _NO_DIR3, False)
+        else:
+            nearest_kernel(*self._arrays, points, out, _NO_DIR, False)
         return out
 
     def range_into(self, positions: np.ndarray, directions: np.ndarray, max_range: float,

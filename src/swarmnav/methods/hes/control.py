@@ -10,6 +10,7 @@ parts' ``guard`` hook.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.decision import NAVIGATE
@@ -22,12 +23,13 @@ def couplings(h, step: Step) -> None:
     An agent routed on its own (``Step.own``) forms a cohesion group with the others routed to
     the same point, heads for that point (its c_s) and is not coupled to a subleader."""
     x = step.x
-    ids = sorted(h.subs)
-    col = np.searchsorted(np.asarray(ids), h.labels)
-    sl_idx = np.array([h.subs[s].subleader for s in ids])[col]
-    wp = np.array([h.subs[s].waypoint for s in ids])[col]
-    nav = np.array([h.subs[s].mode == NAVIGATE for s in ids])[col]
-    follower = sl_idx != np.arange(h.n)
+    part = h.partition()
+    col = part.col
+    subs = [h.subs[s] for s in part.ids]
+    sl_idx = np.array([sub.subleader for sub in subs])[col]
+    wp = np.array([sub.waypoint for sub in subs])[col]
+    nav = np.array([sub.mode == NAVIGATE for sub in subs])[col]
+    follower = sl_idx != h.arange
     queued = step.own >= 0
     if queued.any():
         cgrp = col * (int(step.own.max()) + 2) + step.own + 1  # (sub-swarm, own group) pairs, in that order
@@ -37,7 +39,7 @@ def couplings(h, step: Step) -> None:
         follower &= ~queued
         nn = F.nearest_in_group(x, cgrp)
     else:
-        cent = F.group_centroids(x, col, len(ids))[col]
+        cent = F.group_centroids(x, col, len(subs))[col]
         nn = F.nearest_in_group(x, h.labels)
     step.col, step.sl_idx, step.wp, step.nav = col, sl_idx, wp, nav
     step.follower, step.cent, step.nn = follower, cent, nn
@@ -49,15 +51,31 @@ def occlusion(h, step: Step) -> None:
     one (computed also with sigma_occ = 1 when a part reads them)."""
     p = h.params
     x, n = step.x, h.n
-    step.blocked = np.zeros((n, 4), dtype=np.bool_)
-    if h.geom.is_empty or (p.sigma == 1.0 and not any(part.needs_blocked for part in h.parts)):
+    if h.geom.is_empty or (p.sigma == 1.0 and not h.needs_blocked):
+        step.blocked = np.zeros((n, 4), dtype=np.bool_)
         step.sig = np.ones((n, 4))
         return
-    q_nn = x[np.where(step.nn >= 0, step.nn, np.arange(n))]
-    P = np.concatenate([x, x, x, x])
-    Q = np.concatenate([step.slot, q_nn, x[step.sl_idx], step.cent])
+    P, Q = np.empty((4 * n, 2)), np.empty((4 * n, 2))
+    occlusion_segments(x, step.slot, step.nn, step.sl_idx, step.cent, P, Q)
     step.blocked = h.obstacles.blocked_into(P, Q, np.empty(4 * n, dtype=np.bool_)).reshape(4, n).T
     step.sig = np.where(step.blocked, p.sigma, 1.0)
+
+
+@njit(cache=True)
+def occlusion_segments(x, slot, nn, sl_idx, cent, P, Q):
+    """The 4N segments of eq. (30) into ``P`` (starts) and ``Q`` (ends), (4N, 2) each: agent i to
+    its slot (row i), nearest neighbour (itself if none; row N + i), subleader (2N + i) and
+    centroid (3N + i)."""
+    n = x.shape[0]
+    for i in range(n):
+        j = nn[i] if nn[i] >= 0 else i
+        s = sl_idx[i]
+        for c in range(2):
+            P[i, c] = P[n + i, c] = P[2 * n + i, c] = P[3 * n + i, c] = x[i, c]
+            Q[i, c] = slot[i, c]
+            Q[n + i, c] = x[j, c]
+            Q[2 * n + i, c] = x[s, c]
+            Q[3 * n + i, c] = cent[i, c]
 
 
 def control(h, step: Step) -> np.ndarray:

@@ -187,11 +187,12 @@ class Corridor:
 
 @njit(cache=True)
 def _filter_gaps(gaps, px, py, gx, gy, w_pass, cos_toward, ring, sx, sy, cos_t, sin_t, cx, cy, rho_vis,
-                 max_range, check_vis, approach, approach_w):
-    """Rows of ``gaps`` that are candidate corridors toward the goal, and their route costs."""
+                 max_range, check_vis, approach, approach_w, through):
+    """The rows of ``gaps`` that are candidate corridors toward the goal, as (K, 8) rows
+    ``mid_x, mid_y, n_x, n_y, width, target_x, target_y, cost`` in the order of ``gaps``."""
     m = gaps.shape[0]
-    keep = np.zeros(m, dtype=np.bool_)
-    cost = np.empty(m)
+    out = np.empty((m, 8))
+    k = 0
     ux = gx - px
     uy = gy - py
     un = math.sqrt(ux * ux + uy * uy)
@@ -214,9 +215,13 @@ def _filter_gaps(gaps, px, py, gx, gy, w_pass, cos_toward, ring, sx, sy, cos_t, 
             if not (segment_clear(ring, sx, sy, cos_t, sin_t, cx, cy, ax, ay, rho_vis, max_range)
                     and segment_clear(ring, sx, sy, cos_t, sin_t, ax, ay, mx, my, rho_vis, max_range)):
                 continue
-        keep[j] = True
-        cost[j] = math.sqrt((mx - px) ** 2 + (my - py) ** 2) + math.sqrt((gx - mx) ** 2 + (gy - my) ** 2)
-    return keep, cost
+        out[k, 0], out[k, 1] = mx, my
+        out[k, 2], out[k, 3] = gaps[j, 5], gaps[j, 6]
+        out[k, 4] = gaps[j, 4]
+        out[k, 5], out[k, 6] = mx + through * gaps[j, 5], my + through * gaps[j, 6]
+        out[k, 7] = math.sqrt((mx - px) ** 2 + (my - py) ** 2) + math.sqrt((gx - mx) ** 2 + (gy - my) ** 2)
+        k += 1
+    return out[:k]
 
 
 def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pass: float, toward_deg: float,
@@ -241,25 +246,18 @@ def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pas
     if not check:
         ring, sensor, origin = np.zeros(1), np.zeros(2), np.zeros(2)
     cos_t, sin_t = rays if rays is not None else _rays(len(ring))
-    keep, cost = _filter_gaps(gaps, float(p[0]), float(p[1]), float(goal[0]), float(goal[1]), w_pass,
-                              math.cos(math.radians(toward_deg)), ring, float(sensor[0]), float(sensor[1]), cos_t, sin_t,
-                              float(origin[0]), float(origin[1]), rho_vis, max_range, check, float(approach),
-                              float(approach_w))
-    idx = np.flatnonzero(keep)
-    if len(idx) == 0:
-        return []
-    rows = gaps[idx]  # the kept openings at once: the same element-wise arithmetic as one at a time
-    mids = 0.5 * (rows[:, GAP_QA_X:GAP_QA_Y + 1] + rows[:, GAP_QB_X:GAP_QB_Y + 1])
-    nrms = rows[:, GAP_NX:GAP_NY + 1].copy()
-    tgts = mids + through * nrms
-    out = [Corridor(mid=mids[i], normal=nrms[i], width=w, target=tgts[i], cost=c)
-           for i, (w, c) in enumerate(zip(rows[:, GAP_W].tolist(), cost[idx].tolist()))]
+    rows = _filter_gaps(gaps, float(p[0]), float(p[1]), float(goal[0]), float(goal[1]), w_pass,
+                        math.cos(math.radians(toward_deg)), ring, float(sensor[0]), float(sensor[1]), cos_t, sin_t,
+                        float(origin[0]), float(origin[1]), rho_vis, max_range, check, float(approach),
+                        float(approach_w), float(through))
+    out = [Corridor(mid=r[0:2], normal=r[2:4], width=w, target=r[5:7], cost=c)
+           for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
     out.sort(key=lambda c: c.cost)
     return out
 
 
-def seen_passages(gaps: np.ndarray, ring: np.ndarray, px: float, py: float, cos_t: np.ndarray,
-                  sin_t: np.ndarray, depth: float, max_range: float) -> np.ndarray:
+@njit(cache=True)
+def seen_passages(gaps, ring, px, py, cos_t, sin_t, depth, max_range):
     """(M,) bool: the openings ``gaps`` (from :func:`detect_gaps` on ``ring`` sensed at
     ``(px, py)``) that are not concave corners: where the peak ray hits (range < ``max_range``),
     its return lies at least ``depth`` [m] from the throat segment, i.e. the ring sees on through
@@ -270,17 +268,22 @@ def seen_passages(gaps: np.ndarray, ring: np.ndarray, px: float, py: float, cos_
     one ray spacing (<= 0.35 m at R_L) behind that pair. An opening whose peak reads R_L is
     kept: the ring cannot tell a passage from a corner out of range.
     """
-    if len(gaps) == 0:
-        return np.zeros(0, dtype=bool)
-    qa = gaps[:, GAP_QA_X:GAP_QA_Y + 1]
-    qb = gaps[:, GAP_QB_X:GAP_QB_Y + 1]
-    pk = gaps[:, GAP_PEAK].astype(np.int64)
-    hit = np.column_stack([px + ring[pk] * cos_t[pk], py + ring[pk] * sin_t[pk]])  # the peak ray's return
-    e = qb - qa
-    ee = np.maximum(np.sum(e * e, axis=1), 1e-12)
-    s = np.clip(np.sum((hit - qa) * e, axis=1) / ee, 0.0, 1.0)
-    beyond = np.hypot(*(hit - qa - s[:, None] * e).T)  # distance of the peak return from the throat segment
-    return (beyond >= depth) | (ring[pk] >= max_range)
+    m = gaps.shape[0]
+    out = np.empty(m, dtype=np.bool_)
+    for j in range(m):
+        pk = int(gaps[j, GAP_PEAK])
+        d = ring[pk]
+        if d >= max_range:
+            out[j] = True
+            continue
+        hx = px + d * cos_t[pk]  # the peak ray's return
+        hy = py + d * sin_t[pk]
+        ax, ay = gaps[j, GAP_QA_X], gaps[j, GAP_QA_Y]
+        ex, ey = gaps[j, GAP_QB_X] - ax, gaps[j, GAP_QB_Y] - ay
+        ee = max(ex * ex + ey * ey, 1e-12)
+        s = min(max(((hx - ax) * ex + (hy - ay) * ey) / ee, 0.0), 1.0)
+        out[j] = math.hypot(hx - ax - s * ex, hy - ay - s * ey) >= depth  # its distance from the throat segment
+    return out
 
 
 def _rays(n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -18,6 +18,7 @@ memory (partition, sub-swarms, cooldowns) and the parts of ours that the paramet
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -38,7 +39,7 @@ from swarmnav.methods.hes.report import decision_state, reelect, report, sense, 
 from swarmnav.methods.hes.routes import RouteHold, SplitCommit
 from swarmnav.methods.hes.safety import ContactGuard, WallBarrier
 from swarmnav.methods.hes.stall import StallPlanner
-from swarmnav.methods.hes.step import NEVER, Step, SubSwarm
+from swarmnav.methods.hes.step import NEVER, Partition, Step, SubSwarm, partition
 from swarmnav.methods.hes.structure import merge, reassign_followers, split
 from swarmnav.methods.hes.targets import references
 from swarmnav.methods.hes.trail import TrailFollow
@@ -93,6 +94,8 @@ class Hes:
         self._source_override: DecisionSource | None = None
         self.parts: list[Part] = []
         self.at: dict[str, list[Part]] = hook_table([])  # hook name -> the parts that override it
+        self._part_key: tuple | None = None  # the labels and ids the cached Partition was built for
+        self._part: Partition | None = None
 
     def use_source(self, source: DecisionSource) -> Hes:
         """Decide structure with ``source`` instead of the rule policy (from the next reset)."""
@@ -114,6 +117,7 @@ class Hes:
         self.obstacles = PreparedGeometry(self.geom)  # the per-step LiDAR and line-of-sight queries
         n = len(positions)
         self.n = n
+        self.arange = np.arange(n)  # agent indices (compared with per-agent indices every step)
         rule = RulePolicy(p.d_merge, p.t_cd)
         self.source: DecisionSource = self._source_override or decision_source(p, rule, project)
         c = positions.mean(axis=0)
@@ -131,6 +135,11 @@ class Hes:
         self.last_step: Step | None = None
         self.parts = build_parts(p)
         self.at = hook_table(self.parts)
+        self._part_key = None
+        self.needs_blocked = any(q.needs_blocked for q in self.parts)  # a part reads Step.blocked
+        # the report's approach to narrow throats (hook attribute ``approach``; the last part that sets it)
+        self.approach = next(((q.approach, q.approach_w) for q in reversed(self.parts) if q.approach > 0.0),
+                             (0.0, math.inf))
         for q in self.parts:
             q.reset(self, positions)
 
@@ -144,6 +153,14 @@ class Hes:
     def artifacts(self) -> dict[str, str]:
         """Extra run files: ``llm_transcript.jsonl`` when an LLM decides (docs/llm.md)."""
         return self.source.artifacts() if hasattr(self.source, "artifacts") else {}
+
+    def partition(self) -> Partition:
+        """The current sub-swarms as arrays (:class:`Partition`), rebuilt only when the labels or
+        the sub-swarm ids have changed since the last call."""
+        key = (self.labels.tobytes(), tuple(self.subs))
+        if key != self._part_key:
+            self._part_key, self._part = key, partition(self.labels, self.subs)
+        return self._part
 
     def new_id(self) -> int:
         """A fresh sub-swarm id."""

@@ -31,7 +31,8 @@ def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
     if 0 < len(head) < len(rep.pack.members):  # members routed on their own: c_s leads the others
         cent = x[head].mean(axis=0)
     sl = x[sub.subleader]
-    delta = target_proximity(float(np.hypot(*(cent - h.goal))), float(np.hypot(*(sl - h.goal))))
+    gx, gy = h.goal
+    delta = target_proximity(math.hypot(cent[0] - gx, cent[1] - gy), math.hypot(sl[0] - gx, sl[1] - gy))
     mode = task_mode(sub.mode, delta, p.r_in, p.r_out)
     if mode != sub.mode:
         sub.slot_step = NEVER

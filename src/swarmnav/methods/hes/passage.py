@@ -125,11 +125,14 @@ class PassageMode(Part):
         """A subleader queued behind a throat cannot see the head's next corridor: the role goes
         to the head member nearest the head's centroid."""
         x = step.x
-        for j, s in enumerate(sorted(self.h.subs)):
+        part = self.h.partition()
+        for j, s in enumerate(part.ids):
             sub = self.h.subs[s]
-            members = np.flatnonzero(col == j)
+            if self.q_idx[sub.subleader] < 0:
+                continue
+            members = part.members[j]
             head = members[self.q_idx[members] < 0]
-            if self.q_idx[sub.subleader] >= 0 and len(head):
+            if len(head):
                 hc = x[head].mean(axis=0)
                 sub.subleader = int(head[np.argmin(np.sum((x[head] - hc) ** 2, axis=1))])
 
@@ -287,9 +290,8 @@ class PassageMode(Part):
 
     def chained_agents(self, step) -> np.ndarray:
         """(N,) bool: the agent's sub-swarm remembers a passage (it is in a chain of throats)."""
-        ids = sorted(self.h.subs)
-        col = np.searchsorted(np.asarray(ids), self.h.labels)
-        return np.array([bool(self.mem[s].passages) for s in ids])[col]
+        part = self.h.partition()
+        return np.array([bool(self.mem[s].passages) for s in part.ids])[part.col]
 
     # ------------------------------------------------------------ control
     def steer(self, step):

@@ -32,18 +32,20 @@ def reelect(h, step: Step) -> None:
     obstacle): the subleader's ring is the sub-swarm's view of the corridors (ours; the paper
     fixes no rule for who leads a sub-swarm). Parts may then change subleaders (hook ``elect``)."""
     x = step.x
-    ids = sorted(h.subs)
-    col = np.searchsorted(np.asarray(ids), h.labels)
-    cents = F.group_centroids(x, col, len(ids))
+    part = h.partition()
+    ids = part.ids
+    cents = F.group_centroids(x, part.col, len(ids))
     sl = np.array([h.subs[s].subleader for s in ids])
-    far = np.hypot(*(x[sl] - cents).T) > h.params.stray
+    sl_pos = x[sl]
+    far = np.hypot(*(sl_pos - cents).T) > h.params.stray
     if not h.geom.is_empty:
-        far |= h.obstacles.blocked_into(np.ascontiguousarray(x[sl]), cents, np.empty(len(ids), dtype=np.bool_))
-    for j in np.flatnonzero(far):
-        members = np.flatnonzero(col == j)
-        h.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
-    for part in h.at["elect"]:
-        part.elect(step, col)
+        far |= h.obstacles.blocked_into(sl_pos, cents, np.empty(len(ids), dtype=np.bool_))
+    if far.any():
+        for j in np.flatnonzero(far):
+            members = part.members[j]
+            h.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
+    for q in h.at["elect"]:
+        q.elect(step, part.col)
 
 
 def report(h, step: Step, s: int) -> Report:
@@ -52,24 +54,23 @@ def report(h, step: Step, s: int) -> Report:
     p = h.params
     x, ring = step.x, step.ring
     sub = h.subs[s]
-    members = np.flatnonzero(h.labels == s)
+    part = h.partition()
+    members = part.members[part.index[s]]
     pack = make_pack(s, sub.subleader, members, x, step.v)
     a = sub.subleader
-    gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], h.cos, h.sin, p.lidar_range, p.h_open)
-    for part in h.at["gaps"]:
-        gaps = part.gaps(step, sub, gaps)
-    approach, approach_w = 0.0, math.inf
-    for part in h.parts:
-        if part.approach > 0.0:
-            approach, approach_w = part.approach, part.approach_w
-    cors = corridors_toward(gaps, x[a], h.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
-                            ring=ring[a], sensor=x[a], origin=pack.centroid, rho_vis=p.rho_vis,
+    ra, sa = ring[a], x[a]
+    gaps = detect_gaps(ra, sa[0], sa[1], h.cos, h.sin, p.lidar_range, p.h_open)
+    for q in h.at["gaps"]:
+        gaps = q.gaps(step, sub, gaps)
+    approach, approach_w = h.approach
+    cors = corridors_toward(gaps, sa, h.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
+                            ring=ra, sensor=sa, origin=pack.centroid, rho_vis=p.rho_vis,
                             max_range=p.lidar_range, rays=(h.cos, h.sin), approach=approach, approach_w=approach_w)
-    for part in h.at["corridors"]:
-        cors = part.corridors(step, sub, cors)
-    clr = ring[members].min(axis=1)
-    for part in h.at["cruise_mask"]:
-        free = part.cruise_mask(members)
+    for q in h.at["corridors"]:
+        cors = q.corridors(step, sub, cors)
+    clr = step.ring_min[members]
+    for q in h.at["cruise_mask"]:
+        free = q.cruise_mask(members)
         if free is not None:
             clr = clr[free] if free.any() else clr
     return Report(pack, tuple(cors), float(clr.min()))
@@ -86,12 +87,16 @@ def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float,
     wide = [c for c in rep.corridors if c.width >= w_split]
     if not wide:
         return []
-    cent = rep.pack.centroid
-    mids = np.array([cent] + [c.mid for c in wide])
-    d = np.hypot(mids[:, 0] - goal[0], mids[:, 1] - goal[1]).tolist()  # d[0]: the centroid's
-    sx, sy = rep.pack.subleader_position
-    return [c for c, dc in zip(wide, d[1:])
-            if dc <= d[0] and (c.direct or in_view(ring, sx, sy, c.target, rho_vis, max_range))]
+    gx, gy = float(goal[0]), float(goal[1])
+    cx, cy = rep.pack.centroid.tolist()
+    d0 = math.hypot(cx - gx, cy - gy)
+    sx, sy = rep.pack.subleader_position.tolist()
+    out = []
+    for c in wide:
+        mx, my = c.mid.tolist()
+        if math.hypot(mx - gx, my - gy) <= d0 and (c.direct or in_view(ring, sx, sy, c.target, rho_vis, max_range)):
+            out.append(c)
+    return out
 
 
 def decision_state(h, step: Step) -> DecisionState:
@@ -99,23 +104,23 @@ def decision_state(h, step: Step) -> DecisionState:
     p = h.params
     k, reports = step.k, step.reports
     ids = sorted(reports)
-    cents = np.array([reports[s].pack.centroid for s in ids])
+    gx, gy = float(h.goal[0]), float(h.goal[1])
+    cents = [reports[s].pack.centroid.tolist() for s in ids]
     S = len(ids)
-    d_goal = np.hypot(*(cents - h.goal).T)
+    d_goal = [math.hypot(cx - gx, cy - gy) for cx, cy in cents]
     widths = [c.width for s in ids for c in reports[s].corridors]
     n_c = max(len(h.split_paths(step, reports[s])) for s in ids)
-    n_near = int(np.sum(d_goal < p.r_merge))  # eq. (15)
+    n_near = sum(d < p.r_merge for d in d_goal)  # eq. (15)
     d_swarm_min = math.inf
-    if S >= 2:  # eq. (14)
-        diff = cents[:, None, :] - cents[None, :, :]
-        dd = np.hypot(diff[..., 0], diff[..., 1])
-        d_swarm_min = float(dd[np.triu_indices(S, 1)].min())
+    for a in range(S):  # eq. (14)
+        for b in range(a + 1, S):
+            d_swarm_min = min(d_swarm_min, math.hypot(cents[a][0] - cents[b][0], cents[a][1] - cents[b][1]))
     n_all = sum(len(reports[s].pack.members) for s in ids)
     gbar = sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all  # global centroid, eq. (2)
-    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, float(np.hypot(*(gbar - h.goal))), p.r_merge)
+    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbar[0] - gx, gbar[1] - gy), p.r_merge)
     can_merge = merge_feasible(S, n_near, d_swarm_min, p.d_merge)
     return DecisionState(
         k=int(k), dt=p.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,
-        w_min=float(min(widths)) if widths else 0.0, d_goal_avg=float(d_goal.mean()), n_near=n_near,
+        w_min=float(min(widths)) if widths else 0.0, d_goal_avg=sum(d_goal) / S, n_near=n_near,
         d_swarm_min=d_swarm_min, can_split=bool(can_split), can_merge=bool(can_merge),
     )

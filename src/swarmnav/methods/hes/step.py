@@ -39,12 +39,32 @@ class SubSwarm:
     ring_offsets: np.ndarray | None = None  # encircle slots relative to the goal
 
 
+@dataclass(frozen=True, slots=True)
+class Partition:
+    """The sub-swarms of a step as arrays: ``ids`` (sorted sub-swarm ids), ``col`` (N,) the column
+    of each agent's sub-swarm in ``ids``, ``members`` the agents of each column (ascending),
+    ``index`` {sid: column}. Built by :func:`partition` and reused while the labels stand."""
+
+    ids: tuple
+    col: np.ndarray
+    members: tuple
+    index: dict
+
+
+def partition(labels: np.ndarray, sids) -> Partition:
+    """The :class:`Partition` of ``labels`` over the sub-swarm ids ``sids``."""
+    ids = tuple(sorted(sids))
+    col = np.searchsorted(np.asarray(ids), labels)
+    members = tuple(np.flatnonzero(col == j) for j in range(len(ids)))
+    return Partition(ids, col, members, {s: j for j, s in enumerate(ids)})
+
+
 @dataclass(slots=True)
 class Step:
     """The context of one step, (N, ...) arrays over the agents unless noted.
 
     Perception: ``k``, ``x``, ``v`` (positions [m], velocities [m/s]), ``ring`` (N, R) fused
-    LiDAR ranges [m] (eq. 8-9). Report and decision: ``reports`` {sid: Report}, ``z`` (eq. 18).
+    LiDAR ranges [m] (eq. 8-9), ``ring_min`` (N,) each ring's nearest return [m]. Report and decision: ``reports`` {sid: Report}, ``z`` (eq. 18).
     Targets: ``own`` (N,) int, >= 0 for an agent a part routes on its own (passage mode's
     queues: the index of its throat), with ``own_target`` (N, 2) its point [m] and ``routed``
     (N,) bool the agents a part routes (trail following leaves them alone); ``slot`` (N, 2) p*_i
@@ -61,6 +81,7 @@ class Step:
     x: np.ndarray
     v: np.ndarray
     ring: np.ndarray
+    ring_min: np.ndarray | None = None  # computed from ``ring`` when not given
     reports: dict = field(default_factory=dict)
     z: DecisionState | None = None
     own: np.ndarray | None = None
@@ -80,6 +101,10 @@ class Step:
     dsafe: np.ndarray | None = None
     exit_dir: np.ndarray | None = None
     exit_free: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.ring_min is None:
+            self.ring_min = self.ring.min(axis=1)
 
     @property
     def n(self) -> int:

@@ -24,10 +24,15 @@ def references(h, step: Step) -> None:
     slot = np.empty_like(x)
     speed = np.empty(h.n)
     queued = step.own >= 0
-    slot[queued] = step.own_target[queued]
-    speed[queued] = p.v_s
+    any_queued = bool(queued.any())
+    if any_queued:
+        slot[queued] = step.own_target[queued]
+        speed[queued] = p.v_s
+    part = h.partition()
     for s, sub in h.subs.items():
-        members = np.flatnonzero((h.labels == s) & ~queued)
+        members = part.members[part.index[s]]
+        if any_queued:
+            members = members[~queued[members]]
         m = len(members)
         if m == 0:
             continue
