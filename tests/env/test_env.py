@@ -173,6 +173,25 @@ def test_vector_copies_equal_single_envs_and_autoreset_draws_the_next_start():
     vec.close()
 
 
+def test_same_step_autoreset_returns_the_new_start_and_keeps_the_last_observation():
+    kw = dict(num_envs=2, scenario="off_axis_goal", horizon=0.3)  # truncation after 3 steps
+    nxt = E.SwarmVectorEnv(**kw)
+    same = E.SwarmVectorEnv(autoreset_mode="same_step", **kw)
+    for v in (nxt, same):
+        v.reset(seed=[4, 9])
+    rng = np.random.default_rng(1)
+    for k in range(3):
+        act = rng.uniform(-1, 1, (2, 20, 2))
+        o_next, r_next, _, tr_next, _ = nxt.step(act)
+        o_same, r_same, _, tr_same, info = same.step(act)
+        assert np.array_equal(r_next, r_same) and np.array_equal(tr_next, tr_same)
+    assert tr_same.all() and np.array_equal(info["final_obs"], o_next)
+    o_reset, r0, *_ = nxt.step(act)  # next-step mode starts the copies one step later
+    assert np.array_equal(o_same, o_reset) and not r0.any()
+    with pytest.raises(ConfigError, match="autoreset_mode must be next_step or same_step"):
+        E.SwarmVectorEnv(2, "off_axis_goal", autoreset_mode="later")
+
+
 # ------------------------------------------------------------------ baselines and evaluate
 @pytest.mark.parametrize("method, steps", [("apf", 1000), ("hes", 150)])
 def test_a_baseline_in_the_env_reproduces_swarmnav_run(method, steps):

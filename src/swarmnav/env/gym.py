@@ -120,14 +120,22 @@ class SwarmVectorEnv(VectorEnv):
     so copy b starts exactly as ``SwarmEnv.reset(seed=s + b)``. A copy that terminates or
     truncates is reset at its next ``step`` (Gymnasium's next-step autoreset: that step
     ignores its action and returns its first observation with reward 0), drawing its new start
-    from its own generator.
+    from its own generator. With ``autoreset_mode="same_step"`` it is reset within the step
+    that ends it: the step returns its first observation and ``info["final_obs"]`` holds the
+    last one (what Stable-Baselines3 and most PPO loops expect).
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, num_envs: int = 1, scenario: str | Scenario = "default_corridor", n: int | None = None,
-                 render_mode: str | None = None, **options: Any):
+                 render_mode: str | None = None, autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+                 **options: Any):
         _no_render(render_mode)
+        modes = {"next_step": AutoresetMode.NEXT_STEP, "same_step": AutoresetMode.SAME_STEP}
+        mode = next((m for name, m in modes.items() if autoreset_mode in (m, m.value, name)), None)
+        if mode is None:
+            raise ConfigError(f"env: autoreset_mode must be next_step or same_step, got {autoreset_mode!r}")
+        self.metadata = {**self.metadata, "autoreset_mode": mode}
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ConfigError(f"env: num_envs must be an integer >= 1, got {num_envs!r}")
         self.render_mode = None
@@ -196,9 +204,18 @@ class SwarmVectorEnv(VectorEnv):
             truncated[reset] = False
             idx = c.neighbours(self._pos)[0]
         obs = c.observe(self._pos, self._vel, idx)
-        self._autoreset = terminated | truncated
+        ended = terminated | truncated
         infos = _infos(out)
         infos.update({f"_{k}": np.ones(B, dtype=bool) for k in INFO_KEYS})
+        if self.metadata["autoreset_mode"] is AutoresetMode.SAME_STEP:
+            if ended.any():
+                infos["final_obs"] = obs.copy()
+                infos["_final_obs"] = ended.copy()
+                for b in np.flatnonzero(ended):
+                    self._respawn(b)
+                obs = c.observe(self._pos, self._vel)
+        else:
+            self._autoreset = ended
         return obs, reward, terminated, truncated, infos
 
     @property
