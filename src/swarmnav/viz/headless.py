@@ -24,11 +24,13 @@ from typing import Any
 from swarmnav.errors import SwarmnavError
 
 #: Flags of every launch: headless, no first-run chores or network, WebGL on the software
-#: rasteriser (SwiftShader) so the perspective view draws on a machine without a GPU.
+#: rasteriser (SwiftShader) so the perspective view draws on a machine without a GPU, and the
+#: page composited in software (through SwiftShader's GL a 2-D canvas page got ~2 frames/s
+#: instead of 60 on a loaded 2-core machine).
 FLAGS = ("--headless", "--no-sandbox", "--no-first-run", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--disable-quic", "--mute-audio",
          "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist",
-         "--disable-dev-shm-usage")
+         "--disable-gpu-compositing", "--disable-dev-shm-usage")
 
 
 def find_chromium() -> str | None:
@@ -41,6 +43,7 @@ class Browser:
 
     Attributes:
         errors: console errors and uncaught exceptions of the page, as one line each.
+        requests: URL of every request the page made (the page itself included).
     """
 
     def __init__(self, width: int = 1280, height: int = 800, timeout: float = 60.0):
@@ -49,6 +52,7 @@ class Browser:
             raise SwarmnavError("no chromium on PATH (Debian: apt-get install chromium)")
         self.timeout = timeout
         self.errors: list[str] = []
+        self.requests: list[str] = []
         self._profile = tempfile.TemporaryDirectory(prefix="swarmnav-chromium-")
         to_child_r, self._to_child = os.pipe()
         self._from_child, from_child_w = os.pipe()
@@ -73,10 +77,14 @@ class Browser:
         self._lock = threading.Lock()
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
-        target = self.send("Target.createTarget", url="about:blank")["targetId"]
+        # the page chromium opened with (a target made with createTarget is a background tab,
+        # whose requestAnimationFrame is throttled to a few frames per second)
+        pages = [t for t in self.send("Target.getTargets")["targetInfos"] if t["type"] == "page"]
+        target = pages[0]["targetId"] if pages else self.send("Target.createTarget", url="about:blank")["targetId"]
         self.session = self.send("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
-        for domain in ("Page", "Runtime", "Log"):
+        for domain in ("Page", "Runtime", "Log", "Network"):
             self.send(f"{domain}.enable", session=True)
+        self.send("Page.bringToFront", session=True)
         self.send("Emulation.setDeviceMetricsOverride", session=True, width=width, height=height,
                   deviceScaleFactor=1, mobile=False)
 
@@ -111,6 +119,8 @@ class Browser:
             self.errors.append((d.get("exception") or {}).get("description") or d.get("text", "exception"))
         elif method == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
             self.errors.append(" ".join(str(a.get("value", a.get("description", ""))) for a in p["args"]))
+        elif method == "Network.requestWillBeSent":
+            self.requests.append(p["request"]["url"])
         elif method == "Log.entryAdded" and p["entry"].get("level") == "error":
             self.errors.append(p["entry"].get("text", "error"))
         self._events.put(msg)

@@ -205,7 +205,7 @@
   }
   function buildScene(THREE, OrbitControls) {
     THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
-    const renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
+    const renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});  // kept: screenshots read it
     renderer.setPixelRatio(window.devicePixelRatio || 1);
     renderer.setClearColor(0xf4f6f8);
     persp.appendChild(renderer.domElement);
@@ -454,7 +454,7 @@
     else if (ev.key === 'Home') { pause(); seek(0); }
     else if (ev.key === 'End') { pause(); seek(K); }
   });
-  new ResizeObserver(() => { layoutTop(); layoutChart(); if (G) layoutPersp(G); dirty = true; }).observe(document.body);
+  new ResizeObserver(() => { if (!P) return; layoutTop(); layoutChart(); if (G) layoutPersp(G); dirty = true; }).observe(document.body);
 
   function legend() {
     const parts = [];
@@ -502,5 +502,7 @@
     /** What the tooltip says of agent i at the current step. */
     agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i)}),
     stats: () => ({...stats, playing}),
+    /** The perspective renderer, once loaded: 'three.js r185'. */
+    renderer: () => G ? `three.js r${G.THREE.REVISION}` : null,
   };
 })();

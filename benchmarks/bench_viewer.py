@@ -1,0 +1,105 @@
+"""The replay viewer on a 1,000-agent x 1,000-step run: file size, open time, frame rate.
+
+Run: ``python benchmarks/bench_viewer.py`` (needs Debian's ``chromium``). It flies a real run,
+APF with N = 1000 for K = 1000 steps (dt = 0.1 s) on a 200 m x 80 m field of discs and boxes
+(written by ``swarmnav run``, the simulator's own writer), writes its viewer with
+``swarmnav view`` and opens it in headless Chromium (software WebGL, as CI has no GPU):
+
+- file size of ``viewer.html`` [MB] (target <= 25 MB);
+- open time [s]: from the navigation to the first drawn frame, data decoded (target <= 2 s);
+- frames per second while playing (target >= 30 fps), counted with requestAnimationFrame
+  over ``--seconds`` of play at 12x real time (120 steps/s: at 60 Hz or less every frame
+  draws a new step; 5 s play 600 of the 1000 steps), top-down and in perspective; ``draws``
+  says how many frames drew.
+
+The APF parameters are its defaults; the run is only a source of 1000 realistic paths.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+#: A field large enough to spawn 1000 agents 0.6 m apart: discs and boxes between spawn and goal.
+SCENE = """
+name = "bench_viewer_field"
+description = "Viewer benchmark: 1000 agents across a 200 m x 80 m field of discs and boxes."
+[world]
+bounds = [-45.0, -42.0, 160.0, 42.0]
+[swarm]
+n = 1000
+spawn = [-40.0, -30.0, 0.0, 30.0]
+[goal]
+position = [150.0, 0.0]
+"""
+
+
+def scene_text() -> str:
+    import numpy as np
+
+    rng = np.random.default_rng(7)
+    parts = [SCENE]
+    for _ in range(40):
+        x, y, r = rng.uniform(15, 130), rng.uniform(-35, 35), rng.uniform(0.8, 2.5)
+        parts.append(f'[[obstacles]]\ntype = "circle"\ncenter = [{x:.2f}, {y:.2f}]\nradius = {r:.2f}\n')
+    for _ in range(12):
+        x, y = rng.uniform(15, 130), rng.uniform(-35, 35)
+        w, h = rng.uniform(1, 6), rng.uniform(1, 6)
+        parts.append(f'[[obstacles]]\ntype = "box"\nmin = [{x:.2f}, {y:.2f}]\nmax = [{x + w:.2f}, {y + h:.2f}]\n')
+    return "\n".join(parts)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=5.0, help="play time per view for the frame count [s]")
+    ap.add_argument("--keep", metavar="DIR", help="keep the run directory here (default: a temporary one)")
+    args = ap.parse_args()
+
+    from swarmnav.cli import main as cli
+    from swarmnav.viz.headless import Browser
+
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(args.keep or tmp)
+        root.mkdir(parents=True, exist_ok=True)
+        scene = root / "field.toml"
+        scene.write_text(scene_text())
+        run_dir = root / "run"
+        t0 = time.perf_counter()
+        assert cli(["run", "--method", "apf", "--scenario-file", str(scene), "--steps", "1000", "--seed", "1",
+                    "--out", str(run_dir), "--quiet"]) == 0
+        t_run = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        assert cli(["view", str(run_dir)]) == 0
+        t_write = time.perf_counter() - t0
+        html = run_dir / "viewer.html"
+        size = html.stat().st_size / 1e6
+        print(f"run (apf, N = 1000, K = 1000): {t_run:.1f} s;  swarmnav view: {t_write:.2f} s")
+        print(f"file size: {size:.2f} MB  (target <= 25 MB)")
+        with Browser(1280, 800, timeout=120) as b:
+            b.open(html)
+            b.eval("window.swarmnav.ready")
+            opened = b.eval("window.swarmnav.stats().readyMs") / 1000
+            print(f"open time: {opened:.2f} s from navigation to the first frame, data decoded  (target <= 2 s)")
+            for view in ("top", "persp"):
+                b.eval(f"window.swarmnav.view('{view}')")
+                b.eval("window.swarmnav.seek(0)")
+                before = b.eval("window.swarmnav.stats()")
+                b.eval("window.swarmnav.play(12)")
+                t0 = time.perf_counter()
+                time.sleep(args.seconds)
+                after = b.eval("window.swarmnav.stats()")
+                dt = time.perf_counter() - t0
+                b.eval("window.swarmnav.pause()")
+                frames, draws = after["frames"] - before["frames"], after["draws"] - before["draws"]
+                ms = (after["drawMs"] - before["drawMs"]) / max(draws, 1)
+                name = "top-down" if view == "top" else "perspective"
+                print(f"{name:12s}: {frames / dt:.1f} fps ({frames} frames in {dt:.1f} s, {draws} drew a new step; "
+                      f"{ms:.1f} ms of drawing per frame)  (target >= 30 fps)")
+            if b.errors:
+                print("page errors:", *b.errors, sep="\n  ")
+
+
+if __name__ == "__main__":
+    main()

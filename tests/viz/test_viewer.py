@@ -1,0 +1,117 @@
+"""The replay viewer's page, without a browser: self-contained, its data decode to the stored
+run within the stated quantisation error, and bad input is one line with exit code 2."""
+
+from __future__ import annotations
+
+import base64
+import gzip
+import json
+import re
+
+import numpy as np
+import pytest
+
+from swarmnav.cli import main
+from swarmnav.sim import run
+from swarmnav.viz.viewer import LEVELS, quantisation_error, quantise
+
+
+def page_data(html_path):
+    """The JSON the page embeds (its public data format)."""
+    m = re.search(r'<script type="application/json" id="swarmnav-data">(.*?)</script>', html_path.read_text(), re.S)
+    assert m, "no embedded data"
+    return json.loads(m.group(1))
+
+
+def decode(blob) -> np.ndarray:
+    a = np.frombuffer(gzip.decompress(base64.b64decode(blob["data"])), dtype=np.dtype(blob["dtype"]).newbyteorder("<"))
+    a = a.reshape(blob["shape"])
+    return np.cumsum(a, axis=0, dtype=np.uint16) if blob["delta"] else a  # uint16 sums wrap as the page's do
+
+
+@pytest.fixture(scope="module")
+def hes_dir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("hes")
+    run("hes", "default_corridor", seed=1, steps=400).save(d)
+    return d
+
+
+def test_view_writes_one_self_contained_page(hes_dir, capsys):
+    out = hes_dir / "v.html"
+    assert main(["view", str(hes_dir), "--out", str(out)]) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    text = out.read_text()
+    # nothing is fetched when the page opens: no external script, stylesheet, image or fetch
+    assert not re.search(r'(src|href)\s*=\s*["\']?(https?:|//)', text)
+    from importlib import resources
+
+    own = resources.files("swarmnav.viz").joinpath("viewer", "viewer.js").read_text()
+    assert "fetch(" not in own and "XMLHttpRequest" not in own and "import(" in own  # modules from blob URLs
+    assert 'id="lib-core"' in text and 'id="lib-orbit"' in text  # three.js travels inside
+
+
+def test_three_js_is_vendored_at_its_pinned_version_with_its_licence():
+    from importlib import resources
+
+    from swarmnav.viz.viewer import THREE_VERSION
+
+    d = resources.files("swarmnav.viz").joinpath("vendor", "three")
+    assert "three.js authors" in d.joinpath("LICENSE").read_text()
+    assert f"three@{THREE_VERSION}" in d.joinpath("README.md").read_text()
+
+
+def test_page_positions_equal_the_run_within_the_stated_error(hes_dir):
+    from swarmnav.sim import RunResult
+
+    main(["view", str(hes_dir)])
+    d = page_data(hes_dir / "viewer.html")
+    res = RunResult.load(hes_dir)
+    q = d["quant"]
+    lo, hi = np.array(q["lo"]), np.array(q["hi"])
+    P = lo + decode(d["arrays"]["positions"]) * (hi - lo) / LEVELS
+    err = np.linalg.norm(P - res.positions, axis=2)
+    assert err.max() <= q["error"] + 1e-12
+    # the bound is half a step per axis: a 90 m x 26 m corridor gives well under a millimetre
+    assert q["error"] == pytest.approx(quantisation_error(lo, hi)) and q["error"] < 1e-3
+    labels = np.array(d["label_ids"])[decode(d["arrays"]["labels"])]
+    np.testing.assert_array_equal(labels, res.labels)
+    assert [(e["step"], e["action"]) for e in d["events"]] == [(e["step"], e["action"]) for e in res.events]
+    assert d["dim"] == 2 and d["altitude"] == 10.0  # HES Appendix A, Figure A1
+
+
+def test_quantise_is_within_half_a_step_on_every_axis():
+    rng = np.random.default_rng(0)
+    lo, hi = np.array([-14.0, -13.0, 0.0]), np.array([76.0, 13.0, 6.0])
+    x = rng.uniform(lo, hi, size=(1000, 3))
+    x[0], x[1] = lo, hi  # the ends land exactly on codes 0 and LEVELS
+    back = lo + quantise(x, lo, hi) * (hi - lo) / LEVELS
+    assert np.all(np.abs(back - x) <= (hi - lo) / LEVELS / 2 + 1e-12)
+    assert np.array_equal(quantise(x[:2], lo, hi), [[0, 0, 0], [LEVELS] * 3])
+
+
+def test_run_view_writes_the_viewer_after_the_run(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["run", "--method", "apf", "--scenario", "default_corridor", "--steps", "20", "--out", str(out),
+                 "--view", "--quiet"]) == 0
+    assert f"viewer: {out / 'viewer.html'}" in capsys.readouterr().out
+    assert page_data(out / "viewer.html")["K"] == 20
+
+
+def _one_line_exit_2(args, capsys, fragment):
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err and fragment in err, err
+
+
+def test_bad_input_is_one_line_and_exit_2(hes_dir, tmp_path, capsys):
+    _one_line_exit_2(["view", str(tmp_path)], capsys, "not a run directory (missing config.json)")
+    _one_line_exit_2(["view", str(tmp_path / "nowhere")], capsys, "not a run directory")
+    bad = tmp_path / "truncated"
+    bad.mkdir()
+    for name in ("config.json", "metrics.json", "events.jsonl"):
+        (bad / name).write_bytes((hes_dir / name).read_bytes())
+    whole = (hes_dir / "trajectory.npz").read_bytes()
+    for cut in (len(whole) // 2, len(whole) - 100):  # cut in the data, and in the zip directory
+        (bad / "trajectory.npz").write_bytes(whole[:cut])
+        _one_line_exit_2(["view", str(bad)], capsys, "unreadable run directory")
+    _one_line_exit_2(["plot", str(hes_dir), "--perspective", "--step", "401"], capsys, "--step must be between 0")

@@ -1,0 +1,135 @@
+"""The replay viewer in a real browser: Debian's headless Chromium, driven through the DevTools
+protocol (swarmnav.viz.headless). The page loads with no console error and fetches nothing;
+the agents it draws at step k are the stored ones within the quantisation error, top-down and
+in perspective; event marks, keys and the agent read-out work; screenshots of a planar run,
+the same run in perspective and a 3-D run are drawn and differ."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from swarmnav.cli import main
+from swarmnav.sim import RunResult, run
+from swarmnav.viz.headless import Browser, find_chromium
+
+pytestmark = pytest.mark.skipif(find_chromium() is None, reason="Debian's chromium is not installed (CI installs it)")
+
+#: Drawn positions are read back as float32 screen or instance coordinates: 1e-4 m covers
+#: their rounding on top of the quantisation error the page states.
+READBACK = 1e-4
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """A planar HES run with a split and a merge, and a 3-D APF run, each with its viewer."""
+    out = {}
+    for name, method, scene, steps in (("planar", "hes", "default_corridor", 400),
+                                       ("solid", "apf", "sph_cluttered_3d", 60)):
+        d = tmp_path_factory.mktemp(name)
+        run(method, scene, seed=1, steps=steps).save(d)
+        assert main(["view", str(d)]) == 0
+        out[name] = d
+    return out
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with Browser(1100, 700) as b:
+        yield b
+
+
+def _open(b: Browser, d) -> dict:
+    b.errors.clear()
+    b.open(d / "viewer.html")
+    assert b.eval("window.swarmnav.ready") is True
+    return b.eval("({K: swarmnav.data.K, error: swarmnav.data.quant.error, events: swarmnav.data.events})")
+
+
+def test_page_loads_without_errors_and_fetches_nothing(runs, browser):
+    b = browser
+    b.requests.clear()
+    _open(b, runs["planar"])
+    assert b.eval("swarmnav.view('persp')") == "persp"
+    assert b.eval("swarmnav.renderer()") == "three.js r185"
+    assert b.errors == []
+    # the page itself and the blob: URLs it makes for three.js; nothing from a network or disk
+    assert b.requests and all(u.startswith(("file://", "blob:", "data:")) for u in b.requests), b.requests
+    assert sum(u.startswith("file://") for u in b.requests) == 1
+
+
+@pytest.mark.parametrize("view", ["top", "persp"])
+def test_drawn_positions_equal_the_stored_trajectory(runs, browser, view):
+    res = RunResult.load(runs["planar"])
+    info = _open(browser, runs["planar"])
+    assert browser.eval(f"swarmnav.view('{view}')") == view
+    for k in (0, 137, info["K"]):
+        assert browser.eval(f"swarmnav.seek({k})") == k
+        drawn = np.array(browser.eval("swarmnav.positions()"))
+        err = np.linalg.norm(drawn[:, :2] - res.positions[k], axis=1)
+        assert err.max() <= info["error"] + READBACK, (view, k, err.max())
+        if view == "persp":  # planar runs fly at the fixed altitude of HES Figure A1
+            np.testing.assert_allclose(drawn[:, 2], 10.0)
+    assert browser.errors == []
+
+
+def test_a_3d_run_is_drawn_in_3d(runs, browser):
+    res = RunResult.load(runs["solid"])
+    info = _open(browser, runs["solid"])
+    assert browser.eval("swarmnav.view()") == "persp"  # a 3-D run opens in perspective
+    assert browser.eval("swarmnav.seek(40)") == 40
+    drawn = np.array(browser.eval("swarmnav.positions()"))
+    assert np.linalg.norm(drawn - res.positions[40], axis=1).max() <= info["error"] + READBACK
+    assert browser.errors == []
+
+
+def test_event_marks_keys_and_agent_readout(runs, browser):
+    res = RunResult.load(runs["planar"])
+    info = _open(browser, runs["planar"])
+    assert [e["action"] for e in info["events"]][:2] == ["split", "merge"]  # the run this test needs
+    # a mark on the timeline jumps to the first state after its event
+    browser.eval("document.querySelectorAll('#marks button')[1].click()")
+    assert browser.eval("swarmnav.step()") == info["events"][1]["step"] + 1
+    # step keys: one step, ten with shift, Home
+    browser.eval("swarmnav.seek(100)")
+    for key, shift, want in (("ArrowRight", False, 101), ("ArrowRight", True, 111), ("ArrowLeft", False, 110),
+                             ("Home", False, 0)):
+        browser.eval(f"document.dispatchEvent(new KeyboardEvent('keydown', {{key: '{key}', shiftKey: {str(shift).lower()}}}))")
+        assert browser.eval("swarmnav.step()") == want
+    # what hovering an agent shows: its speed and clearance, within their quantisation
+    k, i = 250, 7
+    browser.eval(f"swarmnav.seek({k})")
+    a = browser.eval(f"swarmnav.agent({i})")
+    vmax, (c_lo, c_hi) = browser.eval("[swarmnav.data.quant.vmax, swarmnav.data.quant.clearance]")
+    assert a["speed"] == pytest.approx(np.linalg.norm(res.velocities[k, i]), abs=vmax / 65535 * 2)
+    assert a["clearance"] == pytest.approx(res.clearance[k, i], abs=(c_hi - c_lo) / 65534)
+    assert a["subswarm"] == res.labels[k, i]
+    assert browser.errors == []
+
+
+def _shot(b: Browser, path) -> np.ndarray:
+    img = np.asarray(Image.open(b.screenshot(path)).convert("RGB"), dtype=np.int16)
+    assert len(np.unique(img.reshape(-1, 3), axis=0)) > 50  # not blank: scene, agents, chart, text
+    return img
+
+
+def test_screenshots_of_planar_perspective_and_3d_runs_differ(runs, browser, tmp_path):
+    _open(browser, runs["planar"])
+    browser.eval("swarmnav.seek(300)")
+    top = _shot(browser, tmp_path / "top.png")
+    browser.eval("swarmnav.view('persp')")
+    browser.eval("swarmnav.seek(300)")
+    persp = _shot(browser, tmp_path / "persp.png")
+    _open(browser, runs["solid"])
+    browser.eval("swarmnav.seek(40)")
+    solid = _shot(browser, tmp_path / "solid.png")
+    stage = (slice(40, 560), slice(None))  # the view, above the controls and the strip chart
+    # share of the view's pixels that differ: top-down against perspective, nearly all (white
+    # canvas against three.js's grey); the two perspective scenes share their background, and
+    # still differ in a fifth of it (corridor slabs against a 3-D field of solids)
+    for a, b, least in ((top, persp, 0.5), (top, solid, 0.5), (persp, solid, 0.1)):
+        changed = np.any(a[stage] != b[stage], axis=2).mean()
+        assert changed > least, changed
+    # the perspective view is three.js drawing, not the top-down canvas: its background is grey
+    assert tuple(persp[300, 20]) == (0xf4, 0xf6, 0xf8) and tuple(top[300, 5]) == (255, 255, 255)
