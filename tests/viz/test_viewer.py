@@ -115,3 +115,27 @@ def test_bad_input_is_one_line_and_exit_2(hes_dir, tmp_path, capsys):
         (bad / "trajectory.npz").write_bytes(whole[:cut])
         _one_line_exit_2(["view", str(bad)], capsys, "unreadable run directory")
     _one_line_exit_2(["plot", str(hes_dir), "--perspective", "--step", "401"], capsys, "--step must be between 0")
+
+
+def test_roles_are_kept_when_a_method_reports_them_and_absent_otherwise(hes_dir, tmp_path):
+    """A method that gives ``info["roles"]`` gets a ``roles`` array in trajectory.npz, which the
+    viewer shows; a run without roles keeps exactly its former four arrays."""
+    import dataclasses
+
+    from swarmnav.sim import RunResult
+
+    with np.load(hes_dir / "trajectory.npz") as z:
+        assert sorted(z.files) == ["clearance", "labels", "positions", "velocities"]
+    res = RunResult.load(hes_dir)
+    assert res.roles is None
+    roles = np.zeros(res.labels.shape, dtype=np.uint8)
+    roles[:, 3], roles[:, 5] = 2, 1  # agent 3 leads, agent 5 is a subleader
+    d = tmp_path / "roles"
+    dataclasses.replace(res, roles=roles).save(d)
+    back = RunResult.load(d)
+    np.testing.assert_array_equal(back.roles, roles)
+    np.testing.assert_array_equal(back.positions, res.positions)
+    assert main(["view", str(d)]) == 0
+    data = page_data(d / "viewer.html")
+    assert data["roles"] == ["follower", "subleader", "leader"]
+    np.testing.assert_array_equal(decode(data["arrays"]["roles"]), roles)

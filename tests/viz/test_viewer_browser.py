@@ -133,3 +133,21 @@ def test_screenshots_of_planar_perspective_and_3d_runs_differ(runs, browser, tmp
         assert changed > least, changed
     # the perspective view is three.js drawing, not the top-down canvas: its background is grey
     assert tuple(persp[300, 20]) == (0xf4, 0xf6, 0xf8) and tuple(top[300, 5]) == (255, 255, 255)
+
+
+def test_recorded_roles_are_marked_and_read_out(runs, browser, tmp_path):
+    import dataclasses
+
+    res = RunResult.load(runs["planar"])
+    roles = np.zeros(res.labels.shape, dtype=np.uint8)
+    roles[:, 3], roles[:, 5] = 2, 1
+    dataclasses.replace(res, roles=roles).save(tmp_path)
+    assert main(["view", str(tmp_path)]) == 0
+    _open(browser, tmp_path)
+    browser.eval("swarmnav.seek(50)")
+    assert [browser.eval(f"swarmnav.agent({i}).role") for i in (0, 3, 5)] == ["follower", "leader", "subleader"]
+    assert "leader" in browser.eval("document.getElementById('legend').textContent")
+    assert browser.errors == []
+    # and a run without roles says so instead of guessing
+    _open(browser, runs["planar"])
+    assert browser.eval("swarmnav.agent(3).role") == "not recorded"

@@ -26,6 +26,8 @@ class RunResult:
         velocities: (K + 1, N, d) [m/s].
         clearance: (K + 1, N) signed distance to the nearest obstacle [m] (+inf: none).
         labels: (K + 1, N) sub-swarm id of each agent.
+        roles: (K + 1, N) uint8 role of each agent (0 follower, 1 subleader, 2 leader) when the
+            method reports roles (``info["roles"]``); None otherwise, and then not saved.
         events: structural events, dicts with ``step``, ``action``, ``source``, ``reason``.
         metrics: scalar metrics (floats).
         wall_time: seconds spent in the rollout loop [s].
@@ -40,6 +42,7 @@ class RunResult:
     velocities: np.ndarray
     clearance: np.ndarray
     labels: np.ndarray
+    roles: np.ndarray | None = None
     events: list[dict[str, Any]] = field(default_factory=list)
     metrics: dict[str, float] = field(default_factory=dict)
     wall_time: float = 0.0
@@ -66,9 +69,10 @@ class RunResult:
         """
         d = Path(out)
         d.mkdir(parents=True, exist_ok=True)
+        extra = {} if self.roles is None else {"roles": self.roles}  # a run without roles keeps its old file
         _atomic(d / "trajectory.npz", lambda f: np.savez_compressed(
             f, positions=self.positions, velocities=self.velocities, clearance=self.clearance,
-            labels=self.labels))
+            labels=self.labels, **extra))
         _atomic(d / "events.jsonl", lambda f: f.write("".join(json.dumps(e) + "\n" for e in self.events).encode()))
         _atomic(d / "config.json", lambda f: f.write(json.dumps(self.config, indent=2).encode()))
         metrics = dict(self.metrics, wall_time_s=self.wall_time)
@@ -98,7 +102,8 @@ class RunResult:
             raise SwarmnavError(f"{d}: trajectory.npz lacks {', '.join(missing)}")
         P = arrays["positions"]
         if P.ndim != 3 or P.shape[0] < 1 or P.shape[2] not in (2, 3) or arrays["velocities"].shape != P.shape \
-                or arrays["clearance"].shape != P.shape[:2] or arrays["labels"].shape != P.shape[:2]:
+                or arrays["clearance"].shape != P.shape[:2] or arrays["labels"].shape != P.shape[:2] \
+                or arrays.get("roles", arrays["labels"]).shape != P.shape[:2]:
             raise SwarmnavError(f"{d}: trajectory.npz arrays disagree in shape (positions {P.shape}, velocities "
                                 f"{arrays['velocities'].shape}, clearance {arrays['clearance'].shape}, labels "
                                 f"{arrays['labels'].shape})")

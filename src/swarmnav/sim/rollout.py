@@ -82,6 +82,7 @@ def run(
     V = np.empty((steps + 1, N, d))
     C = np.empty((steps + 1, N))
     lab = np.zeros((steps + 1, N), dtype=np.int32)
+    roles = None  # (K + 1, N) role codes, recorded only for a method whose info gives "roles"
     geom = scn.geometry
     no_obstacles = geom.is_empty
     if no_obstacles:
@@ -112,17 +113,26 @@ def run(
         C[k + 1] = clear(P[k + 1])
         labels = info.get("labels")
         lab[k + 1] = lab[k] if labels is None else labels
+        if info.get("roles") is not None:
+            if roles is None:
+                roles = np.zeros((steps + 1, N), dtype=np.uint8)
+            roles[k + 1] = info["roles"]
+        elif roles is not None:
+            roles[k + 1] = roles[k]
         for ev in info.get("events", ()):
             events.append({"step": k, **ev})
         if bar is not None and (k % 10 == 9 or k == steps - 1):
             bar(k + 1)
         if info.get("done"):  # the method's task is complete: record this state and stop
             P, V, C, lab = P[: k + 2].copy(), V[: k + 2].copy(), C[: k + 2].copy(), lab[: k + 2].copy()
+            roles = None if roles is None else roles[: k + 2].copy()
             if bar is not None:
                 bar(steps)
             break
     wall = time.perf_counter() - t0
     lab[0] = lab[1]  # the structure in force at k = 0 is the one decided at the first step
+    if roles is not None:
+        roles[0] = roles[1]
     result = RunResult(
         config={
             "swarmnav_version": __version__,
@@ -136,7 +146,7 @@ def run(
             **({"plane": {"z_fly": plane_z, "reason": f"{m.name} is planar: it flew the scene's "
                           f"horizontal slice at z = {plane_z:g} m"}} if plane_z is not None else {}),
         },
-        positions=P, velocities=V, clearance=C, labels=lab, events=events, wall_time=wall,
+        positions=P, velocities=V, clearance=C, labels=lab, roles=roles, events=events, wall_time=wall,
     )
     n_struct = sum(1 for e in events if e.get("action") in ("split", "merge"))
     metrics = navigation_metrics(
