@@ -288,8 +288,17 @@ def _cmd_experiment(args) -> int:
 def _cmd_report(args) -> int:
     from swarmnav.experiments.report import write_report
 
-    for path in write_report(args.dir, experiment=args.experiment, compare=args.compare):
+    viewers = None
+    if not args.no_viewers and (Path(args.dir) / "results.sqlite").exists():
+        from swarmnav.viz.store_views import write_store_viewers
+
+        viewers, problems = write_store_viewers(args.dir, experiment=args.experiment, progress=sys.stderr.isatty())
+        for line in problems:
+            print(f"swarmnav: {line}", file=sys.stderr)
+    for path in write_report(args.dir, experiment=args.experiment, compare=args.compare, viewers=viewers):
         print(f"wrote {path}")
+    if viewers:
+        print(f"wrote {len(viewers)} replay viewers under {Path(args.dir) / 'report_files' / 'viewers'}")
     return 0
 
 
@@ -369,6 +378,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--compare", nargs=2, metavar=("A", "B"),
                    help="add the per-seed %% change of variant B against variant A (HES Fig. 5); "
                         "default: the spec's [report] compare, if any")
+    s.add_argument("--no-viewers", action="store_true",
+                   help="no replay viewer per run (by default each stored trajectory gets one, linked from the report)")
     s.set_defaults(fn=_cmd_report)
 
     s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question")

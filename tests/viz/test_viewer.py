@@ -3,9 +3,6 @@ run within the stated quantisation error, and bad input is one line with exit co
 
 from __future__ import annotations
 
-import base64
-import gzip
-import json
 import re
 
 import numpy as np
@@ -15,18 +12,7 @@ from swarmnav.cli import main
 from swarmnav.sim import run
 from swarmnav.viz.viewer import LEVELS, quantisation_error, quantise
 
-
-def page_data(html_path):
-    """The JSON the page embeds (its public data format)."""
-    m = re.search(r'<script type="application/json" id="swarmnav-data">(.*?)</script>', html_path.read_text(), re.S)
-    assert m, "no embedded data"
-    return json.loads(m.group(1))
-
-
-def decode(blob) -> np.ndarray:
-    a = np.frombuffer(gzip.decompress(base64.b64decode(blob["data"])), dtype=np.dtype(blob["dtype"]).newbyteorder("<"))
-    a = a.reshape(blob["shape"])
-    return np.cumsum(a, axis=0, dtype=np.uint16) if blob["delta"] else a  # uint16 sums wrap as the page's do
+from _helpers.viewer import decode, page_data
 
 
 @pytest.fixture(scope="module")

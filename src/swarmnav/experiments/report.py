@@ -391,12 +391,14 @@ def paired_changes(directory: str | Path, a: str, b: str, *, experiment: str | N
 
 
 def write_report(directory: str | Path, experiment: str | None = None,
-                 compare: tuple[str, str] | None = None) -> list[Path]:
+                 compare: tuple[str, str] | None = None, viewers: dict[str, str] | None = None) -> list[Path]:
     """Write ``report.md`` (+ ``report_files/*.png``, ``*.svg``) and ``report.html`` into ``directory``.
 
     ``compare = (A, B)`` adds the paired-seed comparison of B against A (table, figure
     ``paired``, per-seed ``paired.csv``); without it, the pair the spec's ``[report] compare``
-    declares, if any.
+    declares, if any. ``viewers`` (run key -> a page's path relative to ``directory``, as
+    ``swarmnav report`` makes them with :mod:`swarmnav.viz.store_views`) adds a section that
+    links every run, by variant and seed, to its replay viewer.
     """
     store, experiment = _open(directory, experiment)
     d = store.root
@@ -445,6 +447,11 @@ def write_report(directory: str | Path, experiment: str | None = None,
                "|" + "".join("---|" if c["kind"] == "name" else "--:|" for c in tab["columns"])]
         md += ["| " + " | ".join(r) + " |" for r in tab["rows"]]
     md += [""] + [f"![{n}](report_files/{n})" for n, _ in figs] + [""]
+    replays = _replays(store, experiment, viewers) if viewers else []
+    if replays:
+        md += ["## Replays", "", "Each run's replay viewer (open in a browser), by variant and seed.", ""]
+        md += [f"- {name}: " + " · ".join(f"[seed {seed}]({path})" for seed, path in links) for name, links in replays]
+        md += [""]
     md_path = d / "report.md"
     md_path.write_text("\n".join(md), encoding="utf-8")
     e = html.escape
@@ -475,8 +482,31 @@ img {{ max-width: 100%; }}
 <section id="results">
 {"".join(_html_table(tab) for tab in tabs)}</section>
 {imgs}
+{_replays_html(replays)}
 </body></html>
 """
     html_path = d / "report.html"
     html_path.write_text(page, encoding="utf-8")
     return [md_path, html_path]
+
+
+def _replays(store: Store, experiment: str, viewers: dict[str, str]) -> list[tuple[str, list[tuple[int, str]]]]:
+    """(variant, [(seed, viewer path)]) for each variant with a viewer, in spec order."""
+    from swarmnav.experiments.runner import job_rows
+
+    meta = store.meta(f"experiment:{experiment}")
+    out: dict[str, list[tuple[int, str]]] = {}
+    for r in job_rows(store, meta):
+        if r["key"] in viewers:
+            out.setdefault(r["variant"], []).append((r["seed"], viewers[r["key"]]))
+    return list(out.items())
+
+
+def _replays_html(replays: list[tuple[str, list[tuple[int, str]]]]) -> str:
+    if not replays:
+        return ""
+    e = html.escape
+    items = "\n".join(f"<li>{e(name)}: " + " · ".join(f'<a href="{e(path, quote=True)}">seed {seed}</a>'
+                                                     for seed, path in links) + "</li>" for name, links in replays)
+    return (f'<section id="replays"><h2>Replays</h2><p>Each run\'s replay viewer, by variant and seed.</p>'
+            f"<ul>\n{items}\n</ul></section>")

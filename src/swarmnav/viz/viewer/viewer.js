@@ -463,7 +463,7 @@
     $('legend').innerHTML = parts.join(' ');
     const m = D.metrics;
     $('summary').textContent = `N = ${N}, K = ${K}, dt = ${DT} s` + ('Y' in m ? `  ·  Y = ${fmt(m.Y, 0)}  R_goal = ${fmt(m.R_goal)}  E_mean = ${fmt(m.E_mean)} m  R_unsafe = ${fmt(m.R_unsafe, 3)}` : '') +
-      `  ·  positions within ${fmt(D.quant.error * 1000, 2)} mm`;
+      `  ·  positions within ${fmt(D.quant.error * 1000, 2)} mm` + (D.note ? `  ·  ${D.note}` : '');
   }
 
   // ------------------------------------------------------------------ the hook the tests drive

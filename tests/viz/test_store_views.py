@@ -1,0 +1,75 @@
+"""``swarmnav report`` links every stored run to a replay viewer rebuilt from the store."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from swarmnav.cli import main
+from swarmnav.viz.headless import Browser, find_chromium
+from swarmnav.viz.store_views import derived_events
+from swarmnav.viz.viewer import LEVELS
+
+from _helpers.viewer import decode, page_data
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    d = tmp_path_factory.mktemp("store")
+    assert main(["experiment", "apf-scenes", "--seeds", "1-2", "--set", "steps=30", "--out", str(d), "--quiet"]) == 0
+    return d
+
+
+def test_report_links_each_run_to_its_viewer(store, capsys):
+    assert main(["report", str(store)]) == 0
+    assert "replay viewers under" in capsys.readouterr().out
+    page = (store / "report.html").read_text()
+    links = re.findall(r'<a href="(report_files/viewers/[0-9a-f]{64}\.html)">seed (\d)</a>', page)
+    import sqlite3
+
+    with sqlite3.connect(store / "results.sqlite") as db:
+        rows = db.execute("SELECT key, seed, trajectory FROM runs WHERE status = 'done'").fetchall()
+    assert sorted(p.split("/")[-1][:-5] for p, _ in links) == sorted(k for k, _, _ in rows)  # one link per run
+    assert "## Replays" in (store / "report.md").read_text()
+    key, seed, traj = rows[0]
+    data = page_data(store / "report_files" / "viewers" / f"{key}.html")
+    with np.load(store / traj) as z:
+        stored = z["positions"].astype(float)
+    q = data["quant"]
+    lo, hi = np.array(q["lo"]), np.array(q["hi"])
+    P = lo + decode(data["arrays"]["positions"]) * (hi - lo) / LEVELS
+    assert data["K"] == 30 and data["seed"] == seed
+    assert np.linalg.norm(P - stored, axis=2).max() <= q["error"] + 1e-12
+    assert "from the results store" in data["note"]
+
+
+def test_no_viewers_flag_and_a_rerun_keeps_existing_pages(store, capsys):
+    assert main(["report", str(store)]) == 0
+    folder = store / "report_files" / "viewers"
+    page = next(folder.glob("*.html"))
+    before = page.stat().st_mtime_ns
+    assert main(["report", str(store)]) == 0
+    assert page.stat().st_mtime_ns == before  # a key names one run: its page is not rewritten
+    assert main(["report", str(store), "--no-viewers"]) == 0
+    assert "Replays" not in (store / "report.html").read_text()
+
+
+def test_split_and_merge_marks_come_from_the_labels():
+    labels = np.zeros((6, 4), dtype=int)
+    labels[2:4, 2:] = 1  # a split between steps 1 and 2, a merge between 3 and 4
+    assert [(e["step"], e["action"]) for e in derived_events(labels)] == [(1, "split"), (3, "merge")]
+
+
+@pytest.mark.skipif(find_chromium() is None, reason="Debian's chromium is not installed (CI installs it)")
+def test_a_store_viewer_opens_with_its_shared_scripts(store):
+    main(["report", str(store)])
+    page = next((store / "report_files" / "viewers").glob("*.html"))
+    with Browser(900, 600) as b:
+        b.open(page)
+        assert b.eval("swarmnav.ready") is True
+        assert b.eval("swarmnav.view('persp')") == "persp" and b.eval("swarmnav.renderer()") == "three.js r185"
+        assert b.errors == []
+        local = [u for u in b.requests if u.startswith("file://")]
+        assert [u.rsplit("/", 1)[1] for u in local[1:]] == ["viewer-lib.js", "viewer.js"]  # beside the page
