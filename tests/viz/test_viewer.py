@@ -125,3 +125,24 @@ def test_roles_are_kept_when_a_method_reports_them_and_absent_otherwise(hes_dir,
     data = page_data(d / "viewer.html")
     assert data["roles"] == ["follower", "subleader", "leader"]
     np.testing.assert_array_equal(decode(data["arrays"]["roles"]), roles)
+
+
+def test_plot_perspective_draws_the_step_as_hes_figure_a1(hes_dir, tmp_path):
+    """The PNG shows the slabs, the goal star and the arrows, and moves with --step."""
+    from PIL import Image
+
+    from swarmnav.viz.style import GOAL_FACE
+
+    shots = {}
+    for step in (50, 300):
+        out = tmp_path / f"p{step}.png"
+        assert main(["plot", str(hes_dir), "--perspective", "--step", str(step), "--out", str(out)]) == 0
+        shots[step] = np.asarray(Image.open(out).convert("RGB"), dtype=np.int16)
+    img = shots[300]
+    yellow = np.all(np.abs(img - np.array([0xff, 0xd4, 0x00])) < 30, axis=2)
+    assert GOAL_FACE == "#ffd400" and yellow.sum() > 50  # the goal star
+    grey = np.all(np.abs(img - 0.5 * (np.array([0xc5, 0xca, 0xd3]) + 255)) < 40, axis=2)
+    assert grey.mean() > 0.05  # the slabs: light grey, translucent
+    blue = np.all(np.abs(img - np.array([0x1f, 0x77, 0xb4])) < 40, axis=2)
+    assert blue.sum() > 20  # arrows of sub-swarm 0 (tab:blue)
+    assert np.any(shots[50] != shots[300], axis=2).mean() > 0.001  # another step, another picture
