@@ -383,3 +383,51 @@ def test_agent_guard_counts_the_neighbours_own_stopping_distance():
     c_max = math.sqrt(2 * P.guard_brake * (0.9 - P.guard_margin) - 1.0)
     w = v[0] + P.dt * out[0]
     assert w[0] == pytest.approx(c_max)
+
+
+# --------------------------------------------------------------------------- neighbour rows vs all pairs
+
+def _swarm(n, seed):
+    """n agents at ~2 m spacing in a few groups, moving at up to ~2.5 m/s, some pairs close."""
+    rng = np.random.default_rng(seed)
+    side = 2.0 * math.sqrt(n)
+    x = rng.uniform(0.0, side, (n, 2))
+    x[1::7] = x[::7][: len(x[1::7])] + rng.normal(scale=0.3, size=(len(x[1::7]), 2))  # close pairs
+    v = rng.normal(scale=1.5, size=(n, 2))
+    a = rng.normal(scale=2.0, size=(n, 2))
+    group = rng.integers(0, 3, n)
+    return x, v, a, group
+
+
+@pytest.mark.parametrize("n,seed", [(80, 0), (300, 1), (300, 2)])
+def test_pair_kernels_on_neighbour_rows_equal_all_pairs_bit_for_bit(n, seed):
+    # The cell-list rows (N >= 64) must give the all-pairs result exactly: partners beyond the
+    # radius add nothing and partners are visited in the same ascending order.
+    x, v, a, group = _swarm(n, seed)
+    rows = F.neighbour_rows(x, max(P.r_sep, P.d_ir))
+    assert len(rows[1]) < n * n  # a real cell list, not every pair
+    for k, r, same in ((P.k_sep, P.r_sep, False), (P.k_ir, P.d_ir, True)):
+        assert np.array_equal(F.separation(x, group, k, r, P.d_floor, same, *rows),
+                              F.separation(x, group, k, r, P.d_floor, same))
+    assert np.array_equal(F.nearest_in_group(x, group, *rows), F.nearest_in_group(x, group))
+    lone = group.copy()
+    lone[0] = 7  # alone in its group: found by the fallback over all agents (-1)
+    lone[1], lone[-1] = 8, 8  # a pair far apart: nobody of its group in its row
+    assert np.array_equal(F.nearest_in_group(x, lone, *rows), F.nearest_in_group(x, lone))
+    rg = F.neighbour_rows(x, B.brake_radius(a, v, P.dt, P.guard_brake, P.guard_margin))
+    assert np.array_equal(B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max, 4, *rg),
+                          B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max))
+    active = np.arange(n) % 2 == 0
+    rb = F.neighbour_rows(x, B.brake_radius(a, v, P.dt, P.agent_brake, P.agent_margin))
+    assert np.array_equal(B.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max, *rb),
+                          B.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max))
+
+
+def test_neighbour_rows_hold_every_agent_within_the_radius():
+    x, *_ = _swarm(200, 3)
+    ptr, idx = F.neighbour_rows(x, 3.0)
+    d = np.hypot(*(x[:, None, :] - x[None, :, :]).transpose(2, 0, 1))
+    for i in range(len(x)):
+        row = idx[ptr[i]:ptr[i + 1]]
+        assert np.all(np.diff(row) > 0)  # ascending, no repeats
+        assert set(np.flatnonzero(d[i] <= 3.0)) <= set(row.tolist())

@@ -15,6 +15,8 @@ import math
 import numpy as np
 from numba import njit
 
+from swarmnav.methods.hes.forces import all_rows
+
 @njit(cache=True)
 def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_range, passes=3):
     """Adaptive motion regulation (ours; the safety stack's layers around eq. (38), Section 5.3).
@@ -84,7 +86,7 @@ def _wall_sweep(wx, wy, row, cos_t, sin_t, a_brake, margin, max_range, project):
 
 
 @njit(cache=True)
-def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol):
+def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol, ptr, idx):
     """One pass of agent i's braking bounds, in place on its next velocity ``w[i]``: for every
     other agent j at distance d (``u = (p_j - p_i) / d``, ``s_j = v_j . u``) an excess of
     ``w_i . u`` over ``c_max`` (+ ``tol``) is removed along u. i only brakes: a neighbour closing
@@ -96,7 +98,8 @@ def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol):
     ``c_max = sqrt(max(2 a_brake (d - margin) + s_j |s_j|, 0))``.
     """
     moved = False
-    for j in range(x.shape[0]):
+    for t in range(ptr[i], ptr[i + 1]):
+        j = idx[t]
         if j == i:
             continue
         ux = x[j, 0] - x[i, 0]
@@ -122,8 +125,17 @@ def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol):
     return moved
 
 
+def brake_radius(a: np.ndarray, v: np.ndarray, dt: float, a_brake: float, margin: float) -> float:
+    """Distance [m] beyond which no braking bound of :func:`agent_barrier` or :func:`agent_guard`
+    can bind: a bound ``c_max >= sqrt(max(2 a_brake (d - margin) - max|v|^2, 0))`` exceeds every
+    closing speed ``w_i . u <= max|v + a dt|`` there (projections never lengthen w_i); 1 m of slack."""
+    w2 = float(np.max(np.sum((v + dt * a) ** 2, axis=1), initial=0.0))
+    v2 = float(np.max(np.sum(v * v, axis=1), initial=0.0))
+    return margin + (w2 + v2) / (2.0 * a_brake) + 1.0
+
+
 @njit(cache=True)
-def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead):
+def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead, ptr=None, idx=None):
     """Braking barrier between agents (ours; passage mode's queues, beside :func:`safety_filter`).
 
     For every ``active`` agent i and every other agent j at distance d, with unit direction
@@ -141,17 +153,22 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead):
     Why: the repulsions of eq. (25)/(31) are ~k/d (<= 7 m/s^2 at the 0.4 m contact distance) and
     act on positions only; members converging on a gate mouth at 1-2 m/s were not stopped by them
     (narrow_alternating_gates: 146 contacts per run, median closing speed 1.4 m/s at contact).
+
+    ``ptr, idx``: neighbour rows (``forces.neighbour_rows``) covering :func:`brake_radius`, or
+    every pair if not given (the same result).
     """
     n = x.shape[0]
+    if ptr is None or idx is None:
+        ptr, idx = all_rows(n)
     w = v + dt * a
     for i in range(n):
         if active[i]:
-            _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, 0.0)
+            _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, 0.0, ptr, idx)
     return (w - v) / dt
 
 
 @njit(cache=True)
-def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4):
+def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4, ptr=None, idx=None):
     """Contact guard between agents (ours): a braking bound with priority over the clip of eq. (39).
 
     ``a`` is the already saturated command (norm <= ``a_max``). For every agent i and every other
@@ -174,12 +191,15 @@ def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4):
     exceeds it). Why: the 1/d repulsions of eqs. (25)/(31) (<= 7 m/s^2 at contact) act on
     positions, not on the closing speed (1-4 m/s at contact), and eq. (39) scales them down
     with the far larger LiDAR repulsion near obstacles. Returns the new (N, 2) command.
+    ``ptr, idx``: neighbour rows covering :func:`brake_radius`, or every pair if not given.
     """
     n = x.shape[0]
+    if ptr is None or idx is None:
+        ptr, idx = all_rows(n)
     w = v + dt * a
     for i in range(n):
         for _ in range(passes):
-            if not _brake_toward_neighbours(w, x, v, i, a_brake, margin, 0.0, 1e-12):
+            if not _brake_toward_neighbours(w, x, v, i, a_brake, margin, 0.0, 1e-12, ptr, idx):
                 break
     out = np.empty((n, 2))
     for i in range(n):

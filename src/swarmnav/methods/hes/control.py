@@ -30,6 +30,7 @@ def couplings(h, step: Step) -> None:
     wp = np.array([sub.waypoint for sub in subs])[col]
     nav = np.array([sub.mode == NAVIGATE for sub in subs])[col]
     follower = sl_idx != h.arange
+    rows = step.rows = F.neighbour_rows(x, h.pair_radius)
     queued = step.own >= 0
     if queued.any():
         cgrp = col * (int(step.own.max()) + 2) + step.own + 1  # (sub-swarm, own group) pairs, in that order
@@ -37,10 +38,10 @@ def couplings(h, step: Step) -> None:
         cent = F.group_centroids(x, cgrp, len(uniq))[cgrp]
         wp[queued] = step.own_target[queued]
         follower &= ~queued
-        nn = F.nearest_in_group(x, cgrp)
+        nn = F.nearest_in_group(x, cgrp, *rows)
     else:
         cent = F.group_centroids(x, col, len(subs))[col]
-        nn = F.nearest_in_group(x, h.labels)
+        nn = F.nearest_in_group(x, h.labels, *rows)
     step.col, step.sl_idx, step.wp, step.nav = col, sl_idx, wp, nav
     step.follower, step.cent, step.nn = follower, cent, nn
 
@@ -91,7 +92,7 @@ def control(h, step: Step) -> np.ndarray:
         part.steer(step)
     vslot = F.slot_velocity(x, step.slot, step.speed, p.eps_v)
     args = (x, v, h.labels, x[step.sl_idx], v[step.sl_idx], step.follower, step.cent, step.wp, step.nav,
-            step.slot, vslot, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe)
+            step.slot, vslot, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe, *step.rows)
     edit = [part for part in h.at["push_back"] if part.push_back(step)]
     if edit:
         t = F.force_terms(*args)

@@ -28,6 +28,8 @@ import math
 import numpy as np
 from numba import njit
 
+from swarmnav.sensing.cells import neighbour_csr
+
 TERMS = ("att", "sep", "path", "intra", "ir", "fol", "coh", "obs")
 SIG_SLOT, SIG_NN, SIG_SL, SIG_CENT = 0, 1, 2, 3
 
@@ -94,19 +96,75 @@ def attraction(x, v, slot, vslot, k_p, k_v):
 
 
 @njit(cache=True)
-def separation(x, group, k, radius, d_floor, same_group):
+def all_rows(n):
+    """Neighbour rows (see :func:`neighbour_rows`) that list every agent for every agent."""
+    ptr = np.arange(n + 1) * n
+    idx = np.empty(n * n, dtype=np.int64)
+    for i in range(n):
+        for j in range(n):
+            idx[i * n + j] = j
+    return ptr, idx
+
+
+@njit(cache=True)
+def _sorted_rows(start, end, indices):
+    n = start.shape[0]
+    ptr = np.empty(n + 1, dtype=np.int64)
+    ptr[0] = 0
+    for i in range(n):
+        ptr[i + 1] = ptr[i] + end[i] - start[i]
+    idx = np.empty(ptr[n], dtype=np.int64)
+    for i in range(n):
+        a = ptr[i]
+        for t in range(end[i] - start[i]):  # insertion sort: rows are short
+            j = indices[start[i] + t]
+            u = a + t
+            while u > a and idx[u - 1] > j:
+                idx[u] = idx[u - 1]
+                u -= 1
+            idx[u] = j
+    return ptr, idx
+
+
+def neighbour_rows(x: np.ndarray, radius: float, all_below: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """Every agent's candidate neighbours for the pair kernels: agent i's are
+    ``idx[ptr[i]:ptr[i + 1]]``, ascending, itself included, and hold every agent within
+    ``radius`` [m] of it (a cell list, ``sensing.neighbour_csr``). Below ``all_below`` agents
+    every row lists every agent (a cell list does not pay there). The kernels visit partners in
+    ascending index either way, so a kernel whose partners beyond ``radius`` add nothing gives
+    the same result, bit for bit, as over all pairs."""
+    n = len(x)
+    if n < all_below or not math.isfinite(radius):
+        return all_rows(n)
+    cap = 32 * n
+    while True:
+        indices, dist2 = np.empty(cap, dtype=np.int64), np.empty(cap)
+        _, start, end, total = neighbour_csr(x, float(radius), 0.0, False, indices, dist2, -1.0)
+        if total <= cap:
+            return _sorted_rows(start, end, indices)
+        cap = total
+
+
+@njit(cache=True)
+def separation(x, group, k, radius, d_floor, same_group, ptr=None, idx=None):
     """Inverse-distance repulsion ``sum_j k (p_i - p_j) / d_ij^2`` over ``d_ij < radius``.
 
     ``same_group=False``: all neighbours, eq. (25) (global separation, k_sep, r_sep);
     ``same_group=True``: members of i's own sub-swarm only, eq. (31) (k_ir, d_ir).
-    O(N^2) pair loop (compiled; N is tens to hundreds here).
+    Pairs from the neighbour rows ``ptr, idx`` (:func:`neighbour_rows`, which must cover
+    ``radius``), or all pairs if not given; each pair once, partners in ascending index.
     """
     n = x.shape[0]
+    if ptr is None or idx is None:
+        ptr, idx = all_rows(n)
     out = np.zeros((n, 2))
     r2 = radius * radius
     f2 = d_floor * d_floor
     for i in range(n):
-        for j in range(i + 1, n):
+        for t in range(ptr[i], ptr[i + 1]):
+            j = idx[t]
+            if j <= i:
+                continue
             if same_group and group[i] != group[j]:
                 continue
             dx = x[i, 0] - x[j, 0]
@@ -164,24 +222,36 @@ def velocity_match(v, v_target, k, mask):
 
 
 @njit(cache=True)
-def nearest_in_group(x, group):
-    """Index of each agent's nearest neighbour within its own sub-swarm (-1 if alone)."""
+def nearest_in_group(x, group, ptr=None, idx=None):
+    """Index of each agent's nearest neighbour within its own sub-swarm (-1 if alone); the lowest
+    index among equally near ones. Searched in the neighbour rows ``ptr, idx`` first (all agents
+    if not given), then over all agents for those with no group mate in their row."""
     n = x.shape[0]
+    if ptr is None or idx is None:
+        ptr, idx = all_rows(n)
     out = np.full(n, -1, dtype=np.int64)
-    best = np.full(n, np.inf)
     for i in range(n):
-        for j in range(i + 1, n):
-            if group[i] != group[j]:
+        best = np.inf
+        for t in range(ptr[i], ptr[i + 1]):
+            j = idx[t]
+            if j == i or group[i] != group[j]:
                 continue
             dx = x[i, 0] - x[j, 0]
             dy = x[i, 1] - x[j, 1]
             d2 = dx * dx + dy * dy
-            if d2 < best[i]:
-                best[i] = d2
+            if d2 < best:
+                best = d2
                 out[i] = j
-            if d2 < best[j]:
-                best[j] = d2
-                out[j] = i
+        if out[i] < 0 and ptr[i + 1] - ptr[i] < n:  # nobody of its group nearby: all agents
+            for j in range(n):
+                if j == i or group[i] != group[j]:
+                    continue
+                dx = x[i, 0] - x[j, 0]
+                dy = x[i, 1] - x[j, 1]
+                d2 = dx * dx + dy * dy
+                if d2 < best:
+                    best = d2
+                    out[i] = j
     return out
 
 
@@ -254,7 +324,7 @@ def lidar_repulsion(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_f
 
 @njit(cache=True)
 def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
-                ring, cos_t, sin_t, g, dsafe):
+                ring, cos_t, sin_t, g, dsafe, ptr=None, idx=None):
     """All eight terms of eq. (38), an (8, N, 2) stack in the order of ``TERMS``.
 
     Args:
@@ -269,11 +339,14 @@ def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot
         sig: (N, 4) occlusion factors of eq. (30) for slot, nn, subleader, centroid.
         ring: (N, R) LiDAR ranges; cos_t, sin_t: (R,) ray directions; g: gain vector.
         dsafe: (N,) safety distance of eq. (36) per agent [m] (``g[G_DSAFE]`` outside passage mode).
+        ptr, idx: neighbour rows covering max(r_sep, d_ir) (:func:`neighbour_rows`); all pairs if not given.
     """
     n = x.shape[0]
+    if ptr is None or idx is None:
+        ptr, idx = all_rows(n)
     out = np.zeros((8, n, 2))
     out[0] = attraction(x, v, slot, vslot, g[G_KP], g[G_KV])
-    out[1] = separation(x, group, g[G_KSEP], g[G_RSEP], g[G_DFLOOR], False)
+    out[1] = separation(x, group, g[G_KSEP], g[G_RSEP], g[G_DFLOOR], False, ptr, idx)
     out[2] = centering(x, waypoint, g[G_KPATH])
     has_nn = nn >= 0
     q = np.empty((n, 2))
@@ -282,7 +355,7 @@ def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot
         q[i, 0] = x[j, 0]
         q[i, 1] = x[j, 1]
     out[3] = spring(x, q, g[G_KINTRA], g[G_DTHR], has_nn)
-    out[4] = separation(x, group, g[G_KIR], g[G_DIR], g[G_DFLOOR], True)
+    out[4] = separation(x, group, g[G_KIR], g[G_DIR], g[G_DFLOOR], True, ptr, idx)
     out[5] = spring(x, sl_pos, g[G_KL], g[G_D0], follower) + velocity_match(v, sl_vel, g[G_KVL], follower)
     all_true = np.ones(n, dtype=np.bool_)
     out[6] = spring(x, cent, g[G_KCOH], g[G_DC], all_true)
@@ -302,10 +375,10 @@ def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot
 
 @njit(cache=True)
 def synthesize(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
-               ring, cos_t, sin_t, g, dsafe):
+               ring, cos_t, sin_t, g, dsafe, ptr=None, idx=None):
     """Eq. (38): ``a_cmd = sum of the eight terms`` (before saturation), (N, 2)."""
     t = force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot, vslot, nn, sig,
-                    ring, cos_t, sin_t, g, dsafe)
+                    ring, cos_t, sin_t, g, dsafe, ptr, idx)
     return t.sum(axis=0)
 
 

@@ -89,6 +89,7 @@ class Hes:
         self.dynamics = DampedDoubleIntegrator()  # eq. (5)-(7): m = 5 kg, c_d = 0.5, inverse model
         self.gains = F.gain_vector(self.params)
         self.cos, self.sin = ray_table(self.params.n_rays)
+        self.pair_radius = max(self.params.r_sep, self.params.d_ir)  # [m] reach of the pair terms (eq. 25, 31)
         p = self.params
         self.ring_angles = np.linspace(0.0, 2 * np.pi, p.enc_samples, endpoint=False)  # encircle slot candidates
         self._source_override: DecisionSource | None = None

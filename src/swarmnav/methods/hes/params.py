@@ -87,6 +87,9 @@ class HesParams:
         "candidate angles of the encircle slots on the circle of r_enc (72: every 5 deg)")
     slot_refresh: int = param(10, "steps", "[1, inf)", "ours",
         "steps between two solutions of the slot assignment (10: 1 s at dt = 0.1 s)")
+    assign_exact: int = param(64, "agents", "[1, inf)", "ours",
+        "slot assignment minimising the summed squared distance (Hungarian, O(m^3)) up to this many "
+        "agents per sub-swarm; above, a banded sort in O(m log m) (formation.assign_slots)")
     stray: float = param(4.0, "m", "(0, inf)", "ours",
         "a subleader farther than this from its sub-swarm's centroid (or cut off from it) hands "
         "its role to the member nearest the centroid (the paper fixes no rule for who leads)")

@@ -35,7 +35,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swarmnav.methods.hes.barriers import agent_barrier
+from swarmnav.methods.hes.barriers import agent_barrier, brake_radius
+from swarmnav.methods.hes.forces import neighbour_rows
 from swarmnav.methods.hes.corridors import GAP_W, Corridor, seen_passages, segment_clear
 from swarmnav.methods.hes.part import Part
 
@@ -337,4 +338,5 @@ class PassageMode(Part):
     def queue_barrier(self, step, a: np.ndarray, active: np.ndarray) -> np.ndarray:
         """The agents' braking barrier for the ``active`` members (``barriers.agent_barrier``)."""
         p = self.p
-        return agent_barrier(a, step.x, step.v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound)
+        ptr, idx = neighbour_rows(step.x, brake_radius(a, step.v, p.dt, p.agent_brake, p.agent_margin))
+        return agent_barrier(a, step.x, step.v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound, ptr, idx)

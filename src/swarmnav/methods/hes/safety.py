@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmnav.methods.hes.barriers import agent_guard, safety_filter
+from swarmnav.methods.hes.barriers import agent_guard, brake_radius, safety_filter
+from swarmnav.methods.hes.forces import neighbour_rows
 from swarmnav.methods.hes.part import Part
 
 
@@ -55,4 +56,5 @@ class ContactGuard(Part):
 
     def guard(self, step, a):
         p = self.p
-        return agent_guard(a, step.x, step.v, p.dt, p.guard_brake, p.guard_margin, p.a_bound)
+        ptr, idx = neighbour_rows(step.x, brake_radius(a, step.v, p.dt, p.guard_brake, p.guard_margin))
+        return agent_guard(a, step.x, step.v, p.dt, p.guard_brake, p.guard_margin, p.a_bound, 4, ptr, idx)

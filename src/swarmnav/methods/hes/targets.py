@@ -43,7 +43,7 @@ def references(h, step: Step) -> None:
                 pts = h.goal[None, :] + p.r_enc * np.column_stack([np.cos(ang), np.sin(ang)])
                 free = free_points(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, pts, p.enc_clear, p.lidar_range)
                 ring = ring_slots(h.goal, p.r_enc, m, free, ang)
-                r_i = assign_slots(x[members], ring)
+                r_i = assign_slots(x[members], ring, p.assign_exact)
                 sub.ring_offsets = ring[r_i] - h.goal
                 sub.slot_step = k
             slot[members] = h.goal + sub.ring_offsets
@@ -52,7 +52,7 @@ def references(h, step: Step) -> None:
         tmpl = template(p, m, sub)
         if k - sub.slot_step >= p.slot_refresh or not np.array_equal(sub.slot_members, members):
             sub.slot_members = members
-            sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl)
+            sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl, p.assign_exact)
             sub.slot_step = k
         slot[members] = sub.waypoint + tmpl[sub.slot_index]
         speed[members] = p.v_s
