@@ -136,6 +136,37 @@ def test_reward_is_the_documented_sum_and_arrived_agents_terminate_and_hover():
     assert seen_arrival and seen_penalty and parked
 
 
+def test_the_three_forms_step_the_same_swarm_and_without_termination_everyone_flies_on():
+    kw = dict(goal_radius=30.0, terminate_at_goal=False, horizon=6.0)
+    par = E.parallel_env("narrow_alternating_gates", **kw)
+    gym = gymnasium.make(E.ENV_ID, scenario="narrow_alternating_gates", **kw)
+    vec = E.SwarmVectorEnv(1, "narrow_alternating_gates", **kw)
+    po, pi = par.reset(seed=8)
+    go, _ = gym.reset(seed=8)
+    vo, _ = vec.reset(seed=8)
+    assert np.array_equal(np.stack([po[a] for a in par.possible_agents]), go) and np.array_equal(go, vo[0])
+    o = par.options
+    dist = np.array([pi[a]["distance_to_goal"] for a in par.possible_agents])
+    arrived = np.zeros(20, dtype=bool)
+    for k in range(60):
+        goal = go[:, 38:40] / np.linalg.norm(go[:, 38:40], axis=1, keepdims=True)
+        po, pr, pt, _, pi = par.step({a: goal[i] for i, a in enumerate(par.possible_agents)})
+        go, gr, gt, _, gi = gym.step(goal)
+        vo, vr, *_ = vec.step(goal[None])
+        assert k == 59 or len(par.agents) == 20  # nobody leaves before the step limit
+        assert not any(pt.values()) and not gt
+        assert gr == pytest.approx(np.mean(list(pr.values())), abs=1e-12) and gr == vr[0]
+        assert np.array_equal(gi["reward_agents"], [pr[a] for a in par.possible_agents])
+        first = gi["arrived"] & ~arrived  # the arrival bonus, once per agent
+        want = (o.w_progress * (dist - gi["distance_to_goal"]) + o.w_goal * first
+                - o.dt * (o.w_contact * (gi["obstacle_contact"].astype(float) + gi["agent_contact"])
+                          + o.w_unsafe * gi["unsafe"]))
+        np.testing.assert_allclose(gi["reward_agents"], want, atol=1e-9)
+        arrived |= gi["arrived"]
+        dist = gi["distance_to_goal"]
+    assert arrived.sum() >= 10 and (gi["distance_to_goal"][arrived] < 30.0 - 1.0).any()  # flew on inside
+
+
 def test_out_of_bound_actions_are_clipped_to_norm_one():
     a = E.parallel_env("default_corridor")
     b = E.parallel_env("default_corridor")
