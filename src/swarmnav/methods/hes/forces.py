@@ -126,15 +126,22 @@ def _sorted_rows(start, end, indices):
     return ptr, idx
 
 
-def neighbour_rows(x: np.ndarray, radius: float, all_below: int = 64) -> tuple[np.ndarray, np.ndarray]:
+ROWS_ALL_BELOW = 64  # agents: below this, every neighbour row lists every agent (a cell list does not pay)
+
+
+def neighbour_rows(x: np.ndarray, radius, all_below: int = ROWS_ALL_BELOW) -> tuple[np.ndarray, np.ndarray]:
     """Every agent's candidate neighbours for the pair kernels: agent i's are
     ``idx[ptr[i]:ptr[i + 1]]``, ascending, itself included, and hold every agent within
     ``radius`` [m] of it (a cell list, ``sensing.neighbour_csr``). Below ``all_below`` agents
     every row lists every agent (a cell list does not pay there). The kernels visit partners in
     ascending index either way, so a kernel whose partners beyond ``radius`` add nothing gives
-    the same result, bit for bit, as over all pairs."""
+    the same result, bit for bit, as over all pairs. ``radius`` may be a function returning it,
+    called only when a cell list is built."""
     n = len(x)
-    if n < all_below or not math.isfinite(radius):
+    if n < all_below:
+        return all_rows(n)
+    radius = radius() if callable(radius) else radius
+    if not math.isfinite(radius):
         return all_rows(n)
     cap = 32 * n
     while True:

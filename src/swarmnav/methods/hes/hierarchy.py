@@ -63,7 +63,7 @@ class Report:
 
 def make_pack(sid: int, subleader: int, members: np.ndarray, x: np.ndarray, v: np.ndarray) -> Pack:
     pos = x[members]
-    return Pack(sid, subleader, members, pos, v[members], pos.mean(axis=0))
+    return Pack(sid, subleader, members, pos, v[members], pos.sum(axis=0) / len(pos))  # = pos.mean(axis=0)
 
 
 # --------------------------------------------------------------------------- split and merge

@@ -338,5 +338,5 @@ class PassageMode(Part):
     def queue_barrier(self, step, a: np.ndarray, active: np.ndarray) -> np.ndarray:
         """The agents' braking barrier for the ``active`` members (``barriers.agent_barrier``)."""
         p = self.p
-        ptr, idx = neighbour_rows(step.x, brake_radius(a, step.v, p.dt, p.agent_brake, p.agent_margin))
+        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.dt, p.agent_brake, p.agent_margin))
         return agent_barrier(a, step.x, step.v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound, ptr, idx)

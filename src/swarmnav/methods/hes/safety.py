@@ -56,5 +56,5 @@ class ContactGuard(Part):
 
     def guard(self, step, a):
         p = self.p
-        ptr, idx = neighbour_rows(step.x, brake_radius(a, step.v, p.dt, p.guard_brake, p.guard_margin))
+        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.dt, p.guard_brake, p.guard_margin))
         return agent_guard(a, step.x, step.v, p.dt, p.guard_brake, p.guard_margin, p.a_bound, 4, ptr, idx)
