@@ -105,6 +105,12 @@ def test_event_marks_keys_and_agent_readout(runs, browser):
     assert a["speed"] == pytest.approx(np.linalg.norm(res.velocities[k, i]), abs=vmax / 65535 * 2)
     assert a["clearance"] == pytest.approx(res.clearance[k, i], abs=(c_hi - c_lo) / 65534)
     assert a["subswarm"] == res.labels[k, i]
+    # a real mouse over that agent: the tooltip names it, with its role, speed and clearance
+    x, y = browser.eval(f"swarmnav.screenOf({i})")
+    browser.send("Input.dispatchMouseEvent", session=True, type="mouseMoved", x=x, y=y)
+    tip = browser.eval("new Promise(r => requestAnimationFrame(() => r(document.getElementById('tip').textContent)))")
+    assert tip.startswith(f"agent {i}\n") and f"speed: {a['speed']:.2f} m/s" in tip and "role: not recorded" in tip
+    assert f"clearance: {a['clearance']:.2f} m" in tip
     assert browser.errors == []
 
 

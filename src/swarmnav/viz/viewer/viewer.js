@@ -499,6 +499,8 @@
       for (let i = 0; i < N; i++) { G.agents.getMatrixAt(i, G.m); out.push([e[12], e[13], e[14]]); }
       return out;
     },
+    /** Page coordinates [css px] of agent i as drawn top-down (where to point the mouse). */
+    screenOf(i) { const r = stage.getBoundingClientRect(); return [r.left + drawn[2 * i], r.top + drawn[2 * i + 1]]; },
     /** What the tooltip says of agent i at the current step. */
     agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i)}),
     stats: () => ({...stats, playing}),
