@@ -176,7 +176,7 @@ class Hes:
     # ------------------------------------------------------------------ one step
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         """One step of Section 4.4; returns the commanded accelerations (N, 2) [m/s^2] and
-        ``{"labels", "events"}``."""
+        ``{"labels", "events", "roles"}`` (roles: see :meth:`roles`)."""
         x = np.ascontiguousarray(obs.positions, dtype=np.float64)
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         # 1. perceive
@@ -196,7 +196,15 @@ class Hes:
         # 5. control
         a = control(self, step)
         self.last_step = step
-        return a, {"labels": self.labels.copy(), "events": events}
+        return a, {"labels": self.labels.copy(), "events": events, "roles": self.roles()}
+
+    def roles(self) -> np.ndarray:
+        """(N,) uint8 role of each agent in the hierarchy of eq. (1): 2 the leader, 1 a
+        subleader, 0 a follower (recorded by the run for the replay viewer)."""
+        r = np.zeros(self.n, dtype=np.uint8)
+        r[[sub.subleader for sub in self.subs.values()]] = 1
+        r[self.leader] = 2
+        return r
 
     def _decide(self, step: Step) -> list[dict]:
         """Stages 2-3: the reports, z(k), the source's proposal through Pi_feas (eq. 22), executed."""
