@@ -104,27 +104,26 @@ def test_bad_input_is_one_line_and_exit_2(hes_dir, tmp_path, capsys):
 
 
 def test_roles_are_kept_when_a_method_reports_them_and_absent_otherwise(hes_dir, tmp_path):
-    """A method that gives ``info["roles"]`` gets a ``roles`` array in trajectory.npz, which the
-    viewer shows; a run without roles keeps exactly its former four arrays."""
-    import dataclasses
-
+    """HES reports roles (eq. 1): the run keeps them as a ``roles`` array and the page carries
+    them; a method without roles (APF) keeps exactly its former four arrays."""
     from swarmnav.sim import RunResult
 
-    with np.load(hes_dir / "trajectory.npz") as z:
-        assert sorted(z.files) == ["clearance", "labels", "positions", "velocities"]
     res = RunResult.load(hes_dir)
-    assert res.roles is None
-    roles = np.zeros(res.labels.shape, dtype=np.uint8)
-    roles[:, 3], roles[:, 5] = 2, 1  # agent 3 leads, agent 5 is a subleader
-    d = tmp_path / "roles"
-    dataclasses.replace(res, roles=roles).save(d)
-    back = RunResult.load(d)
-    np.testing.assert_array_equal(back.roles, roles)
-    np.testing.assert_array_equal(back.positions, res.positions)
-    assert main(["view", str(d)]) == 0
-    data = page_data(d / "viewer.html")
+    assert res.roles is not None and res.roles.shape == res.labels.shape
+    assert np.all((res.roles == 2).sum(axis=1) == 1)  # one leader at every step
+    for k in range(0, len(res.labels), 25):  # every sub-swarm is headed by its subleader (or the leader)
+        for s in np.unique(res.labels[k]):
+            assert res.roles[k][res.labels[k] == s].max() >= 1, (k, s)
+    assert res.n_subswarms.max() >= 2 and np.any((res.roles >= 1).sum(axis=1) >= 2)  # the split made one more
+    assert main(["view", str(hes_dir)]) == 0
+    data = page_data(hes_dir / "viewer.html")
     assert data["roles"] == ["follower", "subleader", "leader"]
-    np.testing.assert_array_equal(decode(data["arrays"]["roles"]), roles)
+    np.testing.assert_array_equal(decode(data["arrays"]["roles"]), res.roles)
+    d = tmp_path / "apf"
+    run("apf", "default_corridor", seed=1, steps=10).save(d)
+    with np.load(d / "trajectory.npz") as z:
+        assert sorted(z.files) == ["clearance", "labels", "positions", "velocities"]
+    assert RunResult.load(d).roles is None
 
 
 def test_plot_perspective_draws_the_step_as_hes_figure_a1(hes_dir, tmp_path):

@@ -109,7 +109,8 @@ def test_event_marks_keys_and_agent_readout(runs, browser):
     x, y = browser.eval(f"swarmnav.screenOf({i})")
     browser.send("Input.dispatchMouseEvent", session=True, type="mouseMoved", x=x, y=y)
     tip = browser.eval("new Promise(r => requestAnimationFrame(() => r(document.getElementById('tip').textContent)))")
-    assert tip.startswith(f"agent {i}\n") and f"speed: {a['speed']:.2f} m/s" in tip and "role: not recorded" in tip
+    assert tip.startswith(f"agent {i}\n") and f"speed: {a['speed']:.2f} m/s" in tip and f"role: {a['role']}" in tip
+    assert a["role"] == ["follower", "subleader", "leader"][res.roles[k, i]]
     assert f"clearance: {a['clearance']:.2f} m" in tip
     assert browser.errors == []
 
@@ -141,19 +142,15 @@ def test_screenshots_of_planar_perspective_and_3d_runs_differ(runs, browser, tmp
     assert tuple(persp[300, 20]) == (0xf4, 0xf6, 0xf8) and tuple(top[300, 5]) == (255, 255, 255)
 
 
-def test_recorded_roles_are_marked_and_read_out(runs, browser, tmp_path):
-    import dataclasses
-
-    res = RunResult.load(runs["planar"])
-    roles = np.zeros(res.labels.shape, dtype=np.uint8)
-    roles[:, 3], roles[:, 5] = 2, 1
-    dataclasses.replace(res, roles=roles).save(tmp_path)
-    assert main(["view", str(tmp_path)]) == 0
-    _open(browser, tmp_path)
-    browser.eval("swarmnav.seek(50)")
-    assert [browser.eval(f"swarmnav.agent({i}).role") for i in (0, 3, 5)] == ["follower", "leader", "subleader"]
+def test_recorded_roles_are_marked_and_read_out(runs, browser):
+    res = RunResult.load(runs["planar"])  # HES records its roles
+    _open(browser, runs["planar"])
+    k = 300
+    browser.eval(f"swarmnav.seek({k})")
+    shown = [browser.eval(f"swarmnav.agent({i}).role") for i in range(res.roles.shape[1])]
+    assert shown == [["follower", "subleader", "leader"][r] for r in res.roles[k]]
     assert "leader" in browser.eval("document.getElementById('legend').textContent")
     assert browser.errors == []
-    # and a run without roles says so instead of guessing
-    _open(browser, runs["planar"])
+    # a run without roles says so instead of guessing
+    _open(browser, runs["solid"])
     assert browser.eval("swarmnav.agent(3).role") == "not recorded"
