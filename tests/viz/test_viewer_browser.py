@@ -112,6 +112,17 @@ def test_event_marks_keys_and_agent_readout(runs, browser):
     assert tip.startswith(f"agent {i}\n") and f"speed: {a['speed']:.2f} m/s" in tip and f"role: {a['role']}" in tip
     assert a["role"] == ["follower", "subleader", "leader"][res.roles[k, i]]
     assert f"clearance: {a['clearance']:.2f} m" in tip
+    # the same in perspective, late in the run, far from where the swarm started
+    browser.send("Input.dispatchMouseEvent", session=True, type="mouseMoved", x=2, y=60)
+    browser.eval("swarmnav.seek(0)")
+    browser.eval("swarmnav.view('persp')")
+    for step in (0, info["K"]):  # at the start, then at the end, tens of metres on
+        browser.eval(f"swarmnav.seek({step})")
+        x, y = browser.eval(f"swarmnav.screenOf({i})")
+        browser.send("Input.dispatchMouseEvent", session=True, type="mouseMoved", x=x, y=y)
+        tip = browser.eval("new Promise(r => requestAnimationFrame(() => r(document.getElementById('tip').textContent)))")
+        assert tip.startswith(f"agent {i}\n"), (step, tip)
+        browser.send("Input.dispatchMouseEvent", session=True, type="mouseMoved", x=2, y=60)
     assert browser.errors == []
 
 

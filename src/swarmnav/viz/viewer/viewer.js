@@ -266,6 +266,7 @@
     const cone = new THREE.ConeGeometry(a * 0.38, a, 10); cone.rotateZ(-Math.PI / 2);  // along +x
     const agents = new THREE.InstancedMesh(cone, new THREE.MeshLambertMaterial({color: 0xffffff}), N);
     agents.instanceMatrix.setUsage(THREE.DynamicDrawUsage); scene.add(agents);
+    agents.frustumCulled = false;  // its bounding sphere is computed once, from the first step's positions
     const ring = new THREE.Mesh(new THREE.TorusGeometry(a * 0.9, a * 0.09, 6, 24), new THREE.MeshBasicMaterial({color: 0x000000}));
     ring.visible = false; scene.add(ring);
     // trails: fading segments (RGBA vertex colours)
@@ -339,6 +340,7 @@
   function pickPersp(mx, my) {
     const g = G; g.ptr.set(mx / stage.clientWidth * 2 - 1, -my / stage.clientHeight * 2 + 1);
     g.ray.setFromCamera(g.ptr, g.camera);
+    g.agents.computeBoundingSphere();  // the raycast tests it first: it must hold the agents of this step
     const hit = g.ray.intersectObject(g.agents, false)[0];
     return hit ? hit.instanceId : -1;
   }
@@ -499,8 +501,13 @@
       for (let i = 0; i < N; i++) { G.agents.getMatrixAt(i, G.m); out.push([e[12], e[13], e[14]]); }
       return out;
     },
-    /** Page coordinates [css px] of agent i as drawn top-down (where to point the mouse). */
-    screenOf(i) { const r = stage.getBoundingClientRect(); return [r.left + drawn[2 * i], r.top + drawn[2 * i + 1]]; },
+    /** Page coordinates [css px] of agent i as drawn in the current view (where to point the mouse). */
+    screenOf(i) {
+      const r = stage.getBoundingClientRect();
+      if (view === 'top') return [r.left + drawn[2 * i], r.top + drawn[2 * i + 1]];
+      G.agents.getMatrixAt(i, G.m); G.p.setFromMatrixPosition(G.m).project(G.camera);
+      return [r.left + (G.p.x + 1) / 2 * stage.clientWidth, r.top + (1 - G.p.y) / 2 * stage.clientHeight];
+    },
     /** What the tooltip says of agent i at the current step. */
     agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i)}),
     stats: () => ({...stats, playing}),
