@@ -136,11 +136,15 @@ class RulePolicy:
     4. keep otherwise.
 
     The source watches S(k) to know when the structure last changed (its only state).
+
+    ``paper=True`` is Section 3.2 as written: rules 1-2, and a merge whenever it is feasible
+    (eq. 16: n_near >= 2 or d_swarm_min < d_merge), with no condition of ours (the faithful build).
     """
 
-    def __init__(self, d_merge: float, cooldown_s: float):
+    def __init__(self, d_merge: float, cooldown_s: float, paper: bool = False):
         self.d_merge = float(d_merge)
         self.cooldown_s = float(cooldown_s)
+        self.paper = bool(paper)
         self._S: int | None = None
         self._t_change = -math.inf
 
@@ -153,6 +157,8 @@ class RulePolicy:
             return Proposal("split", f"{z.n_c} corridors toward the goal (w {z.w_min:.1f}-{z.w_max:.1f} m)", "rule")
         if z.can_merge and z.n_near >= 2:
             return Proposal("merge", f"{z.n_near} sub-swarms within r_merge of the goal", "rule")
+        if self.paper and z.can_merge:
+            return Proposal("merge", f"sub-swarms {z.d_swarm_min:.1f} m apart (< d_merge)", "rule")
         if z.can_merge and z.d_swarm_min < self.d_merge and z.n_c < 2 and t - self._t_change >= self.cooldown_s:
             return Proposal("merge", f"sub-swarms {z.d_swarm_min:.1f} m apart (< d_merge)", "rule")
         return Proposal("keep", "no structural change needed", "rule")

@@ -81,6 +81,9 @@ class HesParams:
     through: float = param(3.0, "m", "[0, inf)", "ours", "the corridor target lies this far beyond the gap's throat")
     r_enc: float = param(6.0, "m", "(0, inf)", "ours",
         "encircle radius: paper's E_mean = 6.1 m with R_goal = 1 (r_succ = 8 m)")
+    enc_orbit: bool = param(False, "", None, "ours",
+        "True: the encircle slots circulate around the goal at the cruise speed v_s (the ring "
+        "keeps moving, as the paper's path lengths imply); False: fixed slots")
     enc_clear: float = param(2.0, "m", "[0, inf)", "ours",
         "encircle slots keep this clearance from LiDAR returns (> d_safe)")
     enc_samples: int = param(72, "", "[1, 36000]", "ours",
@@ -275,6 +278,11 @@ class HesParams:
     a_max_relaxed: float = param(26.0, "m/s^2", "(0, inf)", "ours",
         "the \"very loose\" bound of the ablations: 10 x a_max")
 
+    # ---------------------------------------------------------------- structural rules
+    merge_rule: str = param("swarmnav", "", None, "ours",
+        "swarmnav: merge two sub-swarms closer than d_merge only once their corridors have "
+        "rejoined and T_cd has passed (RulePolicy rule 3); paper: merge whenever eq. (16) holds")
+
     # ---------------------------------------------------------------- decision source
     decision: str = param("rule", "", None, "Section 3.3",
         "rule | ollama | openai | llamacpp | replay, Section 3.3 (docs/llm.md)")
@@ -299,6 +307,8 @@ class HesParams:
         # single values are checked against their declared ranges by params.build; here the
         # relations between them
         validate_llm(self)  # decision and llm_* (raises ConfigError)
+        if self.merge_rule not in ("swarmnav", "paper"):
+            raise ConfigError(f"hes: merge_rule must be swarmnav or paper, got {self.merge_rule!r}")
         if not self.r_out > self.r_in:
             raise ConfigError(f"hes: need r_out > r_in (eq. 12), got r_in={self.r_in}, r_out={self.r_out}")
         if not self.passage_relief < self.d_safe:

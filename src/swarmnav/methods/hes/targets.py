@@ -9,6 +9,8 @@ free (ours: the paper does not give the encircle slots). Agents a part routes on
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from swarmnav.methods.hes.corridors import free_points
@@ -37,16 +39,7 @@ def references(h, step: Step) -> None:
         if m == 0:
             continue
         if sub.mode == ENCIRCLE:
-            if sub.ring_offsets is None or len(sub.ring_offsets) != m or k - sub.slot_step >= p.slot_refresh:
-                a = sub.subleader
-                ang = h.ring_angles
-                pts = h.goal[None, :] + p.r_enc * np.column_stack([np.cos(ang), np.sin(ang)])
-                free = free_points(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, pts, p.enc_clear, p.lidar_range)
-                ring = ring_slots(h.goal, p.r_enc, m, free, ang)
-                r_i = assign_slots(x[members], ring, p.assign_exact)
-                sub.ring_offsets = ring[r_i] - h.goal
-                sub.slot_step = k
-            slot[members] = h.goal + sub.ring_offsets
+            slot[members] = h.goal + ring_offsets(h, step, sub, members)
             speed[members] = p.v_s
             continue
         tmpl = template(p, m, sub)
@@ -57,6 +50,32 @@ def references(h, step: Step) -> None:
         slot[members] = sub.waypoint + tmpl[sub.slot_index]
         speed[members] = p.v_s
     step.slot, step.speed = slot, speed
+
+
+def ring_offsets(h, step: Step, sub: SubSwarm, members: np.ndarray) -> np.ndarray:
+    """The encircle slots of a sub-swarm relative to the goal, (m, 2) [m]: m points on the circle of
+    ``r_enc`` spread over the angles its subleader sees free (``enc_clear``), assigned every
+    ``slot_refresh`` steps. With ``enc_orbit`` the ring turns at angular rate v_s / r_enc (the
+    slots move at the cruise speed): the candidate angles are turned by the ring's phase at
+    each assignment, and the assigned slots turn with it between two assignments."""
+    p, x, k = h.params, step.x, step.k
+    m = len(members)
+    omega = p.v_s / p.r_enc if p.enc_orbit else 0.0  # [rad/s]
+    if sub.ring_offsets is None or len(sub.ring_offsets) != m or k - sub.slot_step >= p.slot_refresh:
+        a = sub.subleader
+        ang = h.ring_angles + omega * k * p.dt if omega else h.ring_angles
+        pts = h.goal[None, :] + p.r_enc * np.column_stack([np.cos(ang), np.sin(ang)])
+        free = free_points(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, pts, p.enc_clear, p.lidar_range)
+        ring = ring_slots(h.goal, p.r_enc, m, free, ang)
+        r_i = assign_slots(x[members], ring, p.assign_exact)
+        sub.ring_offsets = ring[r_i] - h.goal
+        sub.slot_step = k
+    if not omega:
+        return sub.ring_offsets
+    turn = omega * (k - sub.slot_step) * p.dt
+    c, s = math.cos(turn), math.sin(turn)
+    o = sub.ring_offsets
+    return np.column_stack([c * o[:, 0] - s * o[:, 1], s * o[:, 0] + c * o[:, 1]])
 
 
 def template(p, m: int, sub: SubSwarm) -> np.ndarray:
