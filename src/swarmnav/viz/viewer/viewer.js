@@ -269,6 +269,12 @@
     agents.frustumCulled = false;  // its bounding sphere is computed once, from the first step's positions
     const ring = new THREE.Mesh(new THREE.TorusGeometry(a * 0.9, a * 0.09, 6, 24), new THREE.MeshBasicMaterial({color: 0x000000}));
     ring.visible = false; scene.add(ring);
+    // roles, when recorded: a thin black ring round each subleader, a thick one round the leader
+    const roleRings = [null, [0.7, 0.05], [0.8, 0.13]].map(r => {
+      if (!r || !ROLE) return null;
+      const m = new THREE.InstancedMesh(new THREE.TorusGeometry(a * r[0], a * r[1], 5, 20), new THREE.MeshBasicMaterial({color: 0x111111}), N);
+      m.count = 0; m.frustumCulled = false; scene.add(m); return m;
+    });
     // trails: fading segments (RGBA vertex colours)
     const maxSeg = N * TRAIL_POINTS;
     const tPos = new Float32Array(maxSeg * 6), tCol = new Float32Array(maxSeg * 8);
@@ -287,7 +293,7 @@
     controls.addEventListener('change', () => { dirty = true; });
     const heading = new Float32Array(N * 3); for (let i = 0; i < N; i++) heading[3 * i] = 1;
     const palette = D.palette.map(c => new THREE.Color(c));
-    const g = {THREE, renderer, scene, camera, controls, agents, trails, tGeo, tPos, tCol, heading, palette, ring, altitude,
+    const g = {THREE, renderer, scene, camera, controls, agents, trails, tGeo, tPos, tCol, heading, palette, ring, roleRings, altitude,
                m: new THREE.Matrix4(), q: new THREE.Quaternion(), p: new THREE.Vector3(), s: new THREE.Vector3(1, 1, 1),
                ux: new THREE.Vector3(1, 0, 0), u: new THREE.Vector3(), ray: new THREE.Raycaster(), ptr: new THREE.Vector2()};
     layoutPersp(g);
@@ -312,6 +318,16 @@
       g.agents.setColorAt(i, g.palette[LAB[k * N + i]]);
     }
     g.agents.instanceMatrix.needsUpdate = true; if (g.agents.instanceColor) g.agents.instanceColor.needsUpdate = true;
+    if (ROLE) {
+      q.identity();
+      for (const code of [1, 2]) {
+        const rings = g.roleRings[code]; let c = 0;
+        for (let i = 0; i < N; i++) if (ROLE[k * N + i] === code) {
+          const a = (k * N + i) * DIM; p.set(P[a], P[a + 1], zOf(k, i)); rings.setMatrixAt(c++, m.compose(p, q, s));
+        }
+        rings.count = c; rings.instanceMatrix.needsUpdate = true;
+      }
+    }
     let n = 0;
     if (showTrails) {
       const steps = trailSteps(), S = steps.length, half = D.periodic ? (hi[0] - lo[0]) / 2 : Infinity;
