@@ -15,7 +15,11 @@ a bad action :class:`ActionError` (a ``ValueError``) naming the agent.
 
 from __future__ import annotations
 
-import gymnasium
+try:
+    import gymnasium
+    import pettingzoo  # noqa: F401
+except ImportError as e:  # the env extra is optional for the simulator
+    raise ImportError(f"swarmnav.env needs Gymnasium and PettingZoo ({e}): pip install 'swarmnav[env]'") from e
 
 from swarmnav.env.baselines import (
     BASELINES,
