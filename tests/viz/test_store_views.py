@@ -9,7 +9,7 @@ import pytest
 
 from swarmnav.cli import main
 from swarmnav.viz.headless import Browser, find_chromium
-from swarmnav.viz.store_views import derived_events
+from swarmnav.viz.store_views import derived_events, write_store_viewers
 from swarmnav.viz.viewer import LEVELS
 
 from _helpers.viewer import decode, page_data
@@ -45,12 +45,12 @@ def test_report_links_each_run_to_its_viewer(store, capsys):
     assert "from the results store" in data["note"]
 
 
-def test_no_viewers_flag_and_a_rerun_keeps_existing_pages(store, capsys):
-    assert main(["report", str(store)]) == 0
-    folder = store / "report_files" / "viewers"
-    page = next(folder.glob("*.html"))
+def test_existing_pages_are_kept_and_no_viewers_writes_none(store):
+    links, problems = write_store_viewers(store)
+    assert problems == [] and len(links) == 8  # apf-scenes: four scenes x two seeds
+    page = store / next(iter(links.values()))
     before = page.stat().st_mtime_ns
-    assert main(["report", str(store)]) == 0
+    assert write_store_viewers(store)[0] == links
     assert page.stat().st_mtime_ns == before  # a key names one run: its page is not rewritten
     assert main(["report", str(store), "--no-viewers"]) == 0
     assert "Replays" not in (store / "report.html").read_text()
@@ -64,8 +64,8 @@ def test_split_and_merge_marks_come_from_the_labels():
 
 @pytest.mark.skipif(find_chromium() is None, reason="Debian's chromium is not installed (CI installs it)")
 def test_a_store_viewer_opens_with_its_shared_scripts(store):
-    main(["report", str(store)])
-    page = next((store / "report_files" / "viewers").glob("*.html"))
+    links, _ = write_store_viewers(store)
+    page = store / next(iter(links.values()))
     with Browser(900, 600) as b:
         b.open(page)
         assert b.eval("swarmnav.ready") is True
