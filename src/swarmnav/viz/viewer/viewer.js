@@ -104,6 +104,8 @@
     }
     g.closePath(); g.fillStyle = GOAL; g.fill(); g.strokeStyle = '#000'; g.lineWidth = 1; g.stroke();
   }
+  // half the periodic cell per axis [m]: a trail step longer than that is a wrap, not a move
+  const halfCell = () => D.periodic ? [(hi[0] - lo[0]) / 2, (hi[1] - lo[1]) / 2] : [Infinity, Infinity];
   function trailSteps() {
     const len = Math.min(k, Math.round(TRAIL_SECONDS / DT));
     const stride = Math.max(1, Math.ceil(len / TRAIL_POINTS)), out = [];
@@ -124,7 +126,7 @@
     ctx.drawImage(T.bg, 0, 0);
     ctx.setTransform(T.dpr, 0, 0, T.dpr, 0, 0);
     const {count, order} = groups();
-    const half = D.periodic ? (hi[0] - lo[0]) / 2 : Infinity;
+    const [hx, hy] = halfCell();
     if (showTrails) {
       const steps = trailSteps(), S = steps.length;
       ctx.lineWidth = N > 200 ? 1 : 1.5;
@@ -141,7 +143,7 @@
             const i = order[q];
             for (let j = j0; j < j1; j++) {
               const a = (steps[j] * N + i) * DIM, e = (steps[j + 1] * N + i) * DIM;
-              if (Math.abs(P[a] - P[e]) > half || Math.abs(P[a + 1] - P[e + 1]) > half) continue;  // a wrap, not a move
+              if (Math.abs(P[a] - P[e]) > hx || Math.abs(P[a + 1] - P[e + 1]) > hy) continue;  // a wrap, not a move
               ctx.moveTo(X(P[a]), Y(P[a + 1])); ctx.lineTo(X(P[e]), Y(P[e + 1]));
             }
           }
@@ -330,12 +332,12 @@
     }
     let n = 0;
     if (showTrails) {
-      const steps = trailSteps(), S = steps.length, half = D.periodic ? (hi[0] - lo[0]) / 2 : Infinity;
+      const steps = trailSteps(), S = steps.length, [hx, hy] = halfCell();
       for (let i = 0; i < N; i++) {
         const col = g.palette[LAB[k * N + i]];
         for (let j = 0; j + 1 < S; j++) {
           const a = (steps[j] * N + i) * DIM, e = (steps[j + 1] * N + i) * DIM;
-          if (Math.abs(P[a] - P[e]) > half || Math.abs(P[a + 1] - P[e + 1]) > half) continue;
+          if (Math.abs(P[a] - P[e]) > hx || Math.abs(P[a + 1] - P[e + 1]) > hy) continue;
           const o = n * 6, c = n * 8, alpha = 0.75 * (1 - j / (S - 1));
           g.tPos[o] = P[a]; g.tPos[o + 1] = P[a + 1]; g.tPos[o + 2] = zOf(steps[j], i);
           g.tPos[o + 3] = P[e]; g.tPos[o + 4] = P[e + 1]; g.tPos[o + 5] = zOf(steps[j + 1], i);
@@ -379,7 +381,7 @@
     g.strokeStyle = '#ddd'; g.lineWidth = 1; g.beginPath(); g.moveTo(xOfStep(0), y0); g.lineTo(xOfStep(K), y0); g.stroke();
     g.strokeStyle = '#888'; g.setLineDash([5, 4]); g.beginPath(); g.moveTo(xOfStep(0), yc(D.d_safe)); g.lineTo(xOfStep(K), yc(D.d_safe)); g.stroke(); g.setLineDash([]);
     g.strokeStyle = '#1f77b4'; g.lineWidth = 1.3; g.beginPath();
-    for (let s = 0; s <= K; s++) { const x = xOfStep(s), y = yn(NSUB[s]); s ? (g.lineTo(x, g._y ?? y), g.lineTo(x, y)) : g.moveTo(x, y); g._y = y; }
+    for (let s = 0, prev = 0; s <= K; s++) { const x = xOfStep(s), y = yn(NSUB[s]); s ? (g.lineTo(x, prev), g.lineTo(x, y)) : g.moveTo(x, y); prev = y; }
     g.stroke();
     g.strokeStyle = '#d62728'; g.lineWidth = 1.3; g.beginPath(); let pen = false;
     for (let s = 0; s <= K; s++) { if (!isFinite(MINC[s])) { pen = false; continue; } const x = xOfStep(s), y = yc(MINC[s]); pen ? g.lineTo(x, y) : g.moveTo(x, y); pen = true; }
