@@ -237,6 +237,8 @@ def _cmd_view(args) -> int:
     if not d.is_dir():
         raise ConfigError(f"view: {d} is not a run directory (not a directory)")
     res = RunResult.load(d)
+    if args.out and Path(args.out).is_dir():
+        raise ConfigError(f"view: --out {args.out} is a directory; give the HTML file's name")
     out = _writable_file(args.out or d / "viewer.html", "--out")
     path = write_viewer(res, out)
     print(f"wrote {path} ({path.stat().st_size / 1e6:.2f} MB)")

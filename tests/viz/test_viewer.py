@@ -145,3 +145,13 @@ def test_plot_perspective_draws_the_step_as_hes_figure_a1(hes_dir, tmp_path):
     blue = np.all(np.abs(img - np.array([0x1f, 0x77, 0xb4])) < 40, axis=2)
     assert blue.sum() > 20  # arrows of sub-swarm 0 (tab:blue)
     assert np.any(shots[50] != shots[300], axis=2).mean() > 0.001  # another step, another picture
+
+
+def test_view_open_hands_the_page_to_the_browser(hes_dir, tmp_path, monkeypatch):
+    import webbrowser
+
+    opened = []
+    monkeypatch.setattr(webbrowser, "open", lambda url: opened.append(url) or True)
+    out = tmp_path / "o.html"
+    assert main(["view", str(hes_dir), "--out", str(out), "--open"]) == 0
+    assert opened == [out.resolve().as_uri()]

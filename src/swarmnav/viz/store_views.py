@@ -42,16 +42,15 @@ def derived_events(labels: np.ndarray) -> list[dict]:
     return out
 
 
-def _run_of(root: Path, row: dict, dt_of) -> object:
+def _run_of(root: Path, row: dict, dt_of, scene_of) -> object:
     """A RunResult rebuilt from one store row and its trajectory file."""
     from swarmnav.sensing import signed_distance
     from swarmnav.sim import RunResult
-    from swarmnav.world.catalog import load_scenario
 
     with np.load(root / row["trajectory"]) as z:
         P = z["positions"].astype(float)
         labels = z["labels"]
-    scn = load_scenario(row["scenario"], n=row["n"])
+    scn = scene_of(row)
     dt = dt_of(row)
     V = np.gradient(P, dt, axis=0) if len(P) > 1 else np.zeros_like(P)
     geom = scn.geometry
@@ -102,12 +101,22 @@ def write_store_viewers(directory: str | Path, experiment: str | None = None,
             dts[key] = float(registry.make(row["method"], **params).dt)
         return dts[key]
 
+    scenes: dict[tuple, object] = {}
+
+    def scene_of(row: dict):  # seeds of one variant share their scene (unless it names {seed})
+        from swarmnav.world.catalog import load_scenario
+
+        key = (row["scenario"], row["n"])
+        if key not in scenes:
+            scenes[key] = load_scenario(row["scenario"], n=row["n"])
+        return scenes[key]
+
     todo = [r for r in rows if not (folder / f"{r['key']}.html").exists()]
     for j, row in enumerate(rows):
         out = folder / f"{row['key']}.html"
         if not out.exists():
             try:
-                data = viewer_data(_run_of(root, row, dt_of))
+                data = viewer_data(_run_of(root, row, dt_of, scene_of))
             except (SwarmnavError, OSError, ValueError, KeyError) as e:
                 problems.append(f"{row['variant']} seed {row['seed']}: no viewer ({e})")
                 continue
