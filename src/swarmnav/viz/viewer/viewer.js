@@ -230,9 +230,19 @@
     // obstacles: a 3-D run's solids; a planar run's obstacles as light-grey slabs (HES Figure A1)
     const solidMat = new THREE.MeshLambertMaterial({color: DIM === 3 ? SOLID : 0xd3d6db, transparent: DIM === 3, opacity: DIM === 3 ? 0.62 : 1, depthWrite: DIM !== 3});
     const edgeMat = new THREE.LineBasicMaterial({color: SOLID_EDGE, transparent: true, opacity: 0.7});
+    // every obstacle goes into one mesh and one set of edges: two draw calls for the whole
+    // scene however many obstacles it has (a forest of hundreds of trees stays two calls)
+    const solidPos = [], solidNrm = [], edgePos = [], M = new THREE.Matrix4(), Rx = new THREE.Matrix4();
     const addSolid = (geo, x, y, z, rotX) => {
-      const m = new THREE.Mesh(geo, solidMat); if (rotX) m.rotation.x = Math.PI / 2; m.position.set(x, y, z); scene.add(m);
-      const e = new THREE.LineSegments(new THREE.EdgesGeometry(geo, 30), edgeMat); e.rotation.copy(m.rotation); e.position.copy(m.position); scene.add(e);
+      M.makeTranslation(x, y, z); if (rotX) M.multiply(Rx.makeRotationX(Math.PI / 2));
+      const edges = new THREE.EdgesGeometry(geo, 30).applyMatrix4(M);
+      const g = (geo.index ? geo.toNonIndexed() : geo).applyMatrix4(M);
+      solidPos.push(g.attributes.position.array); solidNrm.push(g.attributes.normal.array); edgePos.push(edges.attributes.position.array);
+    };
+    const cat = arrays => {
+      const out = new Float32Array(arrays.reduce((n, a) => n + a.length, 0)); let o = 0;
+      for (const a of arrays) { out.set(a, o); o += a.length; }
+      return out;
     };
     for (const o of D.obstacles) {
       const [za, zb] = o.z || [0, D.slab_height];
@@ -247,6 +257,13 @@
         const shape = new THREE.Shape(o.v.map(([x, y]) => new THREE.Vector2(x, y)));
         addSolid(new THREE.ExtrudeGeometry(shape, {depth: zb - za, bevelEnabled: false}), 0, 0, za);
       }
+    }
+    if (solidPos.length) {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute('position', new THREE.BufferAttribute(cat(solidPos), 3));
+      g.setAttribute('normal', new THREE.BufferAttribute(cat(solidNrm), 3));
+      const e = new THREE.BufferGeometry(); e.setAttribute('position', new THREE.BufferAttribute(cat(edgePos), 3));
+      scene.add(new THREE.Mesh(g, solidMat), new THREE.LineSegments(e, edgeMat));
     }
     // goal: a yellow star (with a drop line to the ground)
     const gz = DIM === 3 ? D.goal[2] : altitude, rs = Math.max(0.8, 0.02 * Math.max(ext[0], ext[1]));
