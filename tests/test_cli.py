@@ -209,7 +209,7 @@ def test_methods_name_lists_every_parameter_with_unit_range_and_source(capsys):
             assert f" {info.unit} " in row if info.unit else " - " in row
     main(["methods", "hes"])
     out = capsys.readouterr().out
-    assert "faithful   passage_mode=false agent_guard=false stall_plan=false trail_follow=false" in out
+    assert "faithful   passage_mode=false agent_guard=false stall_plan=false trail_follow=false split_commit=false" in out
     assert "dt" in out and "[0.0001, 1]" in out and "Section 5.1" in out
 
 

@@ -107,3 +107,19 @@ def test_rule_policy():
     p = r.propose(z(k=101, S=2, can_merge=True, d_swarm_min=5.0, n_c=1), 101)
     assert (p.action, p.source) == ("merge", "rule")
     assert r.propose(z(k=200, S=1), 200).action == "keep"
+
+
+def test_rule_policy_as_the_paper_writes_it_merges_whenever_feasible():
+    # merge_rule = paper: eq. (16) alone, even 0.1 s after the split and with both corridors in view
+    r = RulePolicy(d_merge=8.0, cooldown_s=10.0, merge="paper")
+    r.propose(z(k=0, S=1), 0)
+    p = r.propose(z(k=1, S=2, can_merge=True, d_swarm_min=5.0, n_c=2), 1)
+    assert (p.action, p.source) == ("merge", "rule")
+    assert r.propose(z(k=2, S=2, can_merge=False, d_swarm_min=9.0, n_c=2), 2).action == "keep"
+    assert r.propose(z(k=3, S=1, can_split=True, n_c=2), 3).action == "split"
+    # paper_cooldown: the same merge waits T_cd (10 s) after the last change of S
+    r = RulePolicy(d_merge=8.0, cooldown_s=10.0, merge="paper_cooldown")
+    r.propose(z(k=0, S=1), 0)
+    assert r.propose(z(k=1, S=2, can_merge=True, d_swarm_min=5.0, n_c=2), 1).action == "keep"
+    assert r.propose(z(k=99, S=2, can_merge=True, n_near=2, d_swarm_min=5.0), 99).action == "keep"
+    assert r.propose(z(k=101, S=2, can_merge=True, d_swarm_min=5.0, n_c=2), 101).action == "merge"

@@ -42,6 +42,24 @@ def test_encircles_the_goal_at_r_enc():
     assert np.diff(ang).min() > 0.3  # spread around the goal, not bunched
 
 
+def test_orbiting_ring_keeps_the_swarm_moving_on_the_circle():
+    # enc_orbit: the slots circulate at v_s; fixed slots (the default) leave the ring at rest
+    p = Hes().params
+    speed = {}
+    for orbit in (False, True):
+        res = swarmnav.run("hes", from_dict(OPEN), seed=3, steps=500, enc_orbit=orbit)
+        v = np.linalg.norm(res.velocities[-50:], axis=2)  # the last 5 s, on the ring
+        speed[orbit] = float(v.mean())
+        d = np.linalg.norm(res.positions[-1] - np.array([20.0, 0.0]), axis=1)
+        assert res.metrics["R_goal"] == 1.0 and np.all(np.abs(d - p.r_enc) < 2.5)  # about the ring
+        if orbit:  # every agent turns the same way round the goal (counter-clockwise, omega > 0)
+            rel = res.positions[-1] - [20.0, 0.0]
+            vel = res.velocities[-1]
+            assert np.all(rel[:, 0] * vel[:, 1] - rel[:, 1] * vel[:, 0] > 0.0)
+    assert speed[False] < 0.2 * p.v_s
+    assert speed[True] > 0.5 * p.v_s
+
+
 class AlwaysSplit:
     """A decision source that proposes split at every step (an unruly LLM)."""
 

@@ -37,7 +37,7 @@ def test_each_switch_removes_exactly_its_part(switch, name):
 
 
 def test_the_faithful_preset_and_the_safety_stack_ablation():
-    assert _parts(preset="faithful") == ["commit", "hold", "wall"]
+    assert _parts(preset="faithful") == ["wall"]  # every part of ours off but the safety stack
     assert _parts(safety_stack_off=True) == ["commit", "hold", "trail", "passage", "stall"]
 
 

@@ -137,14 +137,20 @@ class RulePolicy:
 
     The source watches S(k) to know when the structure last changed (its only state).
 
-    ``paper=True`` is Section 3.2 as written: rules 1-2, and a merge whenever it is feasible
-    (eq. 16: n_near >= 2 or d_swarm_min < d_merge), with no condition of ours (the faithful build).
+    ``merge="paper"`` is Section 3.2 as written: rules 1-2, and a merge whenever it is feasible
+    (eq. 16: n_near >= 2 or d_swarm_min < d_merge), with no condition of ours;
+    ``merge="paper_cooldown"`` reads Table A1's "split-merge cooldown" T_cd as holding merges
+    too: a feasible merge waits T_cd after the last change of S.
     """
 
-    def __init__(self, d_merge: float, cooldown_s: float, paper: bool = False):
+    MERGES = ("swarmnav", "paper", "paper_cooldown")
+
+    def __init__(self, d_merge: float, cooldown_s: float, merge: str = "swarmnav"):
+        if merge not in self.MERGES:
+            raise ValueError(f"merge must be one of {self.MERGES}, got {merge!r}")
         self.d_merge = float(d_merge)
         self.cooldown_s = float(cooldown_s)
-        self.paper = bool(paper)
+        self.merge = merge
         self._S: int | None = None
         self._t_change = -math.inf
 
@@ -155,10 +161,12 @@ class RulePolicy:
         self._S = z.S
         if z.can_split and z.n_c >= 2:
             return Proposal("split", f"{z.n_c} corridors toward the goal (w {z.w_min:.1f}-{z.w_max:.1f} m)", "rule")
-        if z.can_merge and z.n_near >= 2:
+        if z.can_merge and z.n_near >= 2 and (self.merge != "paper_cooldown" or t - self._t_change >= self.cooldown_s):
             return Proposal("merge", f"{z.n_near} sub-swarms within r_merge of the goal", "rule")
-        if self.paper and z.can_merge:
-            return Proposal("merge", f"sub-swarms {z.d_swarm_min:.1f} m apart (< d_merge)", "rule")
+        if self.merge != "swarmnav" and z.can_merge:
+            if self.merge == "paper" or t - self._t_change >= self.cooldown_s:
+                return Proposal("merge", f"sub-swarms {z.d_swarm_min:.1f} m apart (< d_merge)", "rule")
+            return Proposal("keep", "merge feasible, split-merge cooldown T_cd running", "rule")
         if z.can_merge and z.d_swarm_min < self.d_merge and z.n_c < 2 and t - self._t_change >= self.cooldown_s:
             return Proposal("merge", f"sub-swarms {z.d_swarm_min:.1f} m apart (< d_merge)", "rule")
         return Proposal("keep", "no structural change needed", "rule")

@@ -119,7 +119,7 @@ class Hes:
         n = len(positions)
         self.n = n
         self.arange = np.arange(n)  # agent indices (compared with per-agent indices every step)
-        rule = RulePolicy(p.d_merge, p.t_cd, paper=p.merge_rule == "paper")
+        rule = RulePolicy(p.d_merge, p.t_cd, merge=p.merge_rule)
         self.source: DecisionSource = self._source_override or decision_source(p, rule, project)
         c = positions.mean(axis=0)
         self.leader = int(np.argmin(np.sum((positions - c) ** 2, axis=1)))  # one leader, eq. (1) roles

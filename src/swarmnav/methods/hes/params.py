@@ -19,10 +19,13 @@ from swarmnav.llm.config import DECISIONS, validate as validate_llm  # noqa: F40
 @dataclass(frozen=True, slots=True)
 class HesParams:
     #: Named parameter sets (``--set preset=NAME``): ``swarmnav`` is the default build;
-    #: ``faithful`` is the paper as written, every extension of ours that changes a run switched off.
+    #: ``faithful`` is the paper as written: every extension of ours switched off, the encircle ring
+    #: circulating and merges by eq. (16) under the split-merge cooldown (docs/methods/hes.md).
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "swarmnav": {},
-        "faithful": {"passage_mode": False, "agent_guard": False, "stall_plan": False, "trail_follow": False},
+        "faithful": {"passage_mode": False, "agent_guard": False, "stall_plan": False, "trail_follow": False,
+                     "split_commit": False, "route_hold": False, "width_penalty": False,
+                     "enc_orbit": True, "merge_rule": "paper_cooldown"},
     }
 
     # ---------------------------------------------------------------- dynamics and sensing
@@ -281,7 +284,9 @@ class HesParams:
     # ---------------------------------------------------------------- structural rules
     merge_rule: str = param("swarmnav", "", None, "ours",
         "swarmnav: merge two sub-swarms closer than d_merge only once their corridors have "
-        "rejoined and T_cd has passed (RulePolicy rule 3); paper: merge whenever eq. (16) holds")
+        "rejoined and T_cd has passed (RulePolicy rule 3); paper: merge whenever eq. (16) holds; "
+        "paper_cooldown: eq. (16) once T_cd has passed since the last change (Table A1's "
+        "split-merge cooldown read as holding merges too)")
 
     # ---------------------------------------------------------------- decision source
     decision: str = param("rule", "", None, "Section 3.3",
@@ -307,8 +312,8 @@ class HesParams:
         # single values are checked against their declared ranges by params.build; here the
         # relations between them
         validate_llm(self)  # decision and llm_* (raises ConfigError)
-        if self.merge_rule not in ("swarmnav", "paper"):
-            raise ConfigError(f"hes: merge_rule must be swarmnav or paper, got {self.merge_rule!r}")
+        if self.merge_rule not in ("swarmnav", "paper", "paper_cooldown"):
+            raise ConfigError(f"hes: merge_rule must be swarmnav, paper or paper_cooldown, got {self.merge_rule!r}")
         if not self.r_out > self.r_in:
             raise ConfigError(f"hes: need r_out > r_in (eq. 12), got r_in={self.r_in}, r_out={self.r_out}")
         if not self.passage_relief < self.d_safe:

@@ -56,12 +56,14 @@ def ring_offsets(h, step: Step, sub: SubSwarm, members: np.ndarray) -> np.ndarra
     """The encircle slots of a sub-swarm relative to the goal, (m, 2) [m]: m points on the circle of
     ``r_enc`` spread over the angles its subleader sees free (``enc_clear``), assigned every
     ``slot_refresh`` steps. With ``enc_orbit`` the ring turns at angular rate v_s / r_enc (the
-    slots move at the cruise speed): the candidate angles are turned by the ring's phase at
-    each assignment, and the assigned slots turn with it between two assignments."""
+    slots move at the cruise speed) and is laid out and assigned only when the sub-swarm's size
+    changes: a member lagging behind its moving slot would otherwise be handed the slot behind
+    it at the next assignment and turn back."""
     p, x, k = h.params, step.x, step.k
     m = len(members)
     omega = p.v_s / p.r_enc if p.enc_orbit else 0.0  # [rad/s]
-    if sub.ring_offsets is None or len(sub.ring_offsets) != m or k - sub.slot_step >= p.slot_refresh:
+    if sub.ring_offsets is None or len(sub.ring_offsets) != m or (
+            not omega and k - sub.slot_step >= p.slot_refresh):
         a = sub.subleader
         ang = h.ring_angles + omega * k * p.dt if omega else h.ring_angles
         pts = h.goal[None, :] + p.r_enc * np.column_stack([np.cos(ang), np.sin(ang)])
