@@ -9,8 +9,10 @@ HWVEM-II, which are then evaluated out of sample on held-out seeds.
     # baseline objective of every grid point (fit seeds), one worker, resumable stores under --out
     PYTHONPATH=src python benchmarks/hwvem_scene_fit.py --out out/fit --seeds 1-30 \
         --grid "tiny_offset=0.75|0.9|1.1|1.45" --grid "rect_offset=0.6|0.9" --grid "turn_scale=1|1.25|1.5"
-    # all five models on held-out seeds (the shipped hwvem_mission is rect_offset=0.6)
-    swarmnav experiment hwvem-mission --set "n=5|20|50" --seeds 101-200 --workers 1 --out out/heldout
+    # all five models on held-out seeds (the fitted option hwvem_mission_fitted is rect_offset=0.6;
+    # the reproduction scene hwvem_mission is the family's defaults, not fitted)
+    swarmnav experiment hwvem-mission --set "n=5|20|50" --set scenario=hwvem_mission_fitted --seeds 101-200 \
+        --workers 1 --out out/heldout
 
 The objective is J = sum over the 9 baseline cells of (P_s_mean - paper P_s_mean)^2 [%^2]; each
 grid point's cells and J are appended to ``OUT/fit.jsonl``."""
@@ -33,7 +35,7 @@ from swarmnav.world.generators import hwvem_mission_family
 BASELINES = ("VEM-A", "IVEM-A", "WVEM")
 SIZES = (5, 20, 50)
 
-# The family's free numbers and their defaults (the v1 scene), read off the generator itself.
+# The family's free numbers and their defaults (hwvem_mission), read off the generator itself.
 DEFAULTS = {k: float(v.default) for k, v in inspect.signature(hwvem_mission_family).parameters.items() if k != "n"}
 
 

@@ -61,6 +61,34 @@ def num(x: str | float, fmt: str = ".2f") -> str:
     return format(v, fmt) if math.isfinite(v) else str(v)
 
 
+def ci95(xs) -> tuple[float, float]:
+    """Mean and the half-width of its 95 % confidence interval (Student t, n - 1 degrees of
+    freedom) over the finite values of ``xs``; (nan, nan) if there are none."""
+    from scipy.stats import t
+
+    x = np.asarray([v for v in xs if math.isfinite(v)], dtype=float)
+    if len(x) == 0:
+        return float("nan"), float("nan")
+    if len(x) == 1:
+        return float(x[0]), float("nan")
+    return float(x.mean()), float(t.ppf(0.975, len(x) - 1) * x.std(ddof=1) / math.sqrt(len(x)))
+
+
+def run_values(out: Path, metric: str) -> dict[str, list[float]]:
+    """Per variant: ``metric`` of every finished run (+inf kept)."""
+    with open(out / "runs.csv", newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["status"] == "done"]
+    vals: dict[str, list[float]] = {}
+    for r in rows:
+        vals.setdefault(r["variant"], []).append(float(r[metric]))
+    return vals
+
+
+def pm(x: tuple[float, float], fmt: str = ".2f") -> str:
+    """``mean ± half-width`` of :func:`ci95`."""
+    return f"{num(x[0], fmt)} ± {num(x[1], fmt)}"
+
+
 def finite_means(out: Path, metric: str) -> dict[str, tuple[float, int, int]]:
     """Per variant: mean of ``metric`` over the runs where it is finite, how many, of how many.
 
@@ -90,9 +118,10 @@ def table1(out: Path, sizes=(100, 200, 500)) -> str:
     ref = paper_results()["hwvem"]["table1"]
     s = summary(out)
     fin = finite_means(out, "k_con")
-    lines = ["| N | model | k_con mean* | p25 | p50 | p75 | converged to π/4 | paper mean | p25 | p50 | p75 | "
-             "paper converges | runs (reached Deg_con^d) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    ks = run_values(out, "k_con")
+    lines = ["| N | model | k_con mean* ± 95 % CI | p25 | p50 | p75 | converged to π/4 | paper mean | ours / paper | "
+             "p25 | p50 | p75 | paper converges | runs (reached Deg_con^d) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for n in sizes:
         for model in ("VEM", "VEM-A", "IVEM", "IVEM-A", "WVEM", "HWVEM"):
             k = variant_key(s, model, n)
@@ -101,9 +130,10 @@ def table1(out: Path, sizes=(100, 200, 500)) -> str:
                 continue
             r = s[k]
             mean, n_fin, n_all = fin[k]
-            lines.append(f"| {n} | {model} | {num(mean)} | {num(r['k_con_p25'], '.1f')} | "
+            lines.append(f"| {n} | {model} | {pm(ci95(ks[k]))} | {num(r['k_con_p25'], '.1f')} | "
                          f"{num(r['k_con_p50'], '.1f')} | {num(r['k_con_p75'], '.1f')} | "
-                         f"{num(r['converged_fraction'])} | {p['k_con'][0]:.2f} | {p['k_con'][1]:.1f} | "
+                         f"{num(r['converged_fraction'])} | {p['k_con'][0]:.2f} | {mean / p['k_con'][0]:.2f} | "
+                         f"{p['k_con'][1]:.1f} | "
                          f"{p['k_con'][2]:.1f} | {p['k_con'][3]:.1f} | {'yes' if p['converges'] else 'no'} | "
                          f"{r['done']}/{r['runs']} ({n_fin}) |")
     return "\n".join(lines)
@@ -112,7 +142,9 @@ def table1(out: Path, sizes=(100, 200, 500)) -> str:
 def table2(out: Path, sizes=(5, 20, 50)) -> str:
     ref = paper_results()["hwvem"]["table2"]
     s = summary(out)
-    lines = ["| N | model | P_s mean | p25 | p50 | p75 | D_obs | D_ind | paper P_s | p25 | p50 | p75 | paper D_obs | paper D_ind | runs |",
+    vals = {m: run_values(out, m) for m in ("P_s", "D_obs", "D_ind")}
+    lines = ["| N | model | P_s mean ± 95 % CI | p25 | p50 | p75 | paper P_s | p25 | p50 | p75 | D_obs ± CI | paper D_obs | "
+             "D_ind ± CI | paper D_ind | runs |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for n in sizes:
         for model in ("VEM-A", "IVEM-A", "WVEM", "HWVEM-I", "HWVEM-II"):
@@ -121,10 +153,11 @@ def table2(out: Path, sizes=(5, 20, 50)) -> str:
             if k is None:
                 continue
             r = s[k]
-            lines.append(f"| {n} | {model} | {num(r['P_s_mean'])} | {num(r['P_s_p25'], '.1f')} | "
-                         f"{num(r['P_s_p50'], '.1f')} | {num(r['P_s_p75'], '.1f')} | {num(r['D_obs_mean'], '.4f')} | "
-                         f"{num(r['D_ind_mean'], '.4f')} | {p['P_s'][0]:.2f} | {p['P_s'][1]:.1f} | {p['P_s'][2]:.1f} | "
-                         f"{p['P_s'][3]:.1f} | {p['D_obs']:.4f} | {p['D_ind']:.4f} | {r['done']}/{r['runs']} |")
+            lines.append(f"| {n} | {model} | {pm(ci95(vals['P_s'][k]))} | {num(r['P_s_p25'], '.1f')} | "
+                         f"{num(r['P_s_p50'], '.1f')} | {num(r['P_s_p75'], '.1f')} | {p['P_s'][0]:.2f} | "
+                         f"{p['P_s'][1]:.1f} | {p['P_s'][2]:.1f} | {p['P_s'][3]:.1f} | "
+                         f"{pm(ci95(vals['D_obs'][k]), '.4f')} | {p['D_obs']:.4f} | "
+                         f"{pm(ci95(vals['D_ind'][k]), '.4f')} | {p['D_ind']:.4f} | {r['done']}/{r['runs']} |")
     return "\n".join(lines)
 
 
@@ -227,8 +260,9 @@ def main(argv=None) -> int:
         ns = tuple(int(v) for v in sizes.split("|"))
         print(table1(out, ns) if key == "table1" else table2(out, ns) if key == "table2" else figure_table(out))
         if key != "table2":
-            print("\n*mean over the runs that reached Deg_con^d within the step cap (their number in brackets); "
-                  "quartiles over all runs, a run that never converged counting as +inf.")
+            print("\n*mean and its 95 % confidence interval (Student t) over the runs that reached Deg_con^d "
+                  "within the step cap (their number in brackets); quartiles over all runs, a run that never "
+                  "converged counting as +inf.")
     return 0
 
 

@@ -218,10 +218,9 @@ def test_consistency_kernel_matches_measures():
     rng = np.random.default_rng(1)
     for spread in (3.0, 0.3, 0.003):
         th = R.wrap(0.7 + rng.normal(0, spread, 500))
-        for l2 in (False, True):
-            norm = "l2" if l2 else "l1"
-            assert K.consistency(th, 0.7, False, l2) == pytest.approx(deg_con(th, 0.7, norm), abs=1e-12)
-            assert K.consistency(th, 0.0, True, l2) == pytest.approx(deg_con(th, circular_mean(th), norm), abs=1e-12)
+        for norm, code in (("l1", K.NORM_L1), ("l2", K.NORM_L2), ("linf", K.NORM_LINF)):
+            assert K.consistency(th, 0.7, False, code) == pytest.approx(deg_con(th, 0.7, norm), abs=1e-12)
+            assert K.consistency(th, 0.0, True, code) == pytest.approx(deg_con(th, circular_mean(th), norm), abs=1e-12)
 
 
 def test_velocity_kernel_is_eq25_26():

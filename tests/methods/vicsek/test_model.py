@@ -191,6 +191,69 @@ def test_ivem_rule_by_hand():
     assert out[2] == pytest.approx(0.5 - 0.5)  # above both neighbours (-1, 0): down by (0 + 1) / 2
 
 
+
+@pytest.mark.parametrize("rule, expect", [
+    # agent 0 (-1.0; neighbours 0.0, 0.5), agent 3 (0.2; neighbours 0.0, 0.5), agent 2 (0.5; neighbours -1, 0)
+    (K.IVEM_PRINTED, (-0.75, 0.2, 0.0)),
+    (K.IVEM_MIDDLE, (0.25, 0.25, -0.5)),  # (max + min) / 2 for everyone
+    (K.IVEM_PRINTED_CIRCULAR, (-0.75, 0.2, 0.0)),  # no heading near +-pi: the same as printed
+    (K.IVEM_MIDDLE_CIRCULAR, (0.25, 0.25, -0.5)),
+])
+def test_ivem_readings_by_hand(rule, expect):
+    """The four readings of eq. (30)-(31) on the configuration of test_ivem_rule_by_hand."""
+    pos = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5], [3.0, 3.0], [3.3, 3.0], [3.0, 3.3]])
+    theta = np.array([-1.0, 0.0, 0.5, 0.2, 0.0, 0.5])
+    idx = np.empty(64, np.int64)
+    d2 = np.empty(64)
+    order, start, end, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
+    out = np.empty(6)
+    K.genuine_heading(K.IVEM, order, start, end, idx, d2, 1.0, theta, theta.copy(), np.ones(6, np.int64),
+                      np.zeros(6, np.bool_), -1, np.zeros(6, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0,
+                      NO_NOISE, out, rule)
+    np.testing.assert_allclose(out[[0, 3, 2]], expect, atol=1e-12)
+
+
+def test_ivem_circular_readings_across_the_seam():
+    """Headings 3.0 (own) and -3.0, 3.1 (neighbours): as numbers the agent lies between them and
+    keeps its heading (printed) or turns to their middle 0.05, i.e. backwards (middle); seen from
+    its own heading the neighbours are at +0.28 and +0.1, so it turns up by half their spread
+    (printed-circular) or to the middle of the arc they span (middle-circular), across pi."""
+    pos = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]])
+    theta = np.array([3.0, -3.0, 3.1])
+    idx = np.empty(64, np.int64)
+    d2 = np.empty(64)
+    order, start, end, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
+    two_pi = 2 * np.pi
+    got = {}
+    for rule in (K.IVEM_PRINTED, K.IVEM_MIDDLE, K.IVEM_PRINTED_CIRCULAR, K.IVEM_MIDDLE_CIRCULAR):
+        out = np.empty(3)
+        K.genuine_heading(K.IVEM, order, start, end, idx, d2, 1.0, theta, theta.copy(), np.ones(3, np.int64),
+                          np.zeros(3, np.bool_), -1, np.zeros(3, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0,
+                          100.0, NO_NOISE, out, rule)
+        got[rule] = out[0]
+    lo, hi = 0.1, two_pi - 6.0  # the neighbours relative to 3.0 on the circle
+    assert got[K.IVEM_PRINTED] == pytest.approx(3.0)
+    assert got[K.IVEM_MIDDLE] == pytest.approx(0.05)
+    assert got[K.IVEM_PRINTED_CIRCULAR] == pytest.approx(3.0 + (hi - lo) / 2)
+    assert got[K.IVEM_MIDDLE_CIRCULAR] == pytest.approx(3.0 + (hi + lo) / 2 - two_pi)
+
+
+def test_layer_update_eq4_is_the_current_hop_distance():
+    """layer_update = "eq4" (Algorithm 1, line 13): after every step the layers are the shortest
+    neighbour sequence from the information UAV in the graph of that step (eq. 2-4)."""
+    scn = periodic_box(80, 4.102)
+    m, st, step = stepper("hwvem", scn, seed=3, layer_update="eq4", **ALIGN)
+    box = scn.bounds[2]
+    for _ in range(12):
+        A = R.adjacency(st["x"], 1.0, box)  # the graph the step is taken in
+        step()
+        hops = np.full(80, np.inf)
+        hops[m.iu] = 1
+        for _ in range(80):
+            hops = np.minimum(hops, R.next_layers(A, hops, m.iu))
+        np.testing.assert_array_equal(np.where(m.layers == K.NO_LAYER, np.inf, m.layers.astype(float)), hops)
+
+
 # ----------------------------------------------------------------------------- measures
 
 
@@ -289,7 +352,7 @@ def test_mission_success_counts_agents_that_never_join():
     assert s["D_ind"] == pytest.approx(0.4, abs=0.1) and s["D_obs"] > 1.0
 
 
-@pytest.mark.parametrize("scene, clearance", [("hwvem_mission", 0.6), ("hwvem_mission_v1", 1.2)])
+@pytest.mark.parametrize("scene, clearance", [("hwvem_mission_fitted", 0.6), ("hwvem_mission", 1.2)])
 def test_mission_scene_has_the_paper_ingredients(scene, clearance):
     from swarmnav.sensing import signed_distance
     from swarmnav.world.catalog import load_scenario
@@ -308,10 +371,10 @@ def test_mission_scene_has_the_paper_ingredients(scene, clearance):
     assert d.min() == pytest.approx(clearance, abs=1e-3) and d.min() > VicsekFamily("hwvem").params.r_avoid
 
 
-@pytest.mark.parametrize("scene, params", [("hwvem_mission", "rect_offset=0.6"), ("hwvem_mission_v1", "")])
+@pytest.mark.parametrize("scene, params", [("hwvem_mission_fitted", "rect_offset=0.6"), ("hwvem_mission", "")])
 def test_shipped_mission_scenes_are_members_of_the_family(scene, params):
-    """The scene files are the fitted / the default member of hwvem_mission_family (the geometry
-    the calibration in benchmarks/hwvem_scene_fit.py ran on), at every Table 2 size."""
+    """The scene files are the fitted option / the default member of hwvem_mission_family (the
+    geometry the calibration in benchmarks/hwvem_scene_fit.py ran on), at every Table 2 size."""
     from swarmnav.world.catalog import load_scenario
 
     def geometry(s):
@@ -320,7 +383,7 @@ def test_shipped_mission_scenes_are_members_of_the_family(scene, params):
 
     for n in (5, 20, 50):
         assert geometry(load_scenario(scene, n=n)) == geometry(load_scenario(f"hwvem_mission_family:{params}", n=n))
-    assert geometry(load_scenario("hwvem_mission")) != geometry(load_scenario("hwvem_mission_v1"))
+    assert geometry(load_scenario("hwvem_mission")) != geometry(load_scenario("hwvem_mission_fitted"))
 
 
 def test_experiment_specs_resize_the_periodic_box():

@@ -31,6 +31,13 @@ NO_LAYER = np.int64(1) << np.int64(60)
 
 # Model codes of :func:`genuine_heading`.
 VEM, VEM_A, IVEM, IVEM_A, WVEM, HWVEM = 0, 1, 2, 3, 4, 5
+# Readings of IVEM's eq. (30)-(31) (``ivem_rule`` of :func:`genuine_heading`): the printed update
+# theta_i + lambda (max - min) / 2, or the text's "middle of the two neighbours' directions with
+# the maximum deviation" (max + min) / 2; angles compared as numbers in [-pi, pi) or as
+# differences wrap(theta_j - theta_i) from the agent's own heading (on the circle).
+IVEM_PRINTED, IVEM_MIDDLE, IVEM_PRINTED_CIRCULAR, IVEM_MIDDLE_CIRCULAR = 0, 1, 2, 3
+# Norms of Deg_con, eq. (28) (``norm`` of :func:`consistency`).
+NORM_L1, NORM_L2, NORM_LINF = 1, 2, 0
 
 
 @njit(cache=True)
@@ -106,7 +113,8 @@ def bfs_layers(order, start, end, indices, dist2, r2, iu, out):
 
 @njit(cache=True)
 def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g, layers, avoiding, iu, iu_nb,
-                    theta_d, p1, p2, use_nei, k_alpha, k_beta, k_gamma, info_weight, noise, out):
+                    theta_d, p1, p2, use_nei, k_alpha, k_beta, k_gamma, info_weight, noise, out,
+                    ivem_rule=IVEM_PRINTED):
     """New genuine desired heading of every agent (HWVEM eq. 18) plus the noise of eq. (6).
 
     Weighted models (VEM, VEM-A, WVEM, HWVEM, and IVEM-A next to the information UAV)::
@@ -122,11 +130,16 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
     neighbours (``l_j`` infinite) weigh ``p1 * w_nei`` if ``p2 == 1`` and 0 otherwise (the
     limit of eq. 14-15); a row whose contributors are all unreached averages them uniformly.
 
-    IVEM (and IVEM-A away from the information UAV), eq. (30)-(31)::
+    IVEM (and IVEM-A away from the information UAV), eq. (30)-(31), ``ivem_rule``
+    :data:`IVEM_PRINTED` (as printed)::
 
         theta_i <- theta_i + lambda * (max_j theta_j - min_j theta_j) / 2
 
-    with ``lambda = 1`` if ``theta_i <= min``, ``-1`` if ``theta_i >= max``, else 0.
+    with ``lambda = 1`` if ``theta_i <= min``, ``-1`` if ``theta_i >= max``, else 0;
+    :data:`IVEM_MIDDLE`: ``theta_i <- (max_j theta_j + min_j theta_j) / 2`` (the text's "middle of
+    the two neighbours' directions with the maximum deviation"). The ``_CIRCULAR`` readings
+    take max and min of ``wrap(theta_j - theta_i)`` (the neighbours seen from the agent's own
+    heading, which is then 0) instead of the angles as numbers in ``[-pi, pi)``.
 
     An agent with no contributing neighbour keeps ``theta_g``; the information UAV gets
     ``theta_d`` (eq. 9 with ``b_ij = 0`` for ``i`` in layer 1). ``noise`` (N,) [rad] is added to
@@ -156,21 +169,26 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
         a = start[i]
         b = end[i]
         if code == IVEM or (code == IVEM_A and not iu_nb[i]):
+            circ = ivem_rule == IVEM_PRINTED_CIRCULAR or ivem_rule == IVEM_MIDDLE_CIRCULAR
+            own = 0.0 if circ else theta[i]  # the agent's heading in the frame of lo, hi
             lo = np.inf  # min and max neighbour heading
             hi = -np.inf
             for e in range(a, b):
                 if dist2[e] <= r2:
                     j = indices[e]
                     if not avoiding[j]:
-                        lo = min(lo, theta[j])
-                        hi = max(hi, theta[j])
+                        tj = wrap_angle(theta[j] - theta[i]) if circ else theta[j]
+                        lo = min(lo, tj)
+                        hi = max(hi, tj)
             if lo > hi:
                 out[i] = theta_g[i]
+            elif ivem_rule == IVEM_MIDDLE or ivem_rule == IVEM_MIDDLE_CIRCULAR:
+                out[i] = wrap_angle(theta[i] - own + (hi + lo) / 2.0)
             else:
                 lam = 0.0
-                if theta[i] <= lo:
+                if own <= lo:
                     lam = 1.0
-                elif theta[i] >= hi:
+                elif own >= hi:
                     lam = -1.0
                 out[i] = wrap_angle(theta[i] + lam * (hi - lo) / 2.0)
             if noisy:
@@ -329,10 +347,11 @@ def velocity(theta, avoiding, att, rep, speed0, c_rep, c_att, v_max, tangent, ou
 
 
 @njit(cache=True)
-def consistency(theta, ref, use_mean, l2):
+def consistency(theta, ref, use_mean, norm):
     """Deg_con of eq. (28) against ``ref`` [rad], or against the circular mean of ``theta`` when
-    ``use_mean``; the norm is L1 (mean absolute deviation) or, with ``l2``, L2 / N. The same
-    number as ``measures.deg_con`` in one pass."""
+    ``use_mean``; ``norm`` is :data:`NORM_L1` (mean absolute deviation), :data:`NORM_L2`
+    (Euclidean norm / N) or :data:`NORM_LINF` (largest deviation / N). The same number as
+    ``measures.deg_con`` in one pass."""
     n = theta.shape[0]
     if use_mean:
         s = 0.0
@@ -344,6 +363,11 @@ def consistency(theta, ref, use_mean, l2):
     acc = 0.0
     for i in range(n):
         d = abs(wrap_angle(theta[i] - ref))
-        acc += d * d if l2 else d
-    m = math.sqrt(acc) / n if l2 else acc / n
+        if norm == NORM_L2:
+            acc += d * d
+        elif norm == NORM_L1:
+            acc += d
+        else:
+            acc = max(acc, d)
+    m = math.sqrt(acc) / n if norm == NORM_L2 else acc / n
     return (math.pi - m) / math.pi

@@ -12,21 +12,22 @@ import numpy as np
 
 from swarmnav.methods.vicsek.geometry import wrap
 
-Norm = Literal["l1", "l2"]
+Norm = Literal["l1", "l2", "linf"]
 
 
 def deg_con(theta: np.ndarray, ref: float | np.ndarray, norm: Norm = "l1") -> np.ndarray | float:
     """Eq. (28)-(29): ``Deg_con = (pi - ||theta - theta_d|| / N) / pi``.
 
-    The deviations are wrapped to ``[-pi, pi)``. The paper does not name the norm: ``"l1"``
-    (our default) makes ``||.||/N`` the mean absolute deviation, so ``Deg_con^d = 0.9984``
-    means the headings are within 0.29 deg of the reference on average; ``"l2"`` is the
-    Euclidean norm divided by N (a looser test for large N).
+    The deviations are wrapped to ``[-pi, pi)``. The paper writes ``||.||`` without naming the
+    norm. ``"l2"`` is
+    the Euclidean norm divided by N, so ``Deg_con^d = 0.9984`` asks for a root-mean-square
+    deviation of ``0.0016 pi sqrt(N)`` rad (0.29 deg x sqrt(N)); ``"l1"`` makes ``||.||/N`` the
+    mean absolute deviation (0.29 deg at every N); ``"linf"`` is the largest deviation / N.
 
     Args:
         theta: (..., N) headings [rad].
         ref: reference heading(s) [rad], broadcast against ``theta[..., 0]``.
-        norm: "l1" or "l2".
+        norm: "l1", "l2" or "linf".
 
     Returns:
         Deg_con in ``[0, 1]`` for each leading index.
@@ -38,8 +39,10 @@ def deg_con(theta: np.ndarray, ref: float | np.ndarray, norm: Norm = "l1") -> np
         m = dev.sum(axis=-1) / n
     elif norm == "l2":
         m = np.sqrt((dev * dev).sum(axis=-1)) / n
+    elif norm == "linf":
+        m = dev.max(axis=-1) / n
     else:
-        raise ValueError(f"unknown Deg_con norm {norm!r} (l1, l2)")
+        raise ValueError(f"unknown Deg_con norm {norm!r} (l1, l2, linf)")
     out = (np.pi - m) / np.pi
     return float(out) if np.ndim(out) == 0 else out
 

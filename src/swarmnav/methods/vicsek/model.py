@@ -36,6 +36,9 @@ from swarmnav.world.scenario import Scenario
 MODELS = {"vem": K.VEM, "vem-a": K.VEM_A, "ivem": K.IVEM, "ivem-a": K.IVEM_A, "wvem": K.WVEM, "hwvem": K.HWVEM}
 #: Models with an information UAV.
 WITH_INFO_UAV = ("vem-a", "ivem-a", "wvem", "hwvem")
+_IVEM_RULES = {"printed": K.IVEM_PRINTED, "middle": K.IVEM_MIDDLE, "printed-circular": K.IVEM_PRINTED_CIRCULAR,
+               "middle-circular": K.IVEM_MIDDLE_CIRCULAR}
+_NORMS = {"l1": K.NORM_L1, "l2": K.NORM_L2, "linf": K.NORM_LINF}
 _NO_NOISE = np.zeros(0)
 _NO_FORCE = np.zeros((0, 2))
 
@@ -105,8 +108,23 @@ class VicsekParams:
     lookahead: float = param(1.0, "m", "(0, inf)", "ours",
         "carrot distance of the information UAV's path following (= r)")
     deg_con_d: float = param(0.9984, "", "[0, 1]", "Sec. 3.1", "desired consistency degree")
-    deg_con_norm: Literal["l1", "l2"] = param("l1", "", None, "ours",
-        "norm of eq. (28) (see measures.deg_con)")
+    # The norm of eq. (28), which the paper does not name (audit: docs/methods/vicsek.md). L2
+    # reproduces Table 1's baselines (L1 makes VEM-A, IVEM-A, WVEM 1.5-2x and IVEM up to 34x
+    # slower than published); HWVEM, limited by how fast its layers spread, barely moves.
+    deg_con_norm: Literal["l1", "l2", "linf"] = param("l1", "", None, "eq. (28), Table 1 (our reading)",
+        "norm of eq. (28): ||theta - theta_d|| / N with the L2 (Euclidean), L1 or L-infinity norm")
+    # IVEM, eq. (30)-(31) (audit: docs/methods/vicsek.md): "printed" = theta_i + lambda (max - min)/2,
+    # an agent between its neighbours' extremes keeps its heading; "middle" = (max + min)/2, the
+    # text's "moving toward the middle of two neighbours' motion directions with the maximum
+    # deviation"; "-circular": max and min of the neighbours' headings relative to the agent's own.
+    ivem_rule: Literal["printed", "middle", "printed-circular", "middle-circular"] = param(
+        "printed", "", None, "eq. (30)-(31), Sec. 3.1.2 (our reading)",
+        "IVEM update: the printed eq. (30)-(31), or the middle of the extreme neighbours' headings")
+    # Layers during the run (audit: docs/methods/vicsek.md): "eq5" = l_i(k) = 1 + min l_j(k-1)
+    # over the previous neighbours (Sec. 2.1, one hop per step); "eq4" = the shortest neighbour
+    # sequence of the current graph every step (Algorithm 1, line 13: "update ... with (4)").
+    layer_update: Literal["eq5", "eq4"] = param("eq5", "", None, "eq. (4)-(5), Algorithm 1 (our reading)",
+        "how the layers follow the graph: eq. (5) with its one-step delay, or eq. (4) afresh")
     stop_at_convergence: bool = param(False, "", None, "ours",
         "end the run once Deg_con >= deg_con_d held converge_hold steps")
     converge_hold: int = param(20, "step", "[1, inf)", "ours",
@@ -215,7 +233,7 @@ class VicsekFamily:
         r2_list = np.inf if self.radius <= p.r else r2  # inf: no entry lies beyond r
         K.genuine_heading(self.code, *nb, r2_list, self.theta, self.theta_g, self.layers,
                           self.avoiding, iu, iu_nb, theta_d, p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta,
-                          p.k_gamma, p.info_weight, noise, theta_g)
+                          p.k_gamma, p.info_weight, noise, theta_g, _IVEM_RULES[p.ivem_rule])
 
         theta = theta_g
         avoiding = np.zeros(n, dtype=np.bool_)
@@ -238,7 +256,10 @@ class VicsekFamily:
             self._track_mission(x, nb, dist)
         if iu >= 0:
             nxt = np.empty_like(self.layers)
-            K.next_layers(*nb, r2, self.layers, iu, nxt)
+            if p.layer_update == "eq5":
+                K.next_layers(*nb, r2, self.layers, iu, nxt)
+            else:
+                K.bfs_layers(*nb, r2, iu, nxt)
             self.layers = nxt
         self.theta, self.theta_g, self.avoiding = theta, theta_g, avoiding
 
@@ -314,7 +335,7 @@ class VicsekFamily:
     def _deg_con(self) -> float:
         """Deg_con (eq. 28) against the information UAV's heading, or the consensus direction."""
         ref = float(self.theta[self.iu]) if self.has_info else 0.0
-        return K.consistency(self.theta, ref, not self.has_info, self.params.deg_con_norm == "l2")
+        return K.consistency(self.theta, ref, not self.has_info, _NORMS[self.params.deg_con_norm])
 
     def _track_mission(self, x: np.ndarray, nb: tuple, dist: np.ndarray | None) -> None:
         """Per-step bookkeeping of the success test and the safety distances."""
