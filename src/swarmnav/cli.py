@@ -190,9 +190,9 @@ def _cmd_run(args) -> int:
 
         print(f"  figure: {plot_run(res, out / 'trajectory.png')}")
     if args.view:
-        from swarmnav.viz.viewer import write_viewer
+        from swarmnav.viz.viewer import llm_marks, write_viewer
 
-        print(f"  viewer: {write_viewer(res, out / 'viewer.html')}")
+        print(f"  viewer: {write_viewer(res, out / 'viewer.html', marks=llm_marks(out))}")
     if m.get("llm_calls", 0) > 0 and "llm_latency_median_s" in m:
         print(f"  LLM: {m['llm_calls']:.0f} calls, {m['llm_fallback_used']:.0f} fallbacks, "
               f"{m['llm_projected']:.0f} projected to keep, latency median {m['llm_latency_median_s']:.2f} s "
@@ -206,9 +206,19 @@ def _cmd_llm(args) -> int:
     from swarmnav.llm.config import LlmParams
     from swarmnav.params import build
 
-    params = _llm_sets(args, {})
+    params = _llm_sets(args, _parse_sets(args.set))
     params.setdefault("decision", "ollama")
-    return check(build(LlmParams, params, context="llm check"), sys.stdout)
+    if args.action == "check":
+        return check(build(LlmParams, params, context="llm check"), sys.stdout)
+    from swarmnav.llm import bench
+
+    p = build(LlmParams, params, context="llm bench")
+    states = bench.load_states(args.states)[: args.limit or None]
+    res = bench.bench(p, states, progress=sys.stderr)
+    if args.transcript:
+        Path(args.transcript).write_text(res.transcript(), encoding="utf-8")
+    bench.report(res, sys.stdout)
+    return 0
 
 
 def _cmd_plot(args) -> int:
@@ -231,7 +241,7 @@ def _cmd_plot(args) -> int:
 
 def _cmd_view(args) -> int:
     from swarmnav.sim import RunResult
-    from swarmnav.viz.viewer import write_viewer
+    from swarmnav.viz.viewer import llm_marks, write_viewer
 
     d = Path(args.dir)
     if not d.is_dir():
@@ -240,7 +250,7 @@ def _cmd_view(args) -> int:
     if args.out and Path(args.out).is_dir():
         raise ConfigError(f"view: --out {args.out} is a directory; give the HTML file's name")
     out = _writable_file(args.out or d / "viewer.html", "--out")
-    path = write_viewer(res, out)
+    path = write_viewer(res, out, marks=llm_marks(d))
     print(f"wrote {path} ({path.stat().st_size / 1e6:.2f} MB)")
     if args.open:
         import webbrowser
@@ -384,8 +394,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="no replay viewer per run (by default each stored trajectory gets one, linked from the report)")
     s.set_defaults(fn=_cmd_report)
 
-    s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question")
-    s.add_argument("action", choices=["check"])
+    s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question, "
+                       "'llm bench' scores one on recorded decision states (docs/llm.md)")
+    s.add_argument("action", choices=["check", "bench"])
+    s.add_argument("--states", metavar="FILE", help="bench: decision states (.jsonl; default: the shipped set)")
+    s.add_argument("--limit", type=int, default=0, help="bench: only the first N states")
+    s.add_argument("--transcript", metavar="FILE", help="bench: write the answers (what --decision replay reads)")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE", help="an llm_* parameter, e.g. llm_threads=1")
     _add_llm_flags(s)
     s.set_defaults(fn=_cmd_llm)
     return p

@@ -155,3 +155,25 @@ def test_view_open_hands_the_page_to_the_browser(hes_dir, tmp_path, monkeypatch)
     out = tmp_path / "o.html"
     assert main(["view", str(hes_dir), "--out", str(out), "--open"]) == 0
     assert opened == [out.resolve().as_uri()]
+
+
+def test_llm_calls_and_fallbacks_are_timeline_marks(hes_dir, tmp_path, capsys):
+    """An LLM run's transcript (docs/llm.md) gives one mark per call, a fallback its own kind."""
+    import json
+    import shutil
+
+    d = tmp_path / "llm"
+    shutil.copytree(hes_dir, d)
+    calls = [{"step": 50, "backend": "ollama", "model": "qwen2.5:3b", "parsed": "split", "executed": "split",
+              "rule_action": "split", "fallback": None},
+             {"step": 100, "backend": "ollama", "model": "qwen2.5:3b", "parsed": None, "executed": "keep",
+              "rule_action": "keep", "fallback": "timeout after 120 s"}]
+    (d / "llm_transcript.jsonl").write_text("".join(json.dumps(c) + "\n" for c in calls))
+    assert main(["view", str(d)]) == 0
+    events = page_data(d / "viewer.html")["events"]
+    marks = [(e["step"], e["action"]) for e in events if e["action"].startswith("llm")]
+    assert marks == [(50, "llm"), (100, "llm fallback")]
+    assert "timeout after 120 s" in events[[e["step"] for e in events].index(100)]["reason"]
+    assert [e["step"] for e in events] == sorted(e["step"] for e in events)  # in time order with the splits
+    (d / "llm_transcript.jsonl").write_text('{"backend": "ollama"}\n')
+    _one_line_exit_2(["view", str(d)], capsys, "line 1 is not a transcript record")

@@ -162,6 +162,30 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
     }
 
 
+def llm_marks(run_dir: str | Path) -> list[dict[str, Any]]:
+    """Timeline marks of the LLM calls in a run directory's ``llm_transcript.jsonl`` (none
+    without one; docs/llm.md gives its fields): action ``llm`` for a call the model answered,
+    ``llm fallback`` for one answered by the rule after a failure."""
+    path = Path(run_dir) / "llm_transcript.jsonl"
+    if not path.exists():
+        return []
+    marks = []
+    for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            r = json.loads(line)
+            step = int(r["step"])
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            raise SwarmnavError(f"{path}: line {n} is not a transcript record with a step") from None
+        fallback = r.get("fallback")
+        reason = (f"failed ({fallback}); the rule answered {r.get('rule_action')}" if fallback else
+                  f"proposed {r.get('parsed')}, executed {r.get('executed')}")
+        marks.append({"step": step, "action": "llm fallback" if fallback else "llm",
+                      "source": str(r.get("model") or r.get("backend") or "llm"), "reason": reason})
+    return marks
+
+
 def _asset(*parts: str) -> str:
     return resources.files("swarmnav.viz").joinpath(*parts).read_text("utf-8")
 
@@ -215,11 +239,15 @@ def write_shared(folder: str | Path) -> Path:
     return d
 
 
-def write_viewer(result: RunResult, out_html: str | Path, *, shared: str | None = None) -> Path:
-    """Write the viewer page of ``result`` to ``out_html`` (self-contained unless ``shared``)."""
+def write_viewer(result: RunResult, out_html: str | Path, *, shared: str | None = None,
+                 marks: list[dict[str, Any]] = ()) -> Path:
+    """Write the viewer page of ``result`` to ``out_html`` (self-contained unless ``shared``);
+    ``marks`` are more timeline marks (e.g. :func:`llm_marks`), in the events' form."""
     out = Path(out_html)
     out.parent.mkdir(parents=True, exist_ok=True)
-    text = page(viewer_data(result), shared=shared)
+    data = viewer_data(result)
+    data["events"] = sorted(data["events"] + list(marks), key=lambda e: e["step"])
+    text = page(data, shared=shared)
     tmp = out.with_name(out.name + ".tmp")
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(out)

@@ -420,8 +420,9 @@
     const box = $('marks');
     for (const e of D.events) {
       const b = document.createElement('button'), s = Math.min(e.step + 1, K);
-      b.className = e.action === 'split' ? 'split' : e.action === 'merge' ? 'merge' : 'other';
-      b.textContent = e.action === 'split' ? '\u25B2' : e.action === 'merge' ? '\u25C7' : '\u25CF';
+      const kind = {'split': 'split', 'merge': 'merge', 'llm': 'llm', 'llm fallback': 'fallback'}[e.action] || 'other';
+      b.className = kind;
+      b.textContent = {split: '\u25B2', merge: '\u25C7', llm: '\u2022', fallback: '\u00D7'}[kind] || '\u25CF';
       b.style.left = (K ? 100 * s / K : 0) + '%';
       b.title = `${e.action} at step ${e.step} (t = ${fmt(e.step * DT, 1)} s)` + (e.source ? `, ${e.source}` : '') + (e.reason ? `: ${e.reason}` : '');
       b.addEventListener('click', () => { pause(); seek(s); });
