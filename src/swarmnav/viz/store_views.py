@@ -5,8 +5,8 @@ sub-swarm labels and the minimum clearance per step (docs/experiments.md), not t
 directory. The viewer of such a run rebuilds the rest from what is stored, and says so on the
 page: velocities are central differences of the positions over the method's dt; each agent's
 clearance is the signed distance of its stored position to the scene (the simulator's own
-function); split and merge marks are the steps where the sub-swarm count rises or falls (LLM
-calls and fallbacks are not stored, so they have no marks).
+function); split and merge marks are the steps where the sub-swarm count rises or falls; an
+LLM run's transcript, kept beside its trajectory, gives a mark per call.
 
 Pages go to ``DIR/report_files/viewers/KEY.html`` and share one copy of the scripts
 (``viewer-lib.js``, ``viewer.js``) in that folder; a page whose file exists is kept (a key names
@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from swarmnav.errors import SwarmnavError
-from swarmnav.viz.viewer import page, viewer_data, write_shared
+from swarmnav.viz.viewer import llm_marks, page, viewer_data, write_shared
 
 #: Folder of the viewers, relative to the results directory.
 FOLDER = Path("report_files") / "viewers"
@@ -120,6 +120,13 @@ def write_store_viewers(directory: str | Path, experiment: str | None = None,
             except (SwarmnavError, OSError, ValueError, KeyError) as e:
                 problems.append(f"{row['variant']} seed {row['seed']}: no viewer ({e})")
                 continue
+            transcript = [a for a in row.get("artifacts") or [] if Path(a).name == "llm_transcript.jsonl"]
+            if transcript:  # an LLM run keeps its transcript beside the trajectory: one mark per call
+                try:
+                    data["events"] = sorted(data["events"] + llm_marks((root / transcript[0]).parent),
+                                            key=lambda e: e["step"])
+                except SwarmnavError as e:
+                    problems.append(f"{row['variant']} seed {row['seed']}: no LLM marks ({e})")
             data["title"] += f" ({row['variant']})"
             data["note"] = ("from the results store: speeds are differences of stored positions, split / merge "
                             "marks come from the sub-swarm labels")
