@@ -445,3 +445,28 @@ def test_mission_losses_match_the_component_test_replayed_from_the_trajectory():
         assert got[i][0] == s and got[i][1:] == pytest.approx((x, y))
     assert res.metrics["P_s"] == pytest.approx(100 * (1 - len(expect) / scn.n))
     assert lost["apart_at_end"].tolist() == [bool(apart[i] > 0) for i in sorted(expect)]
+
+
+def test_safety_distances_by_scope():
+    """D_ind and D_obs (Sec. 3.2) against a replay of the recorded positions: over all agents and
+    steps by default (the initial placement included), from step 1 with safety_from = 1, and over
+    the agents that pass the success test with safety_agents = "successful"."""
+    from scipy.spatial.distance import pdist
+
+    from swarmnav.sensing import signed_distance
+    from swarmnav.world.catalog import load_scenario
+
+    scn = load_scenario("hwvem_mission", n=20)
+    runs = {kw: swarmnav.run("hwvem", scn, seed=4, steps=120, **dict(kw))
+            for kw in ((), (("safety_from", 1),), (("safety_agents", "successful"),))}
+    x = runs[()].positions  # (K + 1, N, 2): the states the method saw are 0 .. K - 1
+    seen = x[:-1]
+    pair = np.array([pdist(p).min() for p in seen])
+    obs = np.array([signed_distance(scn.geometry, p).min() for p in seen])
+    m = runs[()].metrics
+    assert m["D_ind"] == pytest.approx(pair.min(), abs=1e-12) and m["D_obs"] == pytest.approx(obs.min(), abs=1e-12)
+    late = runs[(("safety_from", 1),)].metrics
+    assert late["D_ind"] == pytest.approx(pair[1:].min(), abs=1e-12)
+    assert late["D_obs"] == pytest.approx(obs[1:].min(), abs=1e-12)
+    ok = runs[(("safety_agents", "successful"),)].metrics
+    assert ok["D_ind"] >= m["D_ind"] and ok["D_obs"] >= m["D_obs"] and ok["P_s"] == m["P_s"]

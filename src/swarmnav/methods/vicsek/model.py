@@ -139,6 +139,14 @@ class VicsekParams:
     follow_radius: float = param(3.0, "m", "(0, inf)", "ours", "for follow_test = \"distance\"")
     follow_gap: int = param(10, "step", "[0, inf)", "ours",
         "longest time apart from the information UAV (r / v0 = 10 steps: one interaction radius)")
+    # D_ind and D_obs of Table 2 ("the minimum distance between individuals ... and the minimum
+    # distance from the individual to the obstacle during the entire process"; audit:
+    # docs/methods/vicsek.md): over which agents, and from which step on (0 = the initial
+    # placement counts, 1 = only the flight).
+    safety_agents: Literal["all", "successful"] = param("all", "", None, "Sec. 3.2 (our reading)",
+        "agents D_ind and D_obs are taken over: all, or those that pass the success test of eq. (32)")
+    safety_from: int = param(0, "step", "[0, inf)", "Sec. 3.2 (our reading)",
+        "first step counted in D_ind and D_obs (0: the initial placement counts)")
 
 
 class VicsekFamily:
@@ -204,8 +212,8 @@ class VicsekFamily:
         self._k = 0  # steps seen by the success test
         self._apart_from = np.zeros((n, 3))  # step and position where the current run apart began
         self._loss = np.full((n, 3), np.nan)  # the same for the run that failed the agent
-        self.D_obs = np.inf
-        self.D_ind = np.inf
+        self._d2_ind = np.full(n, np.inf)  # per agent: smallest squared distance to another agent
+        self._d_obs = np.full(n, np.inf)  # per agent: smallest signed distance to an obstacle
         if self.mission:
             self._track_mission(x, nb, None)
             self._failed |= self._apart > 0  # "from the beginning": with the IU at k = 0
@@ -290,8 +298,10 @@ class VicsekFamily:
         if self.mission:
             # "to the end": with the IU at the last step seen
             out["P_s"] = 100.0 * float(np.mean(~(self._failed | (self._apart > 0))))
-            out["D_obs"] = float(self.D_obs)
-            out["D_ind"] = float(self.D_ind)
+            ok = ~(self._failed | (self._apart > 0))
+            take = ok if p.safety_agents == "successful" else np.ones(self.n, dtype=np.bool_)
+            out["D_obs"] = float(self._d_obs[take].min()) if take.any() else float("nan")
+            out["D_ind"] = float(np.sqrt(self._d2_ind[take].min())) if take.any() else float("nan")
         return out
 
     def losses(self) -> dict[str, np.ndarray]:
@@ -353,13 +363,19 @@ class VicsekFamily:
         failed = self._failed | (self._apart > p.follow_gap)
         self._loss[failed & ~self._failed] = self._apart_from[failed & ~self._failed]
         self._failed = failed
+        counted = self._k >= p.safety_from
         self._k += 1
-        if len(nb[4]):
-            self.D_ind = min(self.D_ind, float(np.sqrt(nb[4].min())))
+        if not counted:
+            return
+        _, start, end, _, d2 = nb
+        if len(d2):
+            rows = np.argsort(start, kind="stable")  # the rows are contiguous, in this order
+            owner = np.repeat(rows, (end - start)[rows])
+            np.minimum.at(self._d2_ind, owner, d2)
         if self.obstacles is not None:
             if dist is None:
                 dist = signed_distance(self.obstacles, x)
-            self.D_obs = min(self.D_obs, float(dist.min()))
+            np.minimum(self._d_obs, dist, out=self._d_obs)
 
 
 def info_uav_index(scenario: Scenario, positions: np.ndarray) -> int:
