@@ -73,3 +73,22 @@ def test_a_store_viewer_opens_with_its_shared_scripts(store):
         assert b.errors == []
         local = [u for u in b.requests if u.startswith("file://")]
         assert [u.rsplit("/", 1)[1] for u in local[1:]] == ["viewer-lib.js", "viewer.js"]  # beside the page
+
+
+def test_a_stored_llm_transcript_gives_call_marks(store):
+    import json
+
+    from swarmnav.experiments.store import Store
+
+    s = Store(store)
+    row = s.rows()[0]
+    rel = f"trajectories/{row['key'][:2]}/{row['key']}/llm_transcript.jsonl"
+    (store / rel).parent.mkdir(parents=True, exist_ok=True)
+    (store / rel).write_text(json.dumps({"step": 7, "model": "m", "parsed": "keep", "executed": "keep",
+                                         "fallback": None}) + "\n")
+    s.put({**row, "artifacts": [rel]})
+    (store / "report_files" / "viewers" / f"{row['key']}.html").unlink(missing_ok=True)
+    links, problems = write_store_viewers(store)
+    assert problems == []
+    events = page_data(store / links[row["key"]])["events"]
+    assert [(e["step"], e["action"]) for e in events if e["action"] == "llm"] == [(7, "llm")]
