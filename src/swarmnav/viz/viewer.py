@@ -157,7 +157,6 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
                    for e in result.events],
         "metrics": {k: (float(m[k]) if isinstance(m.get(k), (int, float)) and math.isfinite(m[k]) else None)
                     for k in ("Y", "R_goal", "E_mean", "R_unsafe", "d_clr_min") if k in m},
-        "velocity_source": "recorded",
         "arrays": arrays,
     }
 
