@@ -1,0 +1,90 @@
+"""Table 1 of HWVEM under the readings the paper leaves open (issue 21's audit), one core.
+
+For each reading (a set of ``--set``-style overrides on top of the ``hwvem-alignment`` spec's
+parameters) and each model and N, runs the seeds in-process and prints the mean k_con with its
+95 % confidence interval (Student t, over the runs that reached Deg_con^d), the mean first
+passage (the first step with Deg_con >= Deg_con^d, the other reading of "when k_con is read")
+and the paper's mean beside it. The audit table of docs/methods/vicsek.md quotes its output.
+
+    PYTHONPATH=src python benchmarks/hwvem_audit.py --seeds 1-20 \
+        --reading deg_con_norm=l1 --reading deg_con_norm=l2 --reading deg_con_norm=linf
+    PYTHONPATH=src python benchmarks/hwvem_audit.py --seeds 1-20 --models ivem \
+        --reading ivem_rule=printed --reading ivem_rule=middle --reading ivem_rule=printed-circular \
+        --reading ivem_rule=middle-circular
+    PYTHONPATH=src python benchmarks/hwvem_audit.py --seeds 1-20 --models hwvem \
+        --reading layer_update=eq5 --reading layer_update=eq4 --reading initial_layers=unknown
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+
+import numpy as np
+
+from swarmnav.experiments import load_experiment
+from swarmnav.experiments.report import paper_results
+from swarmnav.methods import registry
+from swarmnav.sim.rollout import run as rollout
+from swarmnav.world.catalog import load_scenario
+
+MODELS = {"vem": "VEM", "vem-a": "VEM-A", "ivem": "IVEM", "ivem-a": "IVEM-A", "wvem": "WVEM", "hwvem": "HWVEM"}
+
+
+def ci95(xs: list[float]) -> tuple[float, float, int]:
+    """Mean, 95 % CI half-width (Student t) and count over the finite values."""
+    from scipy.stats import t
+
+    x = np.asarray([v for v in xs if math.isfinite(v)])
+    if len(x) < 2:
+        return (float(x.mean()) if len(x) else math.nan), math.nan, len(x)
+    return float(x.mean()), float(t.ppf(0.975, len(x) - 1) * x.std(ddof=1) / math.sqrt(len(x))), len(x)
+
+
+def cell(model: str, n: int, seeds: list[int], params: dict, steps: int) -> tuple[list[float], list[float]]:
+    """k_con (eq. 27) and the first passage of every seed."""
+    scn = load_scenario(f"periodic_box:n={n},rho=4.102", n=n)
+    k, first = [], []
+    for seed in seeds:
+        m = registry.make(model, **params)
+        res = rollout(m, scn, seed=seed, steps=steps)
+        k.append(res.metrics["k_con"])
+        hit = np.flatnonzero(np.asarray(m.deg_series) >= m.params.deg_con_d)
+        first.append(float(hit[0]) if len(hit) else math.inf)
+    return k, first
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", default="1-20")
+    ap.add_argument("--sizes", default="100|200|500")
+    ap.add_argument("--models", default="|".join(MODELS), help="e.g. ivem|ivem-a")
+    ap.add_argument("--reading", action="append", default=[], metavar="K=V[,K=V]",
+                    help="overrides of one reading (default: the spec's parameters as they are)")
+    args = ap.parse_args(argv)
+    exp = load_experiment("hwvem-alignment", seeds=args.seeds)
+    base = dict(exp.variants[0].params)
+    seeds = list(exp.seeds)
+    ref = paper_results()["hwvem"]["table1"]
+    readings = args.reading or [""]
+    print(f"seeds {args.seeds}; spec parameters {base}\n")
+    print("| reading | N | model | k_con mean ± 95 % CI (reached) | first passage mean | paper mean | ours / paper |")
+    print("|---|---|---|---|---|---|---|")
+    for reading in readings:
+        extra = dict(kv.split("=", 1) for kv in reading.split(",") if kv)
+        for n in (int(v) for v in args.sizes.split("|")):
+            for model in args.models.split("|"):
+                t0 = time.perf_counter()
+                k, first = cell(model, n, seeds, {**base, **extra}, exp.variants[0].steps)
+                mean, half, got = ci95(k)
+                paper = ref[f"N{n}"][MODELS[model]]["k_con"][0]
+                print(f"| {reading or 'spec'} | {n} | {MODELS[model]} | {mean:.1f} ± {half:.1f} ({got}/{len(k)}) | "
+                      f"{ci95(first)[0]:.1f} | {paper:.2f} | {mean / paper:.2f} |", flush=True)
+                print(f"  ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
