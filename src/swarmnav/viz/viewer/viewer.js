@@ -404,7 +404,7 @@
     for (let s = 0; s <= K; s++) { if (!isFinite(MINC[s])) { pen = false; continue; } const x = xOfStep(s), y = yc(MINC[s]); pen ? g.lineTo(x, y) : g.moveTo(x, y); pen = true; }
     g.stroke();
     g.font = '11px system-ui, sans-serif';
-    g.fillStyle = '#d62728'; g.fillText(`min clearance [m] (0 to ${fmt(cmax, 1)})`, CH.pad + 2, 11);
+    g.fillStyle = '#d62728'; g.fillText(`min clearance [m] (${fmt(cmin, 1)} to ${fmt(cmax, 1)})`, CH.pad + 2, 11);
     g.fillStyle = '#777'; g.fillText(`d_safe = ${D.d_safe} m`, CH.pad + 190, 11);
     g.fillStyle = '#1f77b4'; g.fillText(`sub-swarms (0 to ${nmax + 1})`, CH.pad + 290, 11);
     g.fillStyle = '#555'; g.fillText(`t = 0 to ${fmt(K * DT, 1)} s`, w - CH.pad - 110, h - 2);
