@@ -92,3 +92,18 @@ def test_a_stored_llm_transcript_gives_call_marks(store):
     assert problems == []
     events = page_data(store / links[row["key"]])["events"]
     assert [(e["step"], e["action"]) for e in events if e["action"] == "llm"] == [(7, "llm")]
+
+
+def test_a_run_stored_by_an_older_version_still_gets_its_viewer(store):
+    """The resolved parameters of an older version may name a parameter since renamed: the
+    viewer needs only the step, which they carry."""
+    from swarmnav.experiments.store import Store
+
+    s = Store(store)
+    row = s.rows()[1]
+    config = {**row["config"], "params": {**row["config"]["params"], "renamed_since": 1.0}}
+    s.put({**row, "config": config})
+    (store / "report_files" / "viewers" / f"{row['key']}.html").unlink(missing_ok=True)
+    links, problems = write_store_viewers(store)
+    assert problems == [] and row["key"] in links
+    assert page_data(store / links[row["key"]])["dt"] == row["config"]["params"]["dt"]

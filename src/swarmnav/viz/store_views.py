@@ -92,10 +92,16 @@ def write_store_viewers(directory: str | Path, experiment: str | None = None,
     dts: dict[str, float] = {}
 
     def dt_of(row: dict) -> float:
+        """The run's step [s]: its resolved parameters name it (every registered method has a
+        ``dt``); else the method made from the variant's declared parameters says it (the
+        resolved set of an older version may name parameters that no longer exist)."""
         from swarmnav.methods import registry
         from swarmnav.sim.rollout import RUN_OPTIONS
 
-        params = {k: v for k, v in row["config"].get("params", row["params"]).items() if k not in RUN_OPTIONS}
+        resolved = (row.get("config") or {}).get("params") or {}
+        if isinstance(resolved.get("dt"), (int, float)):
+            return float(resolved["dt"])
+        params = {k: v for k, v in row["params"].items() if k not in RUN_OPTIONS}
         key = row["method"] + json.dumps(params, sort_keys=True, default=str)
         if key not in dts:
             dts[key] = float(registry.make(row["method"], **params).dt)
@@ -118,7 +124,8 @@ def write_store_viewers(directory: str | Path, experiment: str | None = None,
             try:
                 data = viewer_data(_run_of(root, row, dt_of, scene_of))
             except (SwarmnavError, OSError, ValueError, KeyError) as e:
-                problems.append(f"{row['variant']} seed {row['seed']}: no viewer ({e})")
+                why = str(e).split(";")[0][:160]  # the first clause: a parameter list can run for lines
+                problems.append(f"{row['variant']} seed {row['seed']}: no viewer ({why})")
                 continue
             transcript = [a for a in row.get("artifacts") or [] if Path(a).name == "llm_transcript.jsonl"]
             if transcript:  # an LLM run keeps its transcript beside the trajectory: one mark per call
