@@ -177,3 +177,12 @@ def test_llm_calls_and_fallbacks_are_timeline_marks(hes_dir, tmp_path, capsys):
     assert [e["step"] for e in events] == sorted(e["step"] for e in events)  # in time order with the splits
     (d / "llm_transcript.jsonl").write_text('{"backend": "ollama"}\n')
     _one_line_exit_2(["view", str(d)], capsys, "line 1 is not a transcript record")
+
+
+def test_a_scene_path_travels_with_the_page(tmp_path):
+    from swarmnav.world.catalog import load_scenario
+
+    d = tmp_path / "hw"
+    run("hwvem", "hwvem_mission", seed=1, steps=5).save(d)
+    assert main(["view", str(d)]) == 0
+    assert page_data(d / "viewer.html")["path"] == [list(map(float, p)) for p in load_scenario("hwvem_mission").path]

@@ -144,6 +144,7 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
         "quant": {"lo": lo.tolist(), "hi": hi.tolist(), "levels": LEVELS, "error": quantisation_error(lo, hi),
                   "vmax": vmax, "clearance": [c_lo, c_hi]},
         "goal": list(np.asarray(scn.goal, dtype=float)),
+        "path": np.asarray(scn.path, dtype=float).tolist() if scn.path else [],  # waypoints a method follows
         "obstacles": _obstacles(scn),
         "palette": [f"#{int(r * 255):02x}{int(g * 255):02x}{int(b * 255):02x}" for r, g, b, _ in palette],
         "label_ids": ids.tolist(),

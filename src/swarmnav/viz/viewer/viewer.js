@@ -11,6 +11,7 @@
   const ctx = top.getContext('2d'), cctx = chart.getContext('2d');
   const TRAIL_SECONDS = 3, TRAIL_POINTS = 12, BANDS = [0.12, 0.25, 0.45, 0.7];
   const OBST_FACE = '#b3d9f2', OBST_EDGE = '#4d7ea8', GOAL = '#ffd400', SOLID = '#c5cad3', SOLID_EDGE = '#59606b';
+  const PATH = '#9467bd';  // tab:purple, the figures' path colour
   const ROLE_NAMES = D.roles || null;
 
   // ------------------------------------------------------------------ data
@@ -90,6 +91,10 @@
       g.closePath();
       g.globalAlpha = DIM === 3 ? 0.6 : 1; g.fillStyle = DIM === 3 ? SOLID : OBST_FACE; g.fill();
       g.globalAlpha = 1; g.strokeStyle = DIM === 3 ? SOLID_EDGE : OBST_EDGE; g.lineWidth = 0.8; g.stroke();
+    }
+    if (D.path.length) {  // the scene's path (HWVEM's waypoints), dash-dot as in the figures
+      g.beginPath(); D.path.forEach(([x, y], j) => j ? g.lineTo(X(x), Y(y)) : g.moveTo(X(x), Y(y)));
+      g.setLineDash([8, 3, 2, 3]); g.strokeStyle = PATH; g.lineWidth = 1.2; g.stroke(); g.setLineDash([]);
     }
     star(g, X(D.goal[0]), Y(D.goal[1]), 9);
     g.font = '11px system-ui, sans-serif'; g.fillStyle = '#555';
@@ -280,6 +285,12 @@
     const drop = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(D.goal[0], D.goal[1], z0), new THREE.Vector3(D.goal[0], D.goal[1], gz)]);
     const dropLine = new THREE.Line(drop, new THREE.LineDashedMaterial({color: 0x555555, dashSize: 0.5, gapSize: 0.4}));
     dropLine.computeLineDistances(); scene.add(dropLine);
+    if (D.path.length) {  // the scene's path, at the flight altitude of a planar run
+      const pts = D.path.map(p => new THREE.Vector3(p[0], p[1], DIM === 3 ? p[2] : altitude));
+      const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints(pts),
+                                  new THREE.LineDashedMaterial({color: PATH, dashSize: 1.2, gapSize: 0.6}));
+      line.computeLineDistances(); scene.add(line);
+    }
     // agents: arrows along their heading, coloured by sub-swarm
     const a = N > 300 ? Math.max(0.35, 0.006 * Math.max(ext[0], ext[1])) : Math.max(0.6, 0.014 * Math.max(ext[0], ext[1]));
     const cone = new THREE.ConeGeometry(a * 0.38, a, 10); cone.rotateZ(-Math.PI / 2);  // along +x
