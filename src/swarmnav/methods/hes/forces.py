@@ -229,6 +229,24 @@ def velocity_match(v, v_target, k, mask):
 
 
 @njit(cache=True)
+def _nearest_mate(x, group, i, cand):
+    """The member of i's group among ``cand`` (ascending) nearest to i; the first of equally near
+    ones; -1 if none."""
+    best = np.inf
+    out = -1
+    for j in cand:
+        if j == i or group[i] != group[j]:
+            continue
+        dx = x[i, 0] - x[j, 0]
+        dy = x[i, 1] - x[j, 1]
+        d2 = dx * dx + dy * dy
+        if d2 < best:
+            best = d2
+            out = j
+    return out
+
+
+@njit(cache=True)
 def nearest_in_group(x, group, ptr=None, idx=None):
     """Index of each agent's nearest neighbour within its own sub-swarm (-1 if alone); the lowest
     index among equally near ones. Searched in the neighbour rows ``ptr, idx`` first (all agents
@@ -238,27 +256,9 @@ def nearest_in_group(x, group, ptr=None, idx=None):
         ptr, idx = all_rows(n)
     out = np.full(n, -1, dtype=np.int64)
     for i in range(n):
-        best = np.inf
-        for t in range(ptr[i], ptr[i + 1]):
-            j = idx[t]
-            if j == i or group[i] != group[j]:
-                continue
-            dx = x[i, 0] - x[j, 0]
-            dy = x[i, 1] - x[j, 1]
-            d2 = dx * dx + dy * dy
-            if d2 < best:
-                best = d2
-                out[i] = j
+        out[i] = _nearest_mate(x, group, i, idx[ptr[i]:ptr[i + 1]])
         if out[i] < 0 and ptr[i + 1] - ptr[i] < n:  # nobody of its group nearby: all agents
-            for j in range(n):
-                if j == i or group[i] != group[j]:
-                    continue
-                dx = x[i, 0] - x[j, 0]
-                dy = x[i, 1] - x[j, 1]
-                d2 = dx * dx + dy * dy
-                if d2 < best:
-                    best = d2
-                    out[i] = j
+            out[i] = _nearest_mate(x, group, i, np.arange(n))
     return out
 
 
