@@ -210,19 +210,16 @@ def _episode(env: SwarmParallelEnv, policy: Any, seed: int, label: str) -> RunRe
     k = 0
     while env.agents:
         live = {a: obs[a] for a in env.agents}  # the step's observations include the just-arrived
-        obs, rew, _, _, infos = env.step(act(live))
+        obs, rew, *_ = env.step(act(live))
         k += 1
         P[k], V[k] = env.positions, env.velocities
         for a, r in rew.items():
             ret[index[a]] += r
-        C[k] = [infos[a]["clearance"] if a in infos else np.nan for a in env.possible_agents]
+        C[k] = env.core.clearance(P[k: k + 1])[0]  # every agent's, hovering ones included
         info = getattr(policy, "info", None) or {}
         lab[k] = info.get("labels", lab[k - 1])
         events += [{"step": k - 1, **ev} for ev in info.get("events", ())]
     P, V, C, lab = P[: k + 1], V[: k + 1], C[: k + 1], lab[: k + 1]
-    gone = np.isnan(C)  # agents that arrived earlier: they hover, their clearance is unchanged
-    if gone.any():
-        C = np.where(gone, env.core.clearance(P), C)
     lab[0] = lab[min(1, k)]
     result = RunResult(
         config={"policy": label, "scenario": env.world.to_dict(), "seed": seed, "steps": k, "dt": o.dt,
