@@ -69,8 +69,16 @@ def test_drawn_positions_equal_the_stored_trajectory(runs, browser, view):
         drawn = np.array(browser.eval("swarmnav.positions()"))
         err = np.linalg.norm(drawn[:, :2] - res.positions[k], axis=1)
         assert err.max() <= info["error"] + READBACK, (view, k, err.max())
-        if view == "persp":  # planar runs fly at the fixed altitude of HES Figure A1
+        if view == "persp":  # planar runs fly at the fixed altitude of HES Figure A1, arrows along their heading
             np.testing.assert_allclose(drawn[:, 2], 10.0)
+            v = res.velocities[k]
+            moving = np.linalg.norm(v, axis=1) > 0.05  # [m/s]: a direction well defined at 16 bits
+            h = np.array(browser.eval("swarmnav.headings()"))
+            if k > 0:
+                assert moving.sum() >= 10
+                np.testing.assert_allclose(h[moving, :2], v[moving] / np.linalg.norm(v[moving], axis=1)[:, None],
+                                           atol=1e-3)
+                assert np.all(h[:, 2] == 0)
     assert browser.errors == []
 
 

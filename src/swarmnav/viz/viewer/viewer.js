@@ -56,7 +56,6 @@
   };
   const speedOf = (k, i) => { let s = 0; for (let j = 0; j < DIM; j++) s += V[(k * N + i) * DIM + j] ** 2; return Math.sqrt(s); };
   const roleOf = (k, i) => ROLE ? ROLE_NAMES[ROLE[k * N + i]] : 'not recorded';
-  const colourOf = (k, i) => D.palette[LAB[k * N + i]];
 
   // ------------------------------------------------------------------ state
   let k = 0, kf = 0, playing = false, rate = 1, view = DIM === 3 ? 'persp' : 'top', showTrails = true;
@@ -345,9 +344,8 @@
     const controls = new OrbitControls(camera, renderer.domElement);
     controls.target.copy(centre); controls.update();
     controls.addEventListener('change', () => { dirty = true; });
-    const heading = new Float32Array(N * 3); for (let i = 0; i < N; i++) heading[3 * i] = 1;
     const palette = D.palette.map(c => new THREE.Color(c));
-    const g = {THREE, renderer, scene, camera, controls, agents, trails, tGeo, tPos, tCol, heading, palette, ring, roleRings, altitude,
+    const g = {THREE, renderer, scene, camera, controls, agents, trails, tGeo, tPos, tCol, palette, ring, roleRings, altitude,
                m: new THREE.Matrix4(), q: new THREE.Quaternion(), p: new THREE.Vector3(), s: new THREE.Vector3(1, 1, 1),
                ux: new THREE.Vector3(1, 0, 0), u: new THREE.Vector3(), ray: new THREE.Raycaster(), ptr: new THREE.Vector2()};
     layoutPersp(g);
@@ -359,13 +357,18 @@
   }
   const zOf = (k, i) => DIM === 3 ? P[(k * N + i) * 3 + 2] : G.altitude;
   function drawPersp() {
-    const g = G, {m, q, p, s, u, ux, heading} = g;
+    const g = G, {m, q, p, s, u, ux} = g;
     for (let i = 0; i < N; i++) {
       const a = (k * N + i) * DIM;
-      let vx = V[a], vy = V[a + 1], vz = DIM === 3 ? V[a + 2] : 0;
-      const sp = Math.hypot(vx, vy, vz);
-      if (sp > 1e-6) { heading[3 * i] = vx / sp; heading[3 * i + 1] = vy / sp; heading[3 * i + 2] = vz / sp; }
-      u.set(heading[3 * i], heading[3 * i + 1], heading[3 * i + 2]);
+      // heading: the velocity's direction, or the last one before this step for an agent at rest
+      // (looked up to 500 steps back; +x for one that has not moved yet)
+      let b = a, sp = 0;
+      for (let kk = k; kk >= Math.max(0, k - 500); kk--) {
+        b = (kk * N + i) * DIM;
+        sp = Math.hypot(V[b], V[b + 1], DIM === 3 ? V[b + 2] : 0);
+        if (sp > 1e-6) break;
+      }
+      if (sp > 1e-6) u.set(V[b] / sp, V[b + 1] / sp, DIM === 3 ? V[b + 2] / sp : 0); else u.set(1, 0, 0);
       q.setFromUnitVectors(ux, u);
       p.set(P[a], P[a + 1], zOf(k, i));
       g.agents.setMatrixAt(i, m.compose(p, q, s));
@@ -578,6 +581,12 @@
       if (view === 'top') return [r.left + drawn[2 * i], r.top + drawn[2 * i + 1]];
       G.agents.getMatrixAt(i, G.m); G.p.setFromMatrixPosition(G.m).project(G.camera);
       return [r.left + (G.p.x + 1) / 2 * stage.clientWidth, r.top + (1 - G.p.y) / 2 * stage.clientHeight];
+    },
+    /** Perspective: the direction each arrow points (unit vectors, from its instance matrix). */
+    headings() {
+      const out = [], e = G.m.elements;
+      for (let i = 0; i < N; i++) { G.agents.getMatrixAt(i, G.m); const n = Math.hypot(e[0], e[1], e[2]); out.push([e[0] / n, e[1] / n, e[2] / n]); }
+      return out;
     },
     /** What the tooltip says of agent i at the current step. */
     agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i)}),
