@@ -34,8 +34,9 @@ Arrived agents (within ``goal_radius`` of the goal) are terminated and hover whe
 (velocity 0, actions ignored); they stay in the world as obstacles to the others' neighbour
 and contact checks, as a parked UAV would. With ``terminate_at_goal=False`` nobody is
 terminated: every agent acts until the step limit and is scored at its last state, the
-protocol of ``swarmnav run`` (the arrival bonus is paid once, the other terms every step). Like the simulator, the world does not stop an agent
-at an obstacle: contacts are counted and penalised, not resolved.
+protocol of ``swarmnav run`` (the arrival bonus is paid once, the other terms every step).
+Like the simulator, the world does not stop an agent at an obstacle: contacts are counted and
+penalised, not resolved.
 """
 
 from __future__ import annotations
