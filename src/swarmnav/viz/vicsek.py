@@ -34,10 +34,11 @@ INFO_COLOR = "tab:red"
 AGENT_COLOR = "tab:blue"
 
 
-def deg_con_series(result: RunResult, norm: str = "l1") -> np.ndarray:
+def deg_con_series(result: RunResult, norm: str = "l2") -> np.ndarray:
     """Deg_con(k) of a stored run [-], k = 1..K, from the recorded velocities (exact for the
     constant-speed alignment runs): against the information UAV's heading for the models that
-    have one, against the consensus (circular mean) direction for VEM and IVEM."""
+    have one, against the consensus (circular mean) direction for VEM and IVEM; ``norm`` as the
+    models' ``deg_con_norm`` (default L2)."""
     th = headings_from_velocities(result.velocities[1:])
     iu = result.metrics.get("info_uav")
     ref = th[:, int(iu)] if iu is not None else circular_mean(th)

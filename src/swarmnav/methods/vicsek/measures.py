@@ -19,8 +19,8 @@ def deg_con(theta: np.ndarray, ref: float | np.ndarray, norm: Norm = "l1") -> np
     """Eq. (28)-(29): ``Deg_con = (pi - ||theta - theta_d|| / N) / pi``.
 
     The deviations are wrapped to ``[-pi, pi)``. The paper writes ``||.||`` without naming the
-    norm. ``"l2"`` is
-    the Euclidean norm divided by N, so ``Deg_con^d = 0.9984`` asks for a root-mean-square
+    norm. ``"l2"`` (the models' default ``deg_con_norm``, chosen on Table 1: docs/methods/vicsek.md)
+    is the Euclidean norm divided by N, so ``Deg_con^d = 0.9984`` asks for a root-mean-square
     deviation of ``0.0016 pi sqrt(N)`` rad (0.29 deg x sqrt(N)); ``"l1"`` makes ``||.||/N`` the
     mean absolute deviation (0.29 deg at every N); ``"linf"`` is the largest deviation / N.
 
