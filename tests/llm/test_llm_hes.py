@@ -23,7 +23,7 @@ def rule_run():
 
 
 def llm_run(server, kind, **kw):
-    kw.setdefault("llm_timeout", 0.3)
+    kw.setdefault("llm_timeout", 1.0)  # well above a loopback answer on a loaded 2-core machine
     return swarmnav.run("hes", SCENE, seed=SEED, steps=STEPS, decision=kind, llm_url=server.url + URL[kind], **kw)
 
 
@@ -35,7 +35,7 @@ def test_rule_run_has_structure_to_decide(rule_run):
 @pytest.mark.parametrize("kind", URL)
 @pytest.mark.parametrize("fault", FAULTS)
 def test_every_fault_falls_back_to_the_rule_and_is_counted(fake_server, rule_run, kind, fault):
-    s = fake_server(fault, delay=1.5)
+    s = fake_server(fault, delay=3.0)
     r = llm_run(s, kind)
     calls = STEPS // 50  # k = 0, 50, ..., 250 (T_llm = 50)
     assert r.metrics["llm_calls"] == calls and r.metrics["llm_fallback_used"] == calls
@@ -47,7 +47,7 @@ def test_every_fault_falls_back_to_the_rule_and_is_counted(fake_server, rule_run
     assert [x["step"] for x in recs] == list(range(0, STEPS, 50))
     want = {"garbage": "parse", "empty": "empty", "http500": "http", "drop": "connection", "late": "timeout"}[fault]
     assert all(x["fallback"].startswith(want) for x in recs), recs[0]["fallback"]
-    assert r.metrics["llm_latency_max_s"] < 1.0  # late answers were cut at the 0.3 s timeout
+    assert r.metrics["llm_latency_max_s"] < 2.0  # late answers (3 s) were cut at the 1 s timeout
     assert s.violations == []
 
 

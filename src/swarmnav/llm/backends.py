@@ -1,31 +1,32 @@
 """Decision back ends: one prompt in, the model's raw text out, or an :class:`LlmError`.
 
-- :class:`OllamaBackend`: Ollama's native ``POST /api/chat`` (``format`` = the JSON schema,
-  ``options.temperature`` = 0, ``options.num_predict`` = 64, ``stream`` = false).
+- :class:`OllamaBackend`: Ollama's native ``POST /api/chat`` through the official ``ollama``
+  client (``format`` = the JSON schema, ``options.temperature`` = 0, ``options.num_predict`` =
+  64, ``stream`` = false).
 - :class:`OpenAIBackend`: any OpenAI-compatible ``POST /v1/chat/completions`` (llama.cpp's
-  server, vLLM, LM Studio, Ollama's ``/v1``): ``temperature`` = 0, ``max_tokens`` = 64 and a
-  JSON ``response_format``.
+  server, vLLM, LM Studio, Ollama's ``/v1``) through the official ``openai`` client:
+  ``temperature`` = 0, ``max_tokens`` = 64 and a JSON ``response_format``.
 - :class:`LlamaCppBackend`: llama-cpp-python in-process on a GGUF file.
 - :class:`ReplayBackend`: the raw answers of a recorded transcript, by step.
 
-The HTTP back ends use only the standard library. Every call is bounded by ``timeout`` seconds
-of wall time in total (not per socket operation): the request runs in a worker thread whose
-socket is shut down when the deadline passes, so a server that stalls or trickles bytes cannot
-stall the simulation.
+Every HTTP call is bounded by ``timeout`` seconds of wall time in total (not per socket
+operation): the client's request runs in a worker thread and the client is closed when the
+deadline passes, so a server that stalls or trickles bytes cannot stall the simulation. Every
+failure of a server (timeout, refused or dropped connection, HTTP status, a body that is not
+the API's) becomes an :class:`LlmError`, which the decider counts as a fallback.
 """
 
 from __future__ import annotations
 
 import atexit
-import http.client
+import importlib
 import json
-import socket
+import os
 import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
-from urllib.parse import urlsplit
+from typing import Any, Callable, Protocol
 
 from swarmnav.errors import ConfigError, SwarmnavError
 from swarmnav.llm.prompt import MAX_TOKENS, SCHEMA, TEMPERATURE, messages
@@ -67,76 +68,81 @@ class Backend(Protocol):
 
 
 # ---------------------------------------------------------------------------------------------
-# HTTP
+# HTTP, on the official clients
 
 
-def post_json(url: str, payload: dict, timeout: float) -> Any:
-    """POST ``payload`` as JSON to ``url`` and return the decoded JSON answer.
+def bounded(call: Callable[[], Any], timeout: float, abort: Callable[[], None], where: str) -> Any:
+    """``call()`` in a worker thread, bounded by ``timeout`` seconds of wall time in total.
 
-    The whole exchange (connect, send, headers, body) is bounded by ``timeout`` seconds.
+    The clients' own timeouts bound each socket operation, not the call: a server that
+    trickles bytes could stretch it without end. Past the deadline ``abort`` closes the
+    client (its sockets), the worker is left to end on its own, and the call fails.
 
     Raises:
-        LlmError: timeout, connection (refused, reset, dropped), http (status != 200),
-            bad-response (not JSON).
+        LlmError: timeout; anything ``call`` raised is re-raised in the caller's thread.
     """
-    parts = urlsplit(url)
-    if parts.scheme not in ("http", "https") or not parts.hostname:
-        raise LlmError("connection", f"not an http(s) URL: {url!r}")
-    cls = http.client.HTTPSConnection if parts.scheme == "https" else http.client.HTTPConnection
-    conn = cls(parts.hostname, parts.port, timeout=timeout)
-    path = (parts.path or "/") + (f"?{parts.query}" if parts.query else "")
-    body = json.dumps(payload).encode()
     box: dict[str, Any] = {}
 
-    def exchange() -> None:
+    def work() -> None:
         try:
-            conn.request("POST", path, body, {"Content-Type": "application/json", "Accept": "application/json"})
-            resp = conn.getresponse()
-            box["status"], box["body"] = resp.status, resp.read()
+            box["out"] = call()
         except BaseException as e:  # handed to the caller's thread
             box["error"] = e
 
-    worker = threading.Thread(target=exchange, name="swarmnav-llm-http", daemon=True)
+    worker = threading.Thread(target=work, name="swarmnav-llm-http", daemon=True)
     t0 = time.monotonic()
     worker.start()
     worker.join(timeout)
     if worker.is_alive():
-        _abort(conn)
-        worker.join(1.0)
-        raise LlmError("timeout", f"no complete answer from {url} within {timeout:g} s")
-    conn.close()
-    err = box.get("error")
-    if err is not None:
-        if isinstance(err, (socket.timeout, TimeoutError)):
-            raise LlmError("timeout", f"no answer from {url} within {timeout:g} s")
-        if isinstance(err, ConnectionRefusedError):
-            raise LlmError("connection", f"connection refused by {parts.netloc}")
-        if isinstance(err, (http.client.HTTPException, OSError)):
-            raise LlmError("connection", f"{url}: {type(err).__name__}: {err}")
-        raise err
-    if time.monotonic() - t0 > timeout:
-        raise LlmError("timeout", f"answer from {url} took longer than {timeout:g} s")
-    status, raw = box["status"], box["body"]
-    if status != 200:
-        raise LlmError("http", f"HTTP {status} from {url}: {_excerpt(raw)}")
-    try:
-        return json.loads(raw)
-    except ValueError:
-        raise LlmError("bad-response", f"{url} answered non-JSON: {_excerpt(raw)}") from None
-
-
-def _abort(conn: http.client.HTTPConnection) -> None:
-    sock = conn.sock
-    if sock is not None:
         try:
-            sock.shutdown(socket.SHUT_RDWR)
-        except OSError:
+            abort()
+        except Exception:  # noqa: BLE001 - best effort: the call has failed either way
             pass
-    conn.close()
+        # not joined: a read blocked in the worker ends by the client's own per-read timeout
+        raise LlmError("timeout", f"no complete answer from {where} within {timeout:g} s")
+    if "error" in box:
+        raise box["error"]
+    if time.monotonic() - t0 > timeout:
+        raise LlmError("timeout", f"answer from {where} took longer than {timeout:g} s")
+    return box["out"]
 
 
-def _excerpt(raw: bytes, n: int = 200) -> str:
-    text = raw.decode("utf-8", "replace").strip().replace("\n", " ")
+def _require(module: str, extra: str = "llm") -> Any:
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise ConfigError(f"this back end needs the {module} client: pip install 'swarmnav[{extra}]'") from None
+
+
+def _chain(e: BaseException | None) -> list[BaseException]:
+    out: list[BaseException] = []
+    while e is not None and e not in out:
+        out.append(e)
+        e = e.__cause__ or e.__context__
+    return out
+
+
+def _transport_error(e: BaseException, where: str) -> LlmError | None:
+    """A client's timeout or transport failure (dropped connection, reset, refused) as an
+    LlmError, else None. Read from the exception and its causes by class name: the ollama
+    client raises httpx's errors, openai 3.x those of its fork httpx2, under the same names."""
+    chain = _chain(e)
+    names = {type(x).__name__ for x in chain}
+    if any(n.endswith("Timeout") or n == "TimeoutException" for n in names) or \
+            any(isinstance(x, TimeoutError) for x in chain):
+        return LlmError("timeout", f"no answer from {where}: {type(e).__name__}")
+    # ConnectError: no connection made (the ollama client re-raises it as a bare ConnectionError)
+    if "ConnectError" in names or any(isinstance(x, ConnectionRefusedError) or type(x) is ConnectionError
+                                      for x in chain):
+        return LlmError("connection", f"cannot connect to {where} (connection refused or unreachable)")
+    if names & {"RemoteProtocolError", "ReadError", "WriteError", "NetworkError", "ProtocolError",
+                "TransportError", "LocalProtocolError", "CloseError"} or any(isinstance(x, OSError) for x in chain):
+        return LlmError("connection", f"{where}: {type(chain[-1]).__name__}: {chain[-1]}")
+    return None
+
+
+def _excerpt(text: str, n: int = 200) -> str:
+    text = str(text).strip().replace("\n", " ")
     return text[:n] + ("..." if len(text) > n else "")
 
 
@@ -154,15 +160,37 @@ def _content(text: Any, where: str) -> str:
 
 
 class OllamaBackend:
-    """Ollama's native chat API, ``POST {url}/api/chat``."""
+    """Ollama's native chat API through the official ``ollama`` client (``Client.chat``).
+
+    ``format`` = :data:`SCHEMA` (Ollama constrains decoding to it), ``options.temperature`` = 0,
+    ``options.num_predict`` = 64, ``stream`` = false. A fresh client per call, closed when the
+    call overruns its timeout.
+    """
 
     name = "ollama"
 
     def __init__(self, url: str = "", model: str = "qwen2.5:3b", timeout: float = 120.0):
         self.url = _endpoint(url, OLLAMA_URL, "/api/chat")
+        self.host = self.url.removesuffix("/api/chat")
         self.model, self.timeout = model, timeout
+        self.client_module = _require("ollama")
+        self._client: Any = None
+        self._connect()
+
+    def _connect(self) -> Any:
+        """A new client (~0.2 s: its TLS context), built ahead of the first call so that this
+        one-off cost never counts against a call's timeout."""
+        self._client = self.client_module.Client(host=self.host, timeout=self.timeout)
+        return self._client
+
+    def _drop(self) -> None:
+        """Close the client (a call overran its timeout); the next call builds a new one."""
+        client, self._client = self._client, None
+        if client is not None:
+            client._client.close()  # the httpx.Client inside: ollama.Client has no close()
 
     def request(self, prompt: str) -> dict:
+        """The keyword arguments of ``ollama.Client.chat``."""
         return {
             "model": self.model,
             "messages": messages(prompt),
@@ -172,19 +200,31 @@ class OllamaBackend:
         }
 
     def complete(self, prompt: str, step: int) -> Reply:
+        ollama = self.client_module
+        client = self._client or self._connect()
         t0 = time.perf_counter()
-        answer = post_json(self.url, self.request(prompt), self.timeout)
-        message = answer.get("message") if isinstance(answer, dict) else None
-        text = _content(message.get("content") if isinstance(message, dict) else None, self.url)
-        return Reply(text, time.perf_counter() - t0)
+        try:
+            answer = bounded(lambda: client.chat(**self.request(prompt)), self.timeout, self._drop, self.url)
+        except LlmError:
+            raise
+        except ollama.ResponseError as e:
+            raise LlmError("http", f"HTTP {e.status_code} from {self.url}: {_excerpt(e.error)}") from None
+        except Exception as e:  # noqa: BLE001 - every failure of the server is a fallback, never a crash
+            err = _transport_error(e, self.host)
+            raise (err or LlmError("bad-response", f"{self.url}: {type(e).__name__}: {_excerpt(e)}")) from None
+        message = getattr(answer, "message", None)
+        return Reply(_content(getattr(message, "content", None), self.url), time.perf_counter() - t0)
 
 
 class OpenAIBackend:
-    """An OpenAI-compatible server, ``POST {url}/chat/completions`` (``url`` ends in ``/v1``).
+    """An OpenAI-compatible server through the official ``openai`` client
+    (``chat.completions.create``; ``url`` is the base ending in ``/v1``).
 
     ``response_format`` is ``{"type": "json_object", "schema": SCHEMA}``: llama.cpp's servers
     constrain decoding to the schema, others (vLLM, Ollama's /v1) at least to JSON.
-    ``json_schema`` sends OpenAI's structured-output form instead (LM Studio needs it).
+    ``json_schema`` sends OpenAI's structured-output form instead (LM Studio needs it). The
+    client's retries are off (``max_retries`` = 0): a failed call falls back to the rule at
+    once instead of retrying into the next decision.
     """
 
     name = "openai"
@@ -192,13 +232,33 @@ class OpenAIBackend:
     def __init__(self, url: str = "", model: str = "qwen2.5:3b", timeout: float = 120.0,
                  response_format: str = "json_object"):
         self.url = _endpoint(url, OPENAI_URL, "/chat/completions")
+        self.base_url = self.url.removesuffix("/chat/completions")
         self.model, self.timeout = model, timeout
         if response_format not in ("json_object", "json_schema", "none"):
             raise ConfigError("llm_response_format: expected json_object, json_schema or none, "
                               f"got {response_format!r}")
         self.response_format = response_format
+        self.client_module = _require("openai")
+        self._client: Any = None
+        self._connect()
+
+    def _connect(self) -> Any:
+        """A new client (~0.3-1 s: its TLS context and lazily imported resources), built ahead of
+        the first call so that this one-off cost never counts against a call's timeout."""
+        # a local server needs no key; the client insists on one (OPENAI_API_KEY if set)
+        self._client = self.client_module.OpenAI(base_url=self.base_url, timeout=self.timeout, max_retries=0,
+                                                 api_key=os.environ.get("OPENAI_API_KEY") or "none")
+        self._client.chat.completions  # noqa: B018 - imports the resource now, not inside the first call
+        return self._client
+
+    def _drop(self) -> None:
+        """Close the client (a call overran its timeout); the next call builds a new one."""
+        client, self._client = self._client, None
+        if client is not None:
+            client.close()
 
     def request(self, prompt: str) -> dict:
+        """The keyword arguments of ``openai.OpenAI().chat.completions.create``."""
         req: dict[str, Any] = {
             "model": self.model,
             "messages": messages(prompt),
@@ -214,11 +274,26 @@ class OpenAIBackend:
         return req
 
     def complete(self, prompt: str, step: int) -> Reply:
+        openai = self.client_module
+        client = self._client or self._connect()
         t0 = time.perf_counter()
-        answer = post_json(self.url, self.request(prompt), self.timeout)
         try:
-            text = answer["choices"][0]["message"]["content"]
-        except (KeyError, IndexError, TypeError):
+            answer = bounded(lambda: client.chat.completions.create(**self.request(prompt)), self.timeout,
+                             self._drop, self.url)
+        except LlmError:
+            raise
+        except openai.APIStatusError as e:
+            raise LlmError("http", f"HTTP {e.status_code} from {self.url}: {_excerpt(e.message)}") from None
+        except openai.APITimeoutError:
+            raise LlmError("timeout", f"no answer from {self.url} within {self.timeout:g} s") from None
+        except openai.APIConnectionError as e:
+            err = _transport_error(e, self.base_url)  # from the httpx2 error underneath
+            raise (err or LlmError("connection", f"{self.url}: {e}")) from None
+        except Exception as e:  # noqa: BLE001 - every failure of the server is a fallback, never a crash
+            raise LlmError("bad-response", f"{self.url}: {type(e).__name__}: {_excerpt(e)}") from None
+        try:
+            text = answer.choices[0].message.content
+        except (AttributeError, IndexError, TypeError):
             text = None
         return Reply(_content(text, self.url), time.perf_counter() - t0)
 
