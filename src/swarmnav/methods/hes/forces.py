@@ -23,6 +23,7 @@ SIG_CENT``.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -126,6 +127,12 @@ def _sorted_rows(start, end, indices):
     return ptr, idx
 
 
+@functools.lru_cache(maxsize=16)
+def _every_row(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`all_rows` of ``n`` agents, built once (the kernels only read the rows)."""
+    return all_rows(n)
+
+
 ROWS_ALL_BELOW = 64  # agents: below this, every neighbour row lists every agent (a cell list does not pay)
 
 
@@ -139,7 +146,7 @@ def neighbour_rows(x: np.ndarray, radius, all_below: int = ROWS_ALL_BELOW) -> tu
     called only when a cell list is built."""
     n = len(x)
     if n < all_below:
-        return all_rows(n)
+        return _every_row(n)
     radius = radius() if callable(radius) else radius
     if not math.isfinite(radius):
         return all_rows(n)

@@ -292,7 +292,10 @@ class PassageMode(Part):
     def chained_agents(self, step) -> np.ndarray:
         """(N,) bool: the agent's sub-swarm remembers a passage (it is in a chain of throats)."""
         part = self.h.partition()
-        return np.array([bool(self.mem[s].passages) for s in part.ids])[part.col]
+        chained = [bool(self.mem[s].passages) for s in part.ids]
+        if not any(chained):
+            return np.zeros(self.n, dtype=np.bool_)
+        return np.array(chained)[part.col]
 
     # ------------------------------------------------------------ control
     def steer(self, step):

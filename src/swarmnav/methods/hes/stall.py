@@ -100,7 +100,8 @@ class StallPlanner(Part):
         engages the planner, so that the members cut off from their ring slots follow the field."""
         p, mem, k = self.p, self.mem[sub.sid], step.k
         mem.prog_step = None  # the head's progress is counted in navigate mode only
-        dmax = float(np.max(np.hypot(*(step.x[rep.pack.members] - self.h.goal).T)))
+        d = rep.pack.positions - self.h.goal
+        dmax = float(np.hypot(d[:, 0], d[:, 1]).max())
         if mem.tail_step is None or dmax <= p.r_out or dmax < mem.tail_d - p.plan_progress:
             mem.tail_d, mem.tail_step = dmax, k
         if not mem.planned and (k - mem.tail_step) * p.dt >= p.plan_stall:
@@ -118,7 +119,8 @@ class StallPlanner(Part):
         throat (mid, exit direction = path direction, width = twice its clearance)."""
         p, mem, k = self.p, self.mem[sub.sid], step.k
         mem.tail_step = None  # the tail's progress is counted in encircle mode only
-        dmin = float(np.min(np.hypot(*(step.x[rep.pack.members] - self.h.goal).T)))
+        d = rep.pack.positions - self.h.goal
+        dmin = float(np.hypot(d[:, 0], d[:, 1]).min())
         if mem.prog_step is None or dmin < mem.prog_d - p.plan_progress:
             mem.prog_d, mem.prog_step = min(dmin, mem.prog_d), k
         if not mem.planned:

@@ -92,4 +92,8 @@ def template(p, m: int, sub: SubSwarm) -> np.ndarray:
     hx, hy = sub.heading
     u = t[:, 0] / sub.squeeze
     w = t[:, 1] * sub.squeeze
-    return alpha * np.column_stack([hx * u - hy * w, hy * u + hx * w])
+    out = np.empty((m, 2))
+    out[:, 0] = hx * u - hy * w
+    out[:, 1] = hy * u + hx * w
+    out *= alpha
+    return out
