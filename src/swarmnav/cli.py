@@ -214,9 +214,11 @@ def _cmd_llm(args) -> int:
 
     p = build(LlmParams, params, context="llm bench")
     states = bench.load_states(args.states)[: args.limit or None]
-    res = bench.bench(p, states, progress=sys.stderr)
     if args.transcript:
-        Path(args.transcript).write_text(res.transcript(), encoding="utf-8")
+        with open(args.transcript, "w", encoding="utf-8") as sink:
+            res = bench.bench(p, states, progress=sys.stderr, sink=sink)
+    else:
+        res = bench.bench(p, states, progress=sys.stderr)
     bench.report(res, sys.stdout)
     return 0
 

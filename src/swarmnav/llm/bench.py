@@ -85,12 +85,18 @@ class BenchResult:
         return "".join(json.dumps(r, allow_nan=False) + "\n" for r in self.records)
 
 
-def bench(p: LlmParams, states: list[dict[str, Any]], progress: TextIO | None = None) -> BenchResult:
-    """Ask back end ``p.decision`` about every state (``rule``: the recorded rule action)."""
+def bench(p: LlmParams, states: list[dict[str, Any]], progress: TextIO | None = None,
+          sink: TextIO | None = None) -> BenchResult:
+    """Ask back end ``p.decision`` about every state (``rule``: the recorded rule action).
+
+    ``sink``: each answer is written there as a transcript line as soon as it is in, so an
+    interrupted bench keeps what it measured."""
     if p.decision == "rule":
         res = BenchResult("rule", "-")
         for i, row in enumerate(states):
             res.records.append(_record(i, row, "rule", row["rule"], 0.0, None))
+        if sink is not None:
+            sink.write(res.transcript())
         return res
     backend = make_backend(p.decision, url=p.llm_url, model=p.llm_model, timeout=p.llm_timeout, gguf=p.llm_gguf,
                            replay=p.llm_replay, response_format=p.llm_response_format, threads=p.llm_threads)
@@ -106,6 +112,9 @@ def bench(p: LlmParams, states: list[dict[str, Any]], progress: TextIO | None = 
         except LlmError as e:
             raw, latency, failure = None, e.latency if e.latency is not None else time.perf_counter() - t0, str(e)
         res.records.append(_record(i, row, res.model, raw, latency, failure))
+        if sink is not None:
+            sink.write(json.dumps(res.records[-1], allow_nan=False) + "\n")
+            sink.flush()
         if progress is not None and (i + 1) % 25 == 0:
             s = res.summary()
             print(f"  {i + 1}/{len(states)} states: valid {s['valid']:.3f}, feasible {s['feasible']:.3f}, "
