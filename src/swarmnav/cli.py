@@ -197,6 +197,10 @@ def _cmd_run(args) -> int:
         print(f"  LLM: {m['llm_calls']:.0f} calls, {m['llm_fallback_used']:.0f} fallbacks, "
               f"{m['llm_projected']:.0f} projected to keep, latency median {m['llm_latency_median_s']:.2f} s "
               f"(max {m['llm_latency_max_s']:.2f} s)")
+        if "llm_valid" in m:
+            print(f"  LLM answers: {m['llm_valid']:.0f} valid, {m['llm_feasible']:.0f} feasible, "
+                  f"{m['llm_agree_rule']:.0f} equal to the rule's, {m['llm_differs_feasible']:.0f} feasible and "
+                  f"different from the rule's")
     print(f"  wrote {out}/metrics.json, trajectory.npz, config.json" + "".join(f", {a}" for a in res.artifacts))
     return 0
 
