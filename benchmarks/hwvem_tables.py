@@ -260,9 +260,9 @@ def main(argv=None) -> int:
         ns = tuple(int(v) for v in sizes.split("|"))
         print(table1(out, ns) if key == "table1" else table2(out, ns) if key == "table2" else figure_table(out))
         if key != "table2":
-            print("\n*mean and its 95 % confidence interval (Student t) over the runs that reached Deg_con^d "
-                  "within the step cap (their number in brackets); quartiles over all runs, a run that never "
-                  "converged counting as +inf.")
+            ci = " and its 95 % confidence interval (Student t)" if key == "table1" else ""
+            print(f"\n*mean{ci} over the runs that reached Deg_con^d within the step cap (their number in "
+                  "brackets); quartiles over all runs, a run that never converged counting as +inf.")
     return 0
 
 
