@@ -279,12 +279,12 @@ def is_local_min(ring, r):
     """
     n = ring.shape[0]
     d = ring[r]
-    if not d < ring[(r - 1) % n]:
+    if not d < ring[r - 1 if r > 0 else n - 1]:  # circular neighbours without a modulo (hot loop)
         return False
-    j = (r + 1) % n
+    j = r + 1 if r + 1 < n else 0
     steps = 0
     while ring[j] == d and steps < n:
-        j = (j + 1) % n
+        j = j + 1 if j + 1 < n else 0
         steps += 1
     return ring[j] > d
 
