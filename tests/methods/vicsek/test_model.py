@@ -470,3 +470,17 @@ def test_safety_distances_by_scope():
     assert late["D_obs"] == pytest.approx(obs[1:].min(), abs=1e-12)
     ok = runs[(("safety_agents", "successful"),)].metrics
     assert ok["D_ind"] >= m["D_ind"] and ok["D_obs"] >= m["D_obs"] and ok["P_s"] == m["P_s"]
+
+
+def test_deg_con_norm_only_changes_the_measurement():
+    """The norm of eq. (28) reads the same flight: identical positions, and since
+    ||x||_inf <= ||x||_2 <= ||x||_1, k_con(linf) <= k_con(l2) <= k_con(l1) on every run."""
+    kw = dict(ALIGN, wrap_neighbours=False)
+    for model, seed in (("vem-a", 1), ("ivem", 2), ("wvem", 3)):
+        runs = {norm: swarmnav.run(model, "periodic_box:n=60,rho=4.102", seed=seed, steps=1500, deg_con_norm=norm, **kw)
+                for norm in ("l1", "l2", "linf")}
+        np.testing.assert_array_equal(runs["l1"].positions, runs["l2"].positions)
+        np.testing.assert_array_equal(runs["l1"].positions, runs["linf"].positions)
+        k = {norm: r.metrics["k_con"] for norm, r in runs.items()}
+        assert k["linf"] <= k["l2"] <= k["l1"]
+        assert np.isfinite(k["l2"])  # the default reading converges within the run
