@@ -76,7 +76,8 @@ def bounded(call: Callable[[], Any], timeout: float, abort: Callable[[], None], 
 
     The clients' own timeouts bound each socket operation, not the call: a server that
     trickles bytes could stretch it without end. Past the deadline ``abort`` closes the
-    client (its sockets), the worker is left to end on its own, and the call fails.
+    client, the call fails at once, and the worker is left to end on its own (the client's
+    per-read timeout, the same ``timeout``, ends a read the server never completes).
 
     Raises:
         LlmError: timeout; anything ``call`` raised is re-raised in the caller's thread.
@@ -107,7 +108,7 @@ def bounded(call: Callable[[], Any], timeout: float, abort: Callable[[], None], 
     return box["out"]
 
 
-def _require(module: str, extra: str = "llm") -> Any:
+def _require(module: str, extra: str = "llm-clients") -> Any:
     try:
         return importlib.import_module(module)
     except ImportError:
