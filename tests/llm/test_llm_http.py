@@ -72,7 +72,8 @@ def test_connection_refused(kind):
     assert e.value.kind == "connection" and "refused" in str(e.value)
 
 
-def test_a_trickling_server_cannot_stretch_the_timeout():
+@pytest.mark.parametrize("kind", BACKENDS)
+def test_a_trickling_server_cannot_stretch_the_timeout(kind):
     """Bytes every 0.2 s keep each socket read alive; the call still ends at the deadline."""
     import threading
 
@@ -97,7 +98,7 @@ def test_a_trickling_server_cannot_stretch_the_timeout():
     try:
         t0 = time.perf_counter()
         with pytest.raises(LlmError) as e:
-            OllamaBackend(f"http://127.0.0.1:{srv.getsockname()[1]}", timeout=0.7).complete(PROMPT, 0)
+            BACKENDS[kind](f"http://127.0.0.1:{srv.getsockname()[1]}", model="m", timeout=0.7).complete(PROMPT, 0)
         assert e.value.kind == "timeout" and time.perf_counter() - t0 < 1.5
     finally:
         stop.set()
