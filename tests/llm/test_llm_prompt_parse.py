@@ -68,3 +68,17 @@ def test_parser_accepts(text, action, how):
 def test_parser_rejects(text, error):
     p = parse_answer(text)
     assert p.action is None and error in p.error and p.how == ""
+
+
+def test_messages_put_the_fixed_part_in_the_system_turn():
+    from swarmnav.llm.check import SAMPLE_STATE
+    from swarmnav.llm.prompt import SYSTEM, build_prompt, messages
+
+    prompt = build_prompt(SAMPLE_STATE)
+    system, user = messages(prompt)
+    assert system == {"role": "system", "content": SYSTEM} and user["role"] == "user"
+    assert SYSTEM + "\n\n" + user["content"] == prompt  # nothing lost or added
+    assert "swarm navigation high-level decision planner" in SYSTEM and "Current state" not in SYSTEM
+    # without a system turn (Gemma's GGUF), or for text not built by build_prompt: one user message
+    assert messages(prompt, system=False) == [{"role": "user", "content": prompt}]
+    assert messages("hello") == [{"role": "user", "content": "hello"}]
