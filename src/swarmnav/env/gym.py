@@ -12,7 +12,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from swarmnav.env.core import StepOutcome
-from swarmnav.env.parallel import ActionError, check_action, initial_outcome, make_core
+from swarmnav.env.parallel import check_action, initial_outcome, make_core, typed_action
 from swarmnav.errors import ConfigError
 from swarmnav.world.scenario import Scenario
 
@@ -37,13 +37,8 @@ def _no_render(render_mode: str | None) -> None:
 
 def _check_batch(action: Any, shape: tuple[int, ...], prefix: str) -> np.ndarray:
     """(…, N, d) actions as float64; ActionError naming the first bad agent (and copy)."""
-    arr = np.asarray(action)
-    what = f"normalised accelerations, real numbers of shape {shape} (one row per agent)"
-    if arr.dtype.kind not in "fiu":
-        raise ActionError(f"{prefix}action must be {what}; got dtype {arr.dtype}")
-    if arr.shape != shape:
-        raise ActionError(f"{prefix}action must be {what}; got shape {arr.shape}")
-    arr = arr.astype(np.float64)
+    arr = typed_action(action, shape, prefix,
+                       f"normalised accelerations, real numbers of shape {shape} (one row per agent)")
     bad = ~np.isfinite(arr).all(axis=-1)
     if bad.any():
         where = np.argwhere(bad)[0]

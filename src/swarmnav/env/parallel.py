@@ -38,15 +38,20 @@ def _positive(n: Any) -> int:
     return int(n)
 
 
+def typed_action(a: Any, shape: tuple[int, ...], lead: str, what: str) -> np.ndarray:
+    """``a`` as float64 if it holds real numbers of ``shape``, else ActionError starting with
+    ``lead`` and saying the action must be ``what`` (finiteness is the caller's check)."""
+    arr = np.asarray(a)
+    if arr.dtype.kind not in "fiu":
+        raise ActionError(f"{lead}action must be {what}; got dtype {arr.dtype}")
+    if arr.shape != shape:
+        raise ActionError(f"{lead}action must be {what}; got shape {arr.shape}")
+    return arr.astype(np.float64)
+
+
 def check_action(a: Any, shape: tuple[int, ...], who: str) -> np.ndarray:
     """``a`` as a float64 array of ``shape``, or ActionError naming ``who`` and what was expected."""
-    arr = np.asarray(a)
-    what = f"a normalised acceleration, real numbers of shape {shape}"
-    if arr.dtype.kind not in "fiu":
-        raise ActionError(f"{who}: action must be {what}; got dtype {arr.dtype}")
-    if arr.shape != shape:
-        raise ActionError(f"{who}: action must be {what}; got shape {arr.shape}")
-    arr = arr.astype(np.float64)
+    arr = typed_action(a, shape, f"{who}: ", f"a normalised acceleration, real numbers of shape {shape}")
     if not np.isfinite(arr).all():
         raise ActionError(f"{who}: action must be finite; got {np.array2string(arr, threshold=8)}")
     return arr
