@@ -13,6 +13,12 @@ and the paper's mean beside it. The audit table of docs/methods/vicsek.md quotes
         --reading ivem_rule=middle-circular
     PYTHONPATH=src python benchmarks/hwvem_audit.py --seeds 1-20 --models hwvem \
         --reading layer_update=eq5 --reading layer_update=eq4 --reading initial_layers=unknown
+    PYTHONPATH=src python benchmarks/hwvem_audit.py --seeds 1-20 --models ivem-a \
+        --reading ivem_range=signed --reading ivem_range=unsigned --reading ivem_self=true
+    PYTHONPATH=src python benchmarks/hwvem_audit.py --seeds 1-20 --models ivem|vem --box 4.962  # one box for every N
+
+``--box`` replaces the paper's constant density (rho = 4.102 /m^2, side sqrt(N / rho)) by a box
+side [m], one for every N (``--box 7``) or one per N (``--box 100:4.962,200:7,500:11.2``).
 """
 
 from __future__ import annotations
@@ -43,9 +49,20 @@ def ci95(xs: list[float]) -> tuple[float, float, int]:
     return float(x.mean()), float(t.ppf(0.975, len(x) - 1) * x.std(ddof=1) / math.sqrt(len(x))), len(x)
 
 
-def cell(model: str, n: int, seeds: list[int], params: dict, steps: int) -> tuple[list[float], list[float]]:
-    """k_con (eq. 27) and the first passage of every seed."""
-    scn = load_scenario(f"periodic_box:n={n},rho=4.102", n=n)
+def box_sides(spec: str) -> dict[int, float] | float | None:
+    """``--box``: None (the paper's density), one side [m] for every N, or {N: side}."""
+    if not spec:
+        return None
+    if ":" not in spec:
+        return float(spec)
+    return {int(k): float(v) for k, v in (kv.split(":", 1) for kv in spec.split(","))}
+
+
+def cell(model: str, n: int, seeds: list[int], params: dict, steps: int,
+         side: float | None = None) -> tuple[list[float], list[float]]:
+    """k_con (eq. 27) and the first passage of every seed; ``side`` [m] overrides the density."""
+    rho = 4.102 if side is None else n / side**2
+    scn = load_scenario(f"periodic_box:n={n},rho={rho!r}", n=n)
     k, first = [], []
     for seed in seeds:
         m = registry.make(model, **params)
@@ -63,13 +80,20 @@ def main(argv=None) -> int:
     ap.add_argument("--models", default="|".join(MODELS), help="e.g. ivem|ivem-a")
     ap.add_argument("--reading", action="append", default=[], metavar="K=V[,K=V]",
                     help="overrides of one reading (default: the spec's parameters as they are)")
+    ap.add_argument("--box", default="", metavar="D|N:D,...",
+                    help="box side [m] instead of the density rho = 4.102 /m^2 (one for all N, or per N)")
     args = ap.parse_args(argv)
+    try:
+        sides = box_sides(args.box)
+    except ValueError:
+        print(f"hwvem_audit: --box expects D or N:D,N:D,... (metres), got {args.box!r}", file=sys.stderr)
+        return 2
     exp = load_experiment("hwvem-alignment", seeds=args.seeds)
     base = dict(exp.variants[0].params)
     seeds = list(exp.seeds)
     ref = paper_results()["hwvem"]["table1"]
     readings = args.reading or [""]
-    print(f"seeds {args.seeds}; spec parameters {base}\n")
+    print(f"seeds {args.seeds}; spec parameters {base}; box {args.box or 'sqrt(N / 4.102)'}\n")
     print("| reading | N | model | k_con mean ± 95 % CI (reached) | first passage mean | paper mean | ours / paper |")
     print("|---|---|---|---|---|---|---|")
     for reading in readings:
@@ -77,7 +101,8 @@ def main(argv=None) -> int:
         for n in (int(v) for v in args.sizes.split("|")):
             for model in args.models.split("|"):
                 t0 = time.perf_counter()
-                k, first = cell(model, n, seeds, {**base, **extra}, exp.variants[0].steps)
+                side = sides.get(n) if isinstance(sides, dict) else sides
+                k, first = cell(model, n, seeds, {**base, **extra}, exp.variants[0].steps, side)
                 mean, half, got = ci95(k)
                 paper = ref[f"N{n}"][MODELS[model]]["k_con"][0]
                 print(f"| {reading or 'spec'} | {n} | {MODELS[model]} | {mean:.1f} ± {half:.1f} ({got}/{len(k)}) | "

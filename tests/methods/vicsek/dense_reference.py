@@ -84,12 +84,15 @@ def weight_matrix(model, A, layers, iu, *, p1=0.1, p2=5.0, use_nei=True, k_alpha
     raise ValueError(model)
 
 
-def genuine_heading(model, A, theta, theta_g, layers, avoiding, iu, theta_d, **kw):
+def genuine_heading(model, A, theta, theta_g, layers, avoiding, iu, theta_d, ivem_unsigned=False, ivem_self=False,
+                    **kw):
     """Eq. (18) without noise: the new genuine direction of every agent.
 
     Weighted models: atan2(sum h o sin, sum h o cos); all weights zero but contributing
     neighbours present (only unreached layers among them) -> plain average over them;
-    no contributing neighbour -> keep theta_g. IVEM / IVEM-A away from the IU: eq. (30)-(31).
+    no contributing neighbour -> keep theta_g. IVEM / IVEM-A away from the IU: eq. (30)-(31),
+    the headings compared as numbers in [-pi, pi), or in [0, 2 pi) (``ivem_unsigned``), the
+    agent's own heading among the neighbours' min and max if ``ivem_self``.
     """
     N = len(theta)
     o = (~avoiding).astype(float)
@@ -108,8 +111,10 @@ def genuine_heading(model, A, theta, theta_g, layers, avoiding, iu, theta_d, **k
             nb = np.nonzero(plain[i] > 0)[0]
             if len(nb) == 0:
                 continue
-            lo, hi = theta[nb].min(), theta[nb].max()
-            lam = 1.0 if theta[i] <= lo else (-1.0 if theta[i] >= hi else 0.0)
+            num = np.mod(theta, 2 * np.pi) if ivem_unsigned else theta  # the headings as numbers
+            group = np.append(nb, i) if ivem_self else nb
+            lo, hi = num[group].min(), num[group].max()
+            lam = 1.0 if num[i] <= lo else (-1.0 if num[i] >= hi else 0.0)
             out[i] = wrap(theta[i] + lam * (hi - lo) / 2.0)
             continue
         h = H[i]

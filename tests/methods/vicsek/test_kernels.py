@@ -114,6 +114,34 @@ def test_heading_kernel_matches_dense_paper_equations(model, kw, box, wrap):
         np.testing.assert_allclose(R.wrap(out - ref), 0.0, atol=1e-9, err_msg=f"trial {trial}")
 
 
+@pytest.mark.parametrize("model", ["ivem", "ivem-a"])
+@pytest.mark.parametrize("unsigned,own", [(True, False), (False, True), (True, True)])
+@pytest.mark.parametrize("box,wrap", WORLDS[:3])
+def test_ivem_readings_match_dense_paper_equations(model, unsigned, own, box, wrap):
+    """ivem_range = unsigned (headings compared as numbers in [0, 2 pi)) and ivem_self (the
+    agent's own heading among the min and max) against the plain transcription of eq. (30)-(31)."""
+    rng = np.random.default_rng(12)
+    side = box if box else 5.0
+    for trial in range(4):
+        pos, theta, theta_g, layers, avoiding, iu = random_state(rng, 90, side, model == "ivem-a")
+        nb, _ = csr(pos, 1.0, box, wrap)
+        iu_nb = np.zeros(len(pos), dtype=np.bool_)
+        if iu >= 0:
+            iu_nb[row(nb, iu)[0]] = True
+        out = np.empty(len(pos))
+        K.genuine_heading(MODELS[model], *nb, 1.0, theta, theta_g, layers, avoiding, iu, iu_nb, 0.7,
+                          0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out, K.IVEM_PRINTED,
+                          math.pi if unsigned else 0.0, own)
+        A = R.adjacency(pos, 1.0, dense_box(box, wrap))
+        ref = R.genuine_heading(model, A, theta, theta_g, dense_layers(layers), avoiding, iu if iu >= 0 else None,
+                                0.7, ivem_unsigned=unsigned, ivem_self=own, **KW[0])
+        np.testing.assert_allclose(R.wrap(out - ref), 0.0, atol=1e-9, err_msg=f"trial {trial}")
+        signed = np.empty(len(pos))
+        K.genuine_heading(MODELS[model], *nb, 1.0, theta, theta_g, layers, avoiding, iu, iu_nb, 0.7,
+                          0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, signed)
+        assert np.any(np.abs(R.wrap(out - signed)) > 1e-6)  # the reading changes some agent's heading
+
+
 def test_heading_kernel_ignores_entries_beyond_the_alignment_radius():
     """The CSR may be built at the attraction range; alignment uses only r."""
     rng = np.random.default_rng(5)

@@ -238,6 +238,37 @@ def test_ivem_circular_readings_across_the_seam():
     assert got[K.IVEM_MIDDLE_CIRCULAR] == pytest.approx(3.0 + (hi + lo) / 2 - two_pi)
 
 
+def test_ivem_unsigned_and_self_readings_by_hand():
+    """Headings 3.0 (own) and -3.0, 3.1 (neighbours). As numbers in [0, 2 pi) (ivem_range =
+    unsigned) the neighbours are 2 pi - 3.0 = 3.283 and 3.1, both above the agent: it turns up by
+    half their spread, across pi. With its own heading among the min and max (ivem_self, in
+    [-pi, pi)) it lies inside {-3.0, 3.0, 3.1} and keeps 3.0, while agent 2 (3.1) is that set's
+    maximum and turns down by half its spread, (3.1 + 3.0) / 2 (without itself: by 3.0)."""
+    pos = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]])
+    theta = np.array([3.0, -3.0, 3.1])
+    idx = np.empty(64, np.int64)
+    d2 = np.empty(64)
+    order, start, end, _ = K.neighbour_csr(pos, 1.0, 0.0, True, idx, d2)
+
+    def run(shift, own):
+        out = np.empty(3)
+        K.genuine_heading(K.IVEM, order, start, end, idx, d2, 1.0, theta, theta.copy(), np.ones(3, np.int64),
+                          np.zeros(3, np.bool_), -1, np.zeros(3, np.bool_), 0.0, 0.1, 5.0, True, 30.0, 18.0, 1.0,
+                          100.0, NO_NOISE, out, K.IVEM_PRINTED, shift, own)
+        return out
+
+    unsigned = run(math.pi, False)
+    assert unsigned[0] == pytest.approx(wrap(3.0 + (2 * math.pi - 3.0 - 3.1) / 2))
+    # agent 1 (-3.0 -> 3.283) is above its neighbours 3.0, 3.1: down by 0.05
+    assert unsigned[1] == pytest.approx(wrap(2 * math.pi - 3.0 - 0.05))
+    signed = run(0.0, False)
+    assert signed[0] == pytest.approx(3.0)  # between -3.0 and 3.1 as numbers in [-pi, pi)
+    with_self = run(0.0, True)
+    assert with_self[0] == pytest.approx(3.0)  # inside {-3.0, 3.0, 3.1}
+    assert with_self[2] == pytest.approx(3.1 - (3.1 + 3.0) / 2)  # the maximum: down by half of 6.1
+    assert with_self[1] == pytest.approx(-3.0 + (3.1 + 3.0) / 2)  # the minimum: up by half of 6.1
+
+
 def test_layer_update_eq4_is_the_current_hop_distance():
     """layer_update = "eq4" (Algorithm 1, line 13): after every step the layers are the shortest
     neighbour sequence from the information UAV in the graph of that step (eq. 2-4)."""

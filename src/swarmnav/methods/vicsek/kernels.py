@@ -114,7 +114,7 @@ def bfs_layers(order, start, end, indices, dist2, r2, iu, out):
 @njit(cache=True)
 def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g, layers, avoiding, iu, iu_nb,
                     theta_d, p1, p2, use_nei, k_alpha, k_beta, k_gamma, info_weight, noise, out,
-                    ivem_rule=IVEM_PRINTED):
+                    ivem_rule=IVEM_PRINTED, ivem_shift=0.0, ivem_self=False):
     """New genuine desired heading of every agent (HWVEM eq. 18) plus the noise of eq. (6).
 
     Weighted models (VEM, VEM-A, WVEM, HWVEM, and IVEM-A next to the information UAV)::
@@ -140,6 +140,10 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
     the two neighbours' directions with the maximum deviation"). The ``_CIRCULAR`` readings
     take max and min of ``wrap(theta_j - theta_i)`` (the neighbours seen from the agent's own
     heading, which is then 0) instead of the angles as numbers in ``[-pi, pi)``.
+    ``ivem_shift`` [rad] moves the range the non-circular readings compare numbers in to
+    ``[ivem_shift - pi, ivem_shift + pi)`` (0: ``[-pi, pi)``; pi: ``[0, 2 pi)``, the range the
+    initial headings are drawn from). ``ivem_self``: the agent's own heading counts among the
+    neighbours' min and max (the original Vicsek neighbourhood, ``|x_i - x_j| <= r``).
 
     An agent with no contributing neighbour keeps ``theta_g``; the information UAV gets
     ``theta_d`` (eq. 9 with ``b_ij = 0`` for ``i`` in layer 1). ``noise`` (N,) [rad] is added to
@@ -170,16 +174,21 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
         b = end[i]
         if code == IVEM or (code == IVEM_A and not iu_nb[i]):
             circ = ivem_rule == IVEM_PRINTED_CIRCULAR or ivem_rule == IVEM_MIDDLE_CIRCULAR
-            own = 0.0 if circ else theta[i]  # the agent's heading in the frame of lo, hi
+            # the agent's heading in the frame of lo, hi: relative to itself (circular), or as
+            # a number in [ivem_shift - pi, ivem_shift + pi)
+            own = 0.0 if circ else wrap_angle(theta[i] - ivem_shift)
             lo = np.inf  # min and max neighbour heading
             hi = -np.inf
             for e in range(a, b):
                 if dist2[e] <= r2:
                     j = indices[e]
                     if not avoiding[j]:
-                        tj = wrap_angle(theta[j] - theta[i]) if circ else theta[j]
+                        tj = wrap_angle(theta[j] - theta[i]) if circ else wrap_angle(theta[j] - ivem_shift)
                         lo = min(lo, tj)
                         hi = max(hi, tj)
+            if lo <= hi and ivem_self:
+                lo = min(lo, own)
+                hi = max(hi, own)
             if lo > hi:
                 out[i] = theta_g[i]
             elif ivem_rule == IVEM_MIDDLE or ivem_rule == IVEM_MIDDLE_CIRCULAR:

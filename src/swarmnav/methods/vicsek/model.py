@@ -121,6 +121,13 @@ class VicsekParams:
     ivem_rule: Literal["printed", "middle", "printed-circular", "middle-circular"] = param(
         "printed", "", None, "eq. (30)-(31), Sec. 3.1.2 (our reading)",
         "IVEM update: the printed eq. (30)-(31), or the middle of the extreme neighbours' headings")
+    # Which numbers eq. (30)-(31) compare (audit: docs/methods/vicsek.md): "signed" = headings in
+    # [-pi, pi); "unsigned" = in [0, 2 pi), the range Sec. 2.2 draws the initial headings from.
+    # The circular readings do not depend on it.
+    ivem_range: Literal["signed", "unsigned"] = param("signed", "", None, "eq. (30)-(31), Sec. 2.2 (our reading)",
+        "IVEM compares headings as numbers in [-pi, pi) (signed) or [0, 2 pi) (unsigned)")
+    ivem_self: bool = param(False, "", None, "eq. (30)-(31), Sec. 2.2 (our reading)",
+        "IVEM: the agent's own heading counts among its neighbours' min and max")
     # Layers during the run (audit: docs/methods/vicsek.md): "eq5" = l_i(k) = 1 + min l_j(k-1)
     # over the previous neighbours (Sec. 2.1, one hop per step); "eq4" = the shortest neighbour
     # sequence of the current graph every step (Algorithm 1, line 13: "update ... with (4)").
@@ -242,7 +249,8 @@ class VicsekFamily:
         r2_list = np.inf if self.radius <= p.r else r2  # inf: no entry lies beyond r
         K.genuine_heading(self.code, *nb, r2_list, self.theta, self.theta_g, self.layers,
                           self.avoiding, iu, iu_nb, theta_d, p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta,
-                          p.k_gamma, p.info_weight, noise, theta_g, _IVEM_RULES[p.ivem_rule])
+                          p.k_gamma, p.info_weight, noise, theta_g, _IVEM_RULES[p.ivem_rule],
+                          math.pi if p.ivem_range == "unsigned" else 0.0, p.ivem_self)
 
         theta = theta_g
         avoiding = np.zeros(n, dtype=np.bool_)
