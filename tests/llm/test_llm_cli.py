@@ -34,3 +34,16 @@ def test_bad_llm_input_is_one_line_exit_2(args, fragment, tmp_path, capsys):
     assert main([a.replace("X", str(tmp_path / "x")) for a in args]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and fragment in err[0], err
+
+
+def test_sim1_llm_report_sets_the_papers_qwen_row_beside_the_llm_variant(fake_server, tmp_path):
+    # The spec's variant_map names the paper's "qwen2.5:3b" row, whose key has a dot: the report
+    # must find it (the paper's qwen E_mean 6.206, N_event 38.60 and L_mean 228.33 appear).
+    server = fake_server("rules")
+    out = tmp_path / "sim1"
+    assert main(["experiment", "hes-sim1-llm", "--seeds", "1", "--workers", "1", "--quiet", "--no-trajectories",
+                 "--set", "decision=ollama", "--set", f"llm_url={server.url}", "--set", "llm_timeout=5",
+                 "--out", str(out)]) == 0
+    assert main(["report", str(out), "--no-viewers"]) == 0
+    llm_rows = [ln for ln in (out / "report.md").read_text().splitlines() if ln.startswith("| llm |")]
+    assert llm_rows and any("6.206" in ln for ln in llm_rows) and any("228.33" in ln for ln in llm_rows), llm_rows
