@@ -13,6 +13,7 @@
   const OBST_FACE = '#b3d9f2', OBST_EDGE = '#4d7ea8', GOAL = '#ffd400', SOLID = '#c5cad3', SOLID_EDGE = '#59606b';
   const PATH = '#9467bd';  // tab:purple, the figures' path colour
   const ROLE_NAMES = D.roles || null;
+  const LARGE = N > 300;  // a large swarm: cheaper drawing (see buildScene)
 
   // ------------------------------------------------------------------ data
   const TYPES = {uint8: Uint8Array, uint16: Uint16Array, float32: Float32Array};
@@ -211,10 +212,12 @@
   }
   function buildScene(THREE, OrbitControls) {
     THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
-    // multisampling and a preserved drawing buffer cost a software rasteriser ~40 % of its frames
-    // with 1000 agents (9.0 against 14.6 fps, mean of 7 alternating runs of bench_viewer.py's page
-    // in headless Chromium): large swarms go without multisampling, and no page keeps the buffer
-    const renderer = new THREE.WebGLRenderer({antialias: N <= 300, preserveDrawingBuffer: false});
+    // A large swarm is drawn more cheaply in perspective (arrows of 3 facets instead of 10,
+    // solids of fewer facets, half the trail points, no multisampling): on a software
+    // rasteriser (SwiftShader, a machine without a GPU) each of these costs frames with 1000
+    // agents. No page keeps its drawing buffer (screenshots capture it all the same), and the
+    // canvas is opaque, so the compositor need not blend it.
+    const renderer = new THREE.WebGLRenderer({antialias: !LARGE, alpha: false, preserveDrawingBuffer: false});
     renderer.setPixelRatio(window.devicePixelRatio || 1);
     renderer.setClearColor(0xf4f6f8);
     persp.appendChild(renderer.domElement);
@@ -278,8 +281,8 @@
         const b = [Math.min(o.v[2][0], hi[0]), Math.min(o.v[2][1], hi[1]), Math.min(zb, hi[2])];
         scene.add(boxEdges(a, b, 0x59606b, 0.6)); continue;
       }
-      if (o.t === 'sphere') addSolid(new THREE.SphereGeometry(o.r, 24, 12), o.c[0], o.c[1], o.c[2]);
-      else if (o.t === 'circle' || o.t === 'cylinder') addSolid(new THREE.CylinderGeometry(o.r, o.r, zb - za, 28), o.c[0], o.c[1], (za + zb) / 2, true);
+      if (o.t === 'sphere') addSolid(new THREE.SphereGeometry(o.r, LARGE ? 16 : 24, LARGE ? 8 : 12), o.c[0], o.c[1], o.c[2]);
+      else if (o.t === 'circle' || o.t === 'cylinder') addSolid(new THREE.CylinderGeometry(o.r, o.r, zb - za, LARGE ? 16 : 28), o.c[0], o.c[1], (za + zb) / 2, true);
       else {
         const shape = new THREE.Shape(o.v.map(([x, y]) => new THREE.Vector2(x, y)));
         addSolid(new THREE.ExtrudeGeometry(shape, {depth: zb - za, bevelEnabled: false}), 0, 0, za);
@@ -315,11 +318,25 @@
       line.computeLineDistances(); scene.add(line);
     }
     // agents: arrows along their heading, coloured by sub-swarm
-    const a = N > 300 ? Math.max(0.35, 0.006 * Math.max(ext[0], ext[1])) : Math.max(0.6, 0.014 * Math.max(ext[0], ext[1]));
-    const cone = new THREE.ConeGeometry(a * 0.38, a, 10); cone.rotateZ(-Math.PI / 2);  // along +x
-    const agents = new THREE.InstancedMesh(baked(cone), new THREE.MeshBasicMaterial({vertexColors: true}), N);
-    agents.instanceMatrix.setUsage(THREE.DynamicDrawUsage); scene.add(agents);
-    agents.frustumCulled = false;  // its bounding sphere is computed once, from the first step's positions
+    const a = LARGE ? Math.max(0.35, 0.006 * Math.max(ext[0], ext[1])) : Math.max(0.6, 0.014 * Math.max(ext[0], ext[1]));
+    // All N arrows are one mesh whose vertices drawPersp places each frame: a software
+    // rasteriser (SwiftShader) draws an InstancedMesh one instance at a time, which cost more
+    // than the rest of the scene together with 1000 agents.
+    const cone = new THREE.ConeGeometry(a * 0.38, a, LARGE ? 3 : 10); cone.rotateZ(-Math.PI / 2);  // along +x
+    const tpl = baked(cone), tplPos = tpl.attributes.position.array, nv = tplPos.length / 3;
+    const tplShade = new Float32Array(nv);
+    let apex = 0, base = -1;  // the tip and the centre of the base: where an arrow is and points
+    for (let v = 0; v < nv; v++) {
+      tplShade[v] = tpl.attributes.color.array[3 * v];
+      if (tplPos[3 * v] > tplPos[3 * apex]) apex = v;
+      if (base < 0 && Math.abs(tplPos[3 * v] + a / 2) < 1e-6 * a && Math.abs(tplPos[3 * v + 1]) < 1e-6 * a && Math.abs(tplPos[3 * v + 2]) < 1e-6 * a) base = v;
+    }
+    const aGeo = new THREE.BufferGeometry();
+    aGeo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(N * nv * 3), 3).setUsage(THREE.DynamicDrawUsage));
+    aGeo.setAttribute('color', new THREE.BufferAttribute(new Float32Array(N * nv * 3), 3).setUsage(THREE.DynamicDrawUsage));
+    const agents = new THREE.Mesh(aGeo, new THREE.MeshBasicMaterial({vertexColors: true}));
+    agents.frustumCulled = false; scene.add(agents);
+    const arrow = {tplPos, tplShade, nv, apex, base};
     const ring = new THREE.Mesh(new THREE.TorusGeometry(a * 0.9, a * 0.09, 6, 24), new THREE.MeshBasicMaterial({color: 0x000000}));
     ring.visible = false; scene.add(ring);
     // roles, when recorded: a thin black ring round each subleader, a thick one round the leader
@@ -345,7 +362,7 @@
     controls.target.copy(centre); controls.update();
     controls.addEventListener('change', () => { dirty = true; });
     const palette = D.palette.map(c => new THREE.Color(c));
-    const g = {THREE, renderer, scene, camera, controls, agents, trails, tGeo, tPos, tCol, palette, ring, roleRings, altitude,
+    const g = {THREE, renderer, scene, camera, controls, agents, arrow, trails, tGeo, tPos, tCol, palette, ring, roleRings, altitude,
                m: new THREE.Matrix4(), q: new THREE.Quaternion(), p: new THREE.Vector3(), s: new THREE.Vector3(1, 1, 1),
                ux: new THREE.Vector3(1, 0, 0), u: new THREE.Vector3(), ray: new THREE.Raycaster(), ptr: new THREE.Vector2()};
     layoutPersp(g);
@@ -357,7 +374,8 @@
   }
   const zOf = (k, i) => DIM === 3 ? P[(k * N + i) * 3 + 2] : G.altitude;
   function drawPersp() {
-    const g = G, {m, q, p, s, u, ux} = g;
+    const g = G, {m, q, p, s, u, ux} = g, aGeo = g.agents.geometry, {tplPos: tp, tplShade, nv} = g.arrow;
+    const pos = aGeo.attributes.position.array, cols = aGeo.attributes.color.array;
     for (let i = 0; i < N; i++) {
       const a = (k * N + i) * DIM;
       // heading: the velocity's direction, or the last one before this step for an agent at rest
@@ -370,11 +388,14 @@
       }
       if (sp > 1e-6) u.set(V[b] / sp, V[b + 1] / sp, DIM === 3 ? V[b + 2] / sp : 0); else u.set(1, 0, 0);
       q.setFromUnitVectors(ux, u);
-      p.set(P[a], P[a + 1], zOf(k, i));
-      g.agents.setMatrixAt(i, m.compose(p, q, s));
-      g.agents.setColorAt(i, g.palette[LAB[k * N + i]]);
+      const e = m.makeRotationFromQuaternion(q).elements, px = P[a], py = P[a + 1], pz = zOf(k, i), col = g.palette[LAB[k * N + i]];
+      for (let v = 0, o = i * nv * 3; v < nv; v++, o += 3) {
+        const x = tp[3 * v], y = tp[3 * v + 1], z = tp[3 * v + 2], f = tplShade[v];
+        pos[o] = px + e[0] * x + e[4] * y + e[8] * z; pos[o + 1] = py + e[1] * x + e[5] * y + e[9] * z; pos[o + 2] = pz + e[2] * x + e[6] * y + e[10] * z;
+        cols[o] = col.r * f; cols[o + 1] = col.g * f; cols[o + 2] = col.b * f;
+      }
     }
-    g.agents.instanceMatrix.needsUpdate = true; if (g.agents.instanceColor) g.agents.instanceColor.needsUpdate = true;
+    aGeo.attributes.position.needsUpdate = true; aGeo.attributes.color.needsUpdate = true;
     if (ROLE) {
       q.identity();
       for (const code of [1, 2]) {
@@ -387,9 +408,7 @@
     }
     let n = 0;
     if (showTrails) {
-      // half the trail points for a large swarm: software WebGL drew 1000 agents at 20.8 fps
-      // instead of 14.8 (means of 4 alternating runs of bench_viewer.py's page)
-      const steps = trailSteps(N > 300 ? TRAIL_POINTS / 2 : TRAIL_POINTS), S = steps.length, [hx, hy] = halfCell();
+      const steps = trailSteps(LARGE ? TRAIL_POINTS / 2 : TRAIL_POINTS), S = steps.length, [hx, hy] = halfCell();
       for (let i = 0; i < N; i++) {
         const col = g.palette[LAB[k * N + i]];
         for (let j = 0; j + 1 < S; j++) {
@@ -412,12 +431,20 @@
     if (pick >= 0) { const a = (k * N + pick) * DIM; g.ring.position.set(P[a], P[a + 1], zOf(k, pick)); }
     g.renderer.render(g.scene, g.camera);
   }
+  /** Agent i's arrow as drawn, read back from the mesh's vertices: [midpoint of tip and base
+   * centre (where the agent is) [m], unit vector from base to tip (its heading)]. */
+  function arrowAt(i) {
+    const pos = G.agents.geometry.attributes.position.array, {nv, apex, base} = G.arrow;
+    const t = (i * nv + apex) * 3, b = (i * nv + base) * 3, d = [0, 1, 2].map(j => pos[t + j] - pos[b + j]);
+    const n = Math.hypot(...d);
+    return [[0, 1, 2].map(j => (pos[t + j] + pos[b + j]) / 2), d.map(x => x / n)];
+  }
   function pickPersp(mx, my) {
     const g = G; g.ptr.set(mx / stage.clientWidth * 2 - 1, -my / stage.clientHeight * 2 + 1);
     g.ray.setFromCamera(g.ptr, g.camera);
-    g.agents.computeBoundingSphere();  // the raycast tests it first: it must hold the agents of this step
+    g.agents.geometry.computeBoundingSphere();  // the raycast tests it first: it must hold the agents of this step
     const hit = g.ray.intersectObject(g.agents, false)[0];
-    return hit ? hit.instanceId : -1;
+    return hit ? Math.floor(hit.faceIndex * 3 / g.arrow.nv) : -1;
   }
 
   // ------------------------------------------------------------------ strip chart, timeline
@@ -573,21 +600,21 @@
         for (let i = 0; i < N; i++) out.push([(drawn[2 * i] - T.ox) / T.s + lo[0], hi[1] - (drawn[2 * i + 1] - T.oy) / T.s]);
         return out;
       }
-      const out = [], e = G.m.elements;
-      for (let i = 0; i < N; i++) { G.agents.getMatrixAt(i, G.m); out.push([e[12], e[13], e[14]]); }
+      const out = [];
+      for (let i = 0; i < N; i++) out.push(arrowAt(i)[0]);
       return out;
     },
     /** Page coordinates [css px] of agent i as drawn in the current view (where to point the mouse). */
     screenOf(i) {
       const r = stage.getBoundingClientRect();
       if (view === 'top') return [r.left + drawn[2 * i], r.top + drawn[2 * i + 1]];
-      G.agents.getMatrixAt(i, G.m); G.p.setFromMatrixPosition(G.m).project(G.camera);
+      G.p.set(...arrowAt(i)[0]).project(G.camera);
       return [r.left + (G.p.x + 1) / 2 * stage.clientWidth, r.top + (1 - G.p.y) / 2 * stage.clientHeight];
     },
     /** Perspective: the direction each arrow points (unit vectors, from its instance matrix). */
     headings() {
-      const out = [], e = G.m.elements;
-      for (let i = 0; i < N; i++) { G.agents.getMatrixAt(i, G.m); const n = Math.hypot(e[0], e[1], e[2]); out.push([e[0] / n, e[1] / n, e[2] / n]); }
+      const out = [];
+      for (let i = 0; i < N; i++) out.push(arrowAt(i)[1]);
       return out;
     },
     /** What the tooltip says of agent i at the current step. */
