@@ -30,12 +30,28 @@ from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.methods.base import Observation
 from swarmnav.methods.sph.bspline import SplineCosts, evaluate, optimize
 from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
-from swarmnav.methods.sph.kernel import environment_force, sph_forces
+from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.params import build
 from swarmnav.sensing.esdf import Esdf
 from swarmnav.world.scenario import Scenario
+
+
+class AxisClampedDoubleIntegrator:
+    """The released controller's bound (``sph_zhang_3d.cpp``, ``parallelUpdateParticlePositions``):
+    ``v_{k+1} = clamp(v_k + dt clamp(a, a_max), v_max)``, ``p_{k+1} = p_k + dt v_{k+1}``, every
+    clamp per axis (eq. 2 bounds the Euclidean norms instead)."""
+
+    __slots__ = ("v_max", "a_max")
+
+    def __init__(self, v_max: float, a_max: float):
+        self.v_max = v_max  # [m/s], per axis
+        self.a_max = a_max  # [m/s^2], per axis
+
+    def step(self, p: np.ndarray, v: np.ndarray, a_cmd: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        v_new = np.clip(v + dt * np.clip(a_cmd, -self.a_max, self.a_max), -self.v_max, self.v_max)
+        return p + dt * v_new, v_new
 
 
 class Sph:
@@ -48,10 +64,16 @@ class Sph:
         p = build(SphParams, overrides, context="sph")
         self.params = p
         self.dt = p.dt
-        self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
-        self._costs = SplineCosts(p.lambda_s, p.lambda_c, p.lambda_f, p.d_thr, p.v_max, p.a_max)
-        # knot span [s]: control points ctrl_spacing apart at plan_speed * v_max
-        self._dt_knot = p.ctrl_spacing / (p.plan_speed * p.v_max)
+        if p.clip == "norm":
+            self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
+        else:
+            self.dynamics = AxisClampedDoubleIntegrator(p.v_max, p.a_max)
+        # the planner's bounds (the released code plans slower than its controller may fly)
+        self._plan_v = p.plan_v_max or p.v_max
+        plan_a = p.plan_a_max or p.a_max
+        self._costs = SplineCosts(p.lambda_s, p.lambda_c, p.lambda_f, p.d_thr, self._plan_v, plan_a)
+        # knot span [s]: control points ctrl_spacing apart at plan_speed * (planner's) v_max
+        self._dt_knot = p.ctrl_spacing / (p.plan_speed * self._plan_v)
 
     # ------------------------------------------------------------------ contract
 
@@ -105,7 +127,10 @@ class Sph:
         force, _, _ = sph_forces(x, v, vi, vj, h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep, k_vis=p.k_vis,
                                  rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor)
         d, grad = self.esdf.query(x)
-        force += environment_force(d, grad, p.k_env, p.d_thr)
+        if p.env_law == "paper":
+            force += environment_force(d, grad, p.k_env, p.d_thr)
+        else:
+            force += released_environment_force(d - p.env_inflation, grad, p.k_force, p.env_safe)
         self._coord_ms.append(1e3 * (time.perf_counter() - t0))
         self._neighbours += 2.0 * len(vi) / max(n, 1)
         self._steps += 1
@@ -114,21 +139,21 @@ class Sph:
             self._visible = (vi, vj)
             self._replan(obs.step, x, v)
         q_ref, v_ref, a_ref = self._reference(obs.step)
-        if p.plan_once and p.once_hold > 0:
-            # Fig. 3B protocol, no replan re-anchors a lagging reference: each robot's reference clock
-            # slows as its lag grows past once_hold / 2 and stops at once_hold, so the reference waits
-            # on the planned path (ours; the paper only says the robots follow the "trajectory trends").
-            # Time scaling by the rate phi: v* = phi v(tau), a* = phi^2 a(tau).
+        hold = p.once_hold if p.plan_once else p.ref_hold
+        if hold > 0:
+            # The reference waits for a held robot (ours; with plan_once the paper only says the robots
+            # follow the "trajectory trends"): each robot's reference clock slows as its lag grows past
+            # hold / 2 and stops at hold. Time scaling by the rate phi: v* = phi v(tau), a* = phi^2 a(tau).
             lag = np.linalg.norm(q_ref - x, axis=1)
-            phi = np.clip(2.0 - 2.0 * lag / p.once_hold, 0.0, 1.0)
+            phi = np.clip(2.0 - 2.0 * lag / hold, 0.0, 1.0)
             self._hold += 1.0 - phi
             v_ref = phi[:, None] * v_ref
             a_ref = (phi * phi)[:, None] * a_ref
             # a waiting clock cannot bring back a reference that has ended (the goal) or a robot pushed
-            # aside: the position error is bounded by once_hold, as ref_clamp bounds it at a replan
-            far = lag > p.once_hold
+            # aside: the position error is bounded by hold, as ref_clamp bounds it at a replan
+            far = lag > hold
             q_ref = q_ref.copy()
-            q_ref[far] = x[far] + (q_ref[far] - x[far]) * (p.once_hold / lag[far])[:, None]
+            q_ref[far] = x[far] + (q_ref[far] - x[far]) * (hold / lag[far])[:, None]
         # eq. (13)
         a = force / p.m + p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref
         return a, {"labels": labels, "events": events}
@@ -208,6 +233,8 @@ class Sph:
         for r, pl in enumerate(plans):
             self._ref_q[r], self._ref_v[r], self._ref_a[r] = evaluate(pl.ctrl, pl.dt_knot, tau)
         self._ref_k = step
+        if not p.plan_once:
+            self._hold[:] = 0.0  # the new reference starts at this step
 
     def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, others: np.ndarray | None = None):
         """One robot's replan: update its map, grid search to its goal, optimise the spline."""
@@ -225,15 +252,15 @@ class Sph:
         if not reaches_end:
             pts = pts[: p.horizon_points + 1]
         end_v = np.zeros_like(q)
-        if not reaches_end:
+        if not reaches_end and p.end_state == "moving":
             tangent = pts[-1] - pts[-2]
-            end_v = p.v_max * tangent / max(np.linalg.norm(tangent), 1e-9)
+            end_v = self._plan_v * tangent / max(np.linalg.norm(tangent), 1e-9)
         if p.ctrl_seed == "knots":
             # C_2 already stands for the path point one knot ahead (q + v dt, eq. 12) and, with a
             # moving end, C_{K-2} for the one a knot before the end: seed the interior points
             # with the path points at the knots between, so the reference runs at the knot speed
             # ctrl_spacing / dt_knot = v_max instead of repeating those two points.
-            guide = pts[2:-1] if reaches_end else pts[2:-2]
+            guide = pts[2:-1] if reaches_end or p.end_state == "rest" else pts[2:-2]
         else:  # released: C_3 .. C_{K-3} = path[1] .. path[-2] (two knots spent on repeated points)
             guide = pts[1:-1]
         plan = optimize((q, v, a), (pts[-1], end_v, np.zeros_like(q)), guide, self._dt_knot,

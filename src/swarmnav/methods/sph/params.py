@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, ClassVar, Literal
 
 from swarmnav.params import param
 
@@ -11,6 +11,21 @@ from swarmnav.params import param
 @dataclass(frozen=True, slots=True)
 class SphParams:
     """SPH swarm navigation (Li et al., RA-L 2025). Table I values unless marked "our choice"."""
+
+    #: Named parameter sets (``--set preset=NAME``). ``paper`` is the default build: Table I and
+    #: our choices below. ``released`` is the authors' released code (SmartGroupSystems/SPH-planning,
+    #: ``water_swarm/launch/sph.launch`` and the C++ it configures): its controller gains and bounds,
+    #: its 50 Hz update, its kernel evaluation, its ESDF force law, its planner limits and its
+    #: replanning (docs/methods/sph.md, *Presets*).
+    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
+        "paper": {},
+        "released": {
+            "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
+            "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
+            "env_law": "released", "clip": "axis",
+            "ctrl_seed": "released", "ref_reset": 1.0, "ref_clamp": False, "end_state": "rest",
+        },
+    }
 
     # --- swarm (Table I) ---
     c: float = param(54.97, "", "(0, inf)", "eq. (4), Table I", "kernel normalisation constant")
@@ -39,6 +54,18 @@ class SphParams:
     dt: float = param(0.01, "s", "[0.0001, 1]", "ours",
         "control step: the text's \">= 100 Hz\" swarm control (Sec. III); released code 0.02")
     kernel: Literal["paper", "released"] = param("paper", "", None, "ours", "eq. (4) as printed, or the released C++")
+    env_law: Literal["paper", "released"] = param("paper", "", None, "ours",
+        "obstacle force: eqs. (5)-(6), 2 k_env (d_thr - d) along grad d; or the released "
+        "calcGradForce, k_force (d - env_safe)^2 along grad d, d measured from obstacles grown by "
+        "env_inflation")
+    k_force: float = param(1000.0, "1/(m s^2)", "[0, inf)", "released planning/k_force",
+        "env_law = released only: gain of the quadratic obstacle force")
+    env_safe: float = param(0.4, "m", "[0, inf)", "released planning/safe_distance",
+        "env_law = released only: the force acts below this distance")
+    env_inflation: float = param(0.1, "m", "[0, inf)", "released sdf_map/obstacles_inflation (0.099)",
+        "env_law = released only: the released ESDF is built on obstacles grown by this")
+    clip: Literal["norm", "axis"] = param("norm", "", None, "eq. (2)",
+        "bound of speed and command: the Euclidean norm (eq. 2), or each axis (the released clamp)")
     r_floor: float = param(0.05, "m", "(0, inf)", "ours", "distance floor in the 1/r repulsion (finite force)")
     esdf_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "ESDF grid, as the released sdf_map")
     grid_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "grid-search cell, as the released A*")
@@ -55,6 +82,13 @@ class SphParams:
         "(ours; 0 = off, as the paper's planner: on, it made contacts more frequent)")
     plan_neighbours_range: float = param(3.0, "m", "[0, inf)", "ours",
         "only visible neighbours this close enter the search")
+    plan_v_max: float = param(0.0, "m/s", "[0, inf)", "ours (released planning/max_vel 1.2)",
+        "speed bound of the planner (eq. 11 and the knot span); 0: v_max")
+    plan_a_max: float = param(0.0, "m/s^2", "[0, inf)", "ours (released planning/max_acc 1.5)",
+        "acceleration bound of the planner (eq. 11); 0: a_max")
+    end_state: Literal["moving", "rest"] = param("moving", "", None, "ours",
+        "end state of a local plan short of the goal: moving at the planner's speed along the path "
+        "(ours), or at rest (released terminal_state)")
     ctrl_spacing: float = param(0.5, "m", "(0, inf)", "ours",
         "control-point spacing along the initial path (released dist_p)")
     ctrl_seed: Literal["knots", "released"] = param("knots", "", None, "ours",
@@ -84,6 +118,11 @@ class SphParams:
     reset_velocity: bool = param(False, "", None, "ours",
         "on a ref_reset also restart from the measured velocity (ours); the released planner "
         "moves only the start position and keeps the reference's velocity/acceleration")
+    ref_hold: float = param(0.0, "m", "[0, inf)", "ours",
+        "replanning: a robot's reference clock slows once its lag passes ref_hold / 2 and stops at "
+        "ref_hold (v* = phi v, a* = phi^2 a), the position error capped at ref_hold, so the reference "
+        "waits for a robot the swarm holds back instead of pulling it on; 0 = off (as once_hold "
+        "for plan_once)")
     goal_spread: float = param(0.0, "", "[0, inf)", "ours",
         "per-robot goal = goal + goal_spread * (spawn_i - spawn centroid)")
     plan_once: bool = param(False, "", None, "ours", "plan the whole path once at t = 0 (Fig. 3B protocol)")

@@ -1,0 +1,110 @@
+"""SPH presets (``preset=paper`` / ``preset=released``) and the released parts they switch on:
+the quadratic obstacle force, the per-axis clamp, the planner's own speed bound."""
+
+import json
+
+import numpy as np
+import pytest
+
+import swarmnav
+from swarmnav.cli import main
+from swarmnav.methods import registry
+from swarmnav.methods.sph.kernel import environment_force, released_environment_force
+from swarmnav.methods.sph.method import AxisClampedDoubleIntegrator
+from swarmnav.world import from_dict
+
+LONE = {"name": "lone", "swarm": {"n": 1, "spawn": [-0.1, -0.1, 0.1, 0.1]}, "goal": {"position": [30.0, 0.0]},
+        "world": {"bounds": [-6.0, -8.0, 36.0, 8.0]},
+        "obstacles": [{"type": "circle", "center": [4.0, 7.0], "radius": 0.5}]}
+
+
+def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_values():
+    assert registry.make("sph", preset="paper").params == registry.make("sph").params
+    p = registry.make("sph", preset="released").params
+    # water_swarm/launch/sph.launch: k_rep, k_fri, k_p, k_d, v_max, a_max, planv_max, plana_max, updateInterval
+    assert (p.k_rep, p.k_vis, p.k_p, p.k_v, p.v_max, p.a_max) == (1.1, 1.8, 15.0, 6.5, 2.5, 3.5)
+    assert (p.plan_v_max, p.plan_a_max, p.dt) == (1.2, 1.5, 0.02)
+    assert (p.kernel, p.env_law, p.clip, p.k_force, p.env_safe) == ("released", "released", "axis", 1000.0, 0.4)
+    # Table I values the launch file does not change stay
+    assert (p.h, p.k_den, p.rho0, p.T_p) == (10.0, 1.0, 1e6, 0.2)
+    # an explicit value applies on top of the preset
+    assert registry.make("sph", preset="released", k_p=7.0).params.k_p == 7.0
+    with pytest.raises(swarmnav.ConfigError, match="unknown preset 'relased'"):
+        registry.make("sph", preset="relased")
+
+
+def test_cli_preset_reaches_the_stored_configuration(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["run", "--method", "sph", "--scenario-file", _scene(tmp_path), "--steps", "5",
+                 "--out", str(out), "--set", "preset=released"]) == 0
+    cfg = json.loads((out / "config.json").read_text())
+    assert cfg["params"]["k_p"] == 15.0 and cfg["params"]["clip"] == "axis" and cfg["dt"] == 0.02
+    assert main(["methods", "sph"]) == 0
+    listing = capsys.readouterr().out
+    assert "released" in listing and "paper" in listing
+
+
+def _scene(tmp_path) -> str:
+    from swarmnav.world import load_scenario
+
+    f = tmp_path / "lone.toml"
+    f.write_text(from_dict(LONE).to_toml())
+    assert load_scenario(str(f)).n == 1
+    return str(f)
+
+
+def _loop_released_force(d, g, k_force, d_safe):
+    """Plain per-robot evaluation of calcGradForce (bspline_opt_3d.cpp), the oracle."""
+    out = np.zeros_like(g)
+    for i in range(len(d)):
+        if d[i] > d_safe:
+            continue
+        out[i] = k_force * (d[i] - d_safe) ** 2 * g[i] / np.linalg.norm(g[i])
+    return out
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_released_obstacle_force_against_a_loop(dim):
+    rng = np.random.default_rng(4)
+    d = rng.uniform(-0.1, 0.8, 40)
+    g = rng.normal(size=(40, dim)) * rng.uniform(0.5, 2.0, (40, 1))  # not unit: the law normalises
+    np.testing.assert_allclose(released_environment_force(d, g, 1000.0, 0.4), _loop_released_force(d, g, 1000.0, 0.4))
+
+
+def test_released_obstacle_force_is_quadratic_where_the_papers_is_linear():
+    g = np.tile([1.0, 0.0], (4, 1))
+    d = np.array([0.35, 0.2, 0.0, 0.45])
+    rel = released_environment_force(d, g, 1000.0, 0.4)[:, 0]
+    np.testing.assert_allclose(rel, [2.5, 40.0, 160.0, 0.0])  # k_force (d - 0.4)^2, zero beyond
+    lin = environment_force(d, g, 10.0, 0.5)[:, 0]
+    np.testing.assert_allclose(lin, [3.0, 6.0, 10.0, 1.0])  # eqs. (5)-(6): 2 k_env (d_thr - d)
+
+
+def test_axis_clamp_bounds_each_axis_not_the_norm():
+    dyn = AxisClampedDoubleIntegrator(v_max=2.5, a_max=3.5)
+    p, v = np.zeros((3, 2)), np.array([[2.4, 2.4], [0.0, 0.0], [-3.0, 0.5]])
+    a = np.array([[10.0, 10.0], [1.0, -9.0], [0.0, 0.0]])
+    p1, v1 = dyn.step(p, v, a, 0.02)
+    expect_v = np.clip(v + 0.02 * np.clip(a, -3.5, 3.5), -2.5, 2.5)
+    np.testing.assert_allclose(v1, expect_v)
+    np.testing.assert_allclose(p1, 0.02 * expect_v)
+    assert np.linalg.norm(v1[0]) > 2.5  # both axes at the bound: the norm is sqrt(2) x 2.5
+
+
+def test_planner_speed_bound_sets_the_reference_speed():
+    # The planner plans at plan_v_max (the knot span is ctrl_spacing / plan_v_max), below the
+    # controller's v_max: a held-back robot has the difference to catch up with.
+    m = registry.make("sph", plan_v_max=0.8)
+    speeds = []
+    orig = m._replan
+
+    def spy(step, x, v):
+        orig(step, x, v)
+        if 4.0 <= step * m.dt <= 8.0:
+            speeds.append(np.linalg.norm(m._ref_v[0], axis=1).mean())
+
+    m._replan = spy
+    res = swarmnav.run(m, from_dict(LONE), seed=1, steps=round(9.0 / m.dt))
+    assert np.mean(speeds) == pytest.approx(0.8, abs=0.05)
+    cruise = np.linalg.norm(res.velocities[400:800, 0], axis=1)
+    assert cruise.max() <= 1.0 + 1e-9 and cruise.mean() == pytest.approx(0.8, abs=0.06)
