@@ -10,8 +10,11 @@ and boxes (``--dim 3``: a 20 m tall 3-D field of pillars, spheres and boxes)
 - open time [s]: from the navigation to the first drawn frame, data decoded (target <= 2 s);
 - frames per second while playing (target >= 30 fps), counted with requestAnimationFrame
   over ``--seconds`` of play at 12x real time (120 steps/s: at 60 Hz or less every frame
-  draws a new step; 5 s play 600 of the 1000 steps), top-down and in perspective; ``draws``
-  says how many frames drew.
+  draws a new step; 5 s play 600 of the 1000 steps): top-down, and in perspective twice, at
+  full resolution (adaptive resolution off) and with the page's default adaptive resolution
+  (the mean drawing-buffer scale per axis is printed); ``draws`` says how many frames drew;
+- CPU time of all the browser's processes per frame [ms]: what a frame costs, which the frame
+  rate shows only on an otherwise idle machine (Linux: read from /proc).
 
 The APF parameters are its defaults; the run is only a source of 1000 realistic paths.
 """
@@ -19,6 +22,7 @@ The APF parameters are its defaults; the run is only a source of 1000 realistic 
 from __future__ import annotations
 
 import argparse
+import os
 import tempfile
 import time
 from pathlib import Path
@@ -86,6 +90,23 @@ def scene_text() -> str:
     return "\n".join(parts)
 
 
+def cpu_seconds(pid: int) -> float:
+    """CPU time (user + system) of a process and all its descendants [s], from /proc."""
+    total, todo = 0.0, [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            for task in os.listdir(f"/proc/{p}/task"):
+                with open(f"/proc/{p}/task/{task}/children") as f:
+                    todo += [int(c) for c in f.read().split()]
+            with open(f"/proc/{p}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+        except OSError:  # a process that ended meanwhile
+            pass
+    return total
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=5.0, help="play time per view for the frame count [s]")
@@ -121,21 +142,29 @@ def main() -> None:
             first = "top-down" if args.dim == 2 else "perspective, three.js loaded"
             print(f"open time: {opened:.2f} s from navigation to the first frame ({first}), data decoded  "
                   f"(target <= 2 s)")
-            for view in ("top", "persp"):
+            for view, resolution, name in (("top", "full", "top-down"),
+                                           ("persp", "full", "perspective, full resolution"),
+                                           ("persp", "adaptive", "perspective, adaptive resolution")):
                 b.eval(f"window.swarmnav.view('{view}')")
+                b.eval(f"window.swarmnav.resolution('{resolution}')")
                 b.eval("window.swarmnav.seek(0)")
                 before = b.eval("window.swarmnav.stats()")
+                cpu0 = cpu_seconds(b.proc.pid)
                 b.eval("window.swarmnav.play(12)")
                 t0 = time.perf_counter()
                 time.sleep(args.seconds)
                 after = b.eval("window.swarmnav.stats()")
                 dt = time.perf_counter() - t0
+                cpu = cpu_seconds(b.proc.pid) - cpu0
                 b.eval("window.swarmnav.pause()")
                 frames, draws = after["frames"] - before["frames"], after["draws"] - before["draws"]
                 ms = (after["drawMs"] - before["drawMs"]) / max(draws, 1)
-                name = "top-down" if view == "top" else "perspective"
-                print(f"{name:12s}: {frames / dt:.1f} fps ({frames} frames in {dt:.1f} s, {draws} drew a new step; "
-                      f"{ms:.1f} ms of drawing per frame)  (target >= 30 fps)")
+                scale = (after["scaleSum"] - before["scaleSum"]) / max(draws, 1)
+                print(f"{name}: {frames / dt:.1f} fps  (target >= 30 fps)\n"
+                      f"    {frames} frames in {dt:.1f} s, {draws} drew a new step; page script {ms:.1f} ms, "
+                      f"browser CPU {1000 * cpu / max(frames, 1):.0f} ms per frame"
+                      + (f"; mean drawing-buffer scale {scale:.2f}" if resolution == "adaptive" else ""))
+            print(f"load average at the end: {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores)")
             if b.errors:
                 print("page errors:", *b.errors, sep="\n  ")
 

@@ -2,9 +2,12 @@
 protocol (swarmnav.viz.headless). The page loads with no console error and fetches nothing;
 the agents it draws at step k are the stored ones within the quantisation error, top-down and
 in perspective; event marks, keys and the agent read-out work; screenshots of a planar run,
-the same run in perspective and a 3-D run are drawn and differ."""
+the same run in perspective and a 3-D run are drawn and differ; adaptive resolution lowers the
+perspective view's drawing buffer only while playing, and can be switched off."""
 
 from __future__ import annotations
+
+import time
 
 import numpy as np
 import pytest
@@ -173,3 +176,41 @@ def test_recorded_roles_are_marked_and_read_out(runs, browser):
     # a run without roles says so instead of guessing
     _open(browser, runs["solid"])
     assert browser.eval("swarmnav.agent(3).role") == "not recorded"
+
+
+def _wait_for(browser: Browser, expression: str, seconds: float = 20.0):
+    """Poll a JavaScript expression until it is truthy (or the time is up); returns its value."""
+    deadline = time.monotonic() + seconds
+    while not (value := browser.eval(expression)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return value
+
+
+def test_adaptive_resolution_lowers_the_drawing_buffer_while_playing_and_restores_it_on_pause(runs, browser):
+    res = RunResult.load(runs["planar"])
+    info = _open(browser, runs["planar"])
+    browser.eval("swarmnav.view('persp')")
+    width = "document.querySelector('#persp canvas').width"
+    full = browser.eval(width)
+    assert full == browser.eval("document.getElementById('stage').clientWidth")
+    assert browser.eval("swarmnav.resolution()") == {"mode": "adaptive", "budget": pytest.approx(1000 / 30), "scale": 1}
+    # a frame budget of 1 ms, which no frame meets: while playing, the scale steps down to half
+    browser.eval("swarmnav.resolution('adaptive', 1)")
+    browser.eval("swarmnav.seek(0)")
+    browser.eval("swarmnav.play(2)")
+    assert _wait_for(browser, "swarmnav.resolution().scale === 0.5"), browser.eval("swarmnav.resolution()")
+    assert browser.eval(width) == round(full * 0.5)
+    # a seek pauses and draws at full resolution, where the stored trajectory is
+    assert browser.eval("swarmnav.seek(137)") == 137
+    assert browser.eval("swarmnav.resolution().scale") == 1 and browser.eval(width) == full
+    drawn = np.array(browser.eval("swarmnav.positions()"))
+    assert np.linalg.norm(drawn[:, :2] - res.positions[137], axis=1).max() <= info["error"] + READBACK
+    # switched off (the page's check box): full resolution whatever the frames take
+    browser.eval("document.getElementById('adaptive').click()")
+    assert browser.eval("swarmnav.resolution().mode") == "full"
+    browser.eval("swarmnav.play(2)")
+    drawn_before = browser.eval("swarmnav.stats().draws")
+    assert _wait_for(browser, f"swarmnav.stats().draws > {drawn_before} + 20")
+    assert browser.eval("swarmnav.resolution().scale") == 1 and browser.eval(width) == full
+    browser.eval("swarmnav.pause()")
+    assert browser.errors == []

@@ -61,7 +61,7 @@
   // ------------------------------------------------------------------ state
   let k = 0, kf = 0, playing = false, rate = 1, view = DIM === 3 ? 'persp' : 'top', showTrails = true;
   let dirty = true, selected = -1, hovered = -1;
-  const stats = {frames: 0, draws: 0, drawMs: 0, readyMs: null, t0: performance.now()};
+  const stats = {frames: 0, draws: 0, drawMs: 0, scaleSum: 0, readyMs: null, t0: performance.now()};
   const fmt = (x, n = 2) => (x === null || x === undefined || !isFinite(x)) ? 'n/a' : x.toFixed(n);
 
   // ------------------------------------------------------------------ top-down view
@@ -218,7 +218,7 @@
     // agents. No page keeps its drawing buffer (screenshots capture it all the same), and the
     // canvas is opaque, so the compositor need not blend it.
     const renderer = new THREE.WebGLRenderer({antialias: !LARGE, alpha: false, preserveDrawingBuffer: false});
-    renderer.setPixelRatio(window.devicePixelRatio || 1);
+    renderer.setPixelRatio((window.devicePixelRatio || 1) * RES.scale);
     renderer.setClearColor(0xf4f6f8);
     persp.appendChild(renderer.domElement);
     const scene = new THREE.Scene();
@@ -497,10 +497,34 @@
     }
   }
 
+  // ------------------------------------------------------------------ adaptive resolution
+  // While the perspective view plays, drawn frames that take longer than the budget (1/30 s,
+  // mean of 8) lower the drawing buffer's resolution one step (1, 0.75, 0.5 of the page's pixel
+  // ratio per axis; the browser scales the picture up to the canvas) until the next pause; a
+  // pause, a step or a seek draws at full resolution. Off ('full'): always full resolution.
+  const RES = {adaptive: true, scale: 1, budget: 1000 / 30, steps: [1, 0.75, 0.5], recent: []};
+  function setScale(x) {
+    if (x === RES.scale) return;
+    RES.scale = x; RES.recent.length = 0;
+    if (G) { G.renderer.setPixelRatio((window.devicePixelRatio || 1) * x); dirty = true; }
+  }
+  function adapt(ms) {  // ms: how long the last drawn frame took, to the next frame [ms]
+    RES.recent.push(ms);
+    if (RES.recent.length < 8) return;  // the mean of 8 frames, after each change anew
+    const mean = RES.recent.reduce((a, b) => a + b) / RES.recent.length, j = RES.steps.indexOf(RES.scale);
+    RES.recent.shift();
+    if (mean > RES.budget && j + 1 < RES.steps.length) setScale(RES.steps[j + 1]);
+  }
+  function setResolution(mode, budget) {
+    RES.adaptive = mode !== 'full'; $('adaptive').checked = RES.adaptive;
+    if (budget) RES.budget = budget;
+    if (!RES.adaptive) setScale(1);
+  }
+
   // ------------------------------------------------------------------ controls, loop
   function seek(s) { k = Math.max(0, Math.min(K, Math.round(s))); kf = k; scrub.value = k; dirty = true; return k; }
   function play() { if (k >= K) seek(0); playing = true; playBtn.innerHTML = '&#10074;&#10074;'; }
-  function pause() { playing = false; playBtn.innerHTML = '&#9654;'; }
+  function pause() { playing = false; setScale(1); RES.recent.length = 0; playBtn.innerHTML = '&#9654;'; }
   function setView(v) {
     view = v; viewSel.value = v; top.hidden = v !== 'top'; persp.hidden = v !== 'persp'; dirty = true;
     return v === 'persp' ? initPersp().then(() => { layoutPersp(G); render(); }) : Promise.resolve(render());
@@ -512,16 +536,17 @@
     const tip = hovered >= 0 ? hovered : selected;
     if (tip >= 0) showTip(tip);
     $('clock').textContent = `step ${k} / ${K}   t = ${fmt(k * DT, 1)} s   sub-swarms ${NSUB[k]}`;
-    stats.draws++; stats.drawMs += performance.now() - t; dirty = false;
+    stats.draws++; stats.drawMs += performance.now() - t; stats.scaleSum += view === 'persp' ? RES.scale : 1; dirty = false;
   }
-  let lastT = null, tipXY = [0, 0];
+  let lastT = null, drewLast = false, tipXY = [0, 0];
   function frame(t) {
     stats.frames++;
+    if (drewLast && playing && view === 'persp' && RES.adaptive) adapt(t - lastT);
     if (playing) {
       if (lastT !== null) { kf = Math.min(K, kf + rate * (t - lastT) / 1000 / DT); if (Math.floor(kf) !== k) { k = Math.floor(kf); scrub.value = k; dirty = true; } }
       if (k >= K) pause();
     }
-    lastT = t;
+    lastT = t; drewLast = dirty;
     if (dirty) render();
     requestAnimationFrame(frame);
   }
@@ -547,6 +572,7 @@
   chart.addEventListener('click', ev => { pause(); const r = chart.getBoundingClientRect(); seek((ev.clientX - r.left - CH.pad) / (r.width - 2 * CH.pad) * K); });
   viewSel.addEventListener('change', () => setView(viewSel.value));
   $('trails').addEventListener('change', ev => { showTrails = ev.target.checked; dirty = true; });
+  $('adaptive').addEventListener('change', ev => setResolution(ev.target.checked ? 'adaptive' : 'full'));
   const RATES = [0.25, 0.5, 1, 2, 5, 10, 20, 50, 100];
   for (const x of RATES) speedSel.add(new Option(`${x}x`, x));
   speedSel.addEventListener('change', () => { rate = +speedSel.value; });
@@ -619,7 +645,13 @@
     },
     /** What the tooltip says of agent i at the current step. */
     agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i)}),
-    stats: () => ({...stats, playing}),
+    stats: () => ({...stats, playing, scale: RES.scale}),
+    /** Adaptive resolution of the perspective view: 'adaptive' (the default) or 'full', and
+     * optionally the frame budget [ms] (1000 / 30); returns the mode, budget and current scale. */
+    resolution(mode, budget) {
+      if (mode) setResolution(mode, budget);
+      return {mode: RES.adaptive ? 'adaptive' : 'full', budget: RES.budget, scale: RES.scale};
+    },
     /** The perspective renderer, once loaded: 'three.js r185'. */
     renderer: () => G ? `three.js r${G.THREE.REVISION}` : null,
   };
