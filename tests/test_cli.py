@@ -150,6 +150,22 @@ def test_experiment_sweep_syntax(tmp_path):
     assert exp.variants[0].name == "default_corridor[k_att=1]"
 
 
+def test_spec_params_take_nested_tables_as_dotted_names(tmp_path, capsys):
+    from swarmnav.experiments import load_experiment
+
+    spec = tmp_path / "s.toml"
+    spec.write_text('name = "s"\nmethod = "hes"\nscenario = "default_corridor"\nsteps = 5\n'
+                    '[params]\npassage.on = false\n[params.stall]\non = false\n'
+                    '[[variants]]\nname = "a"\n[variants.params]\nablation.safety_stack_off = true\n')
+    (v,) = load_experiment(str(spec), seeds="1").variants
+    assert v.params == {"passage.on": False, "stall.on": False, "ablation.safety_stack_off": True}
+    sim2 = {x.name: x.params for x in load_experiment("hes-sim2", seeds="1").variants}
+    assert sim2["safety_stack_off"]["ablation.safety_stack_off"] is True
+    spec.write_text('name = "s"\nmethod = "hes"\nscenario = "default_corridor"\nsteps = 5\nparams = 3\n')
+    assert main(["experiment", "--spec", str(spec), "--seeds", "1", "--out", str(tmp_path / "o")]) == 2
+    assert "params must be a table" in capsys.readouterr().err
+
+
 def test_readme_main_job_command(tmp_path, capsys):
     """The README's main job: a 1000-step HES run with its figure (kept short here)."""
     out = tmp_path / "demo"
@@ -209,7 +225,7 @@ def test_methods_name_lists_every_parameter_with_unit_range_and_source(capsys):
             assert f" {info.unit} " in row if info.unit else " - " in row
     main(["methods", "hes"])
     out = capsys.readouterr().out
-    assert "faithful   passage_mode=false agent_guard=false stall_plan=false trail_follow=false split_commit=false" in out
+    assert "faithful   passage.on=false guard.on=false stall.on=false trail.on=false commit.on=false" in out
     assert "dt" in out and "[0.0001, 1]" in out and "Section 5.1" in out
 
 

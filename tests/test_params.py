@@ -18,7 +18,7 @@ import swarmnav
 from swarmnav.cli import main
 from swarmnav.errors import ConfigError, SwarmnavError
 from swarmnav.methods import registry
-from swarmnav.params import Range, describe, presets
+from swarmnav.params import Range, aliases, as_dict, build, describe, presets
 
 METHODS = registry.names()
 #: (method, ParamInfo) for every numeric parameter of every registered method.
@@ -79,12 +79,14 @@ def test_presets_name_real_parameters_with_valid_values(method):
     for name, values in presets(cls).items():
         built = registry.make(method, preset=name)  # through the one builder: ranges checked
         for k, v in values.items():
-            assert getattr(built.params, k) == v, (name, k)
+            assert as_dict(built.params)[k] == v, (name, k)
 
 
 def test_a_preset_then_overrides_on_top():
-    m = registry.make("hes", preset="faithful", passage_mode=True)
-    assert m.params.passage_mode is True and m.params.stall_plan is False
+    m = registry.make("hes", preset="faithful", passage_mode=True)  # an old flat name, on top of the preset
+    assert m.params.passage.on is True and m.params.stall.on is False
+    m = registry.make("hes", **{"preset": "faithful", "passage.on": "true"})
+    assert m.params.passage.on is True and m.params.stall.on is False
     with pytest.raises(ConfigError, match="unknown preset 'faithfull' .*did you mean faithful"):
         registry.make("hes", preset="faithfull")
 
@@ -209,3 +211,35 @@ def test_the_python_api_refuses_what_the_cli_refuses():
     for bad in ({"dt": -0.1}, {"dt": 0.0}, {"a_max": -1.0}, {"n_rays": 0}, {"lidar_range": -5.0}, {"k_rep": math.inf}):
         with pytest.raises(SwarmnavError):
             swarmnav.run("apf", scn, seed=1, steps=2, **bad)
+
+
+def test_nested_records_take_dotted_names_and_the_old_flat_names():
+    cls = registry.spec("hes").params
+    dotted = build(cls, {"paper.k_p": "0.5", "passage.margin": 0.25, "stall.on": "false"})
+    flat = build(cls, {"k_p": 0.5, "passage_margin": "0.25", "stall_plan": False})
+    assert dotted == flat
+    assert dotted.paper.k_p == 0.5 and dotted.passage.margin == 0.25 and dotted.stall.on is False
+    assert dotted.paper.k_v == cls().paper.k_v  # untouched fields keep their defaults
+    for old, new in aliases(cls).items():  # every alias names a real parameter
+        assert new in as_dict(cls()), (old, new)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_as_dict_rebuilds_the_record(method):
+    cls = registry.spec(method).params
+    for name in ["", *presets(cls)]:
+        p = build(cls, {"preset": name} if name else {})
+        assert build(cls, as_dict(p)) == p
+        assert [i.name for i in describe(cls)] == list(as_dict(p))
+
+
+def test_nested_errors_name_the_dotted_key():
+    cls = registry.spec("hes").params
+    with pytest.raises(ConfigError, match=r"passage\.margin must be in \[0, inf\) m, got -1.0"):
+        build(cls, {"passage.margin": -1})
+    with pytest.raises(ConfigError, match=r"passage_margin must be|passage\.margin must be"):
+        build(cls, {"passage_margin": -1})
+    with pytest.raises(ConfigError, match=r"unknown parameter 'passage\.margn' \(did you mean passage\.margin"):
+        build(cls, {"passage.margn": 1})
+    with pytest.raises(ConfigError, match=r"unknown parameter 'passage'"):
+        build(cls, {"passage": False})  # a record is not a value: its switch is passage.on

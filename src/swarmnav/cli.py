@@ -127,7 +127,7 @@ def _print_params(spec, out) -> None:
     import shutil
     import textwrap
 
-    from swarmnav.params import describe, presets
+    from swarmnav.params import aliases, describe, presets
 
     def shown(v) -> str:
         return ("true" if v else "false") if isinstance(v, bool) else ('""' if v == "" else f"{v:g}" if isinstance(v, float) else str(v))
@@ -145,6 +145,10 @@ def _print_params(spec, out) -> None:
         for name, values in table.items():
             body = " ".join(f"{k}={shown(v)}" for k, v in values.items()) or "the defaults"
             print(f"  {name:10s} {body}", file=out)
+    old = aliases(spec.params)
+    if old:
+        print(f"older flat names are accepted too ({len(old)}, e.g. {', '.join(f'{k} = {v}' for k, v in list(old.items())[:2])})",
+              file=out)
     rows = [(i.name, shown(i.default), i.unit or "-", i.valid, i.source, i.doc) for i in describe(spec.params)]
     head = ("parameter", "default", "unit", "valid", "source", "meaning")
     widths = [max(len(r[c]) for r in [head, *rows]) for c in range(5)]

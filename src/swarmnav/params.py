@@ -110,13 +110,10 @@ class ParamInfo:
 
 
 def describe(cls: type) -> list[ParamInfo]:
-    """Every parameter of record class ``cls``, in declaration order."""
-    hints = typing.get_type_hints(cls)
+    """Every parameter of record class ``cls``, in declaration order; the fields of a nested record
+    are listed under dotted names (``passage.margin``)."""
     out = []
-    for f in dataclasses.fields(cls):
-        if not f.init:
-            continue
-        typ = hints[f.name]
+    for name, f, typ in _leaves(cls):
         choices: tuple[Any, ...] = ()
         if typ is bool:
             kind = "bool"
@@ -129,9 +126,29 @@ def describe(cls: type) -> list[ParamInfo]:
         else:
             kind = "text"
         md = f.metadata
-        out.append(ParamInfo(f.name, kind, f.default, md.get("unit", ""), md.get("range"), choices,
+        out.append(ParamInfo(name, kind, f.default, md.get("unit", ""), md.get("range"), choices,
                              md.get("source", ""), md.get("doc", "")))
     return out
+
+
+def _leaves(cls: type, prefix: str = "") -> list[tuple[str, dataclasses.Field, Any]]:
+    """(dotted name, field, type) of every parameter of ``cls``, nested records flattened."""
+    hints = typing.get_type_hints(cls)
+    out = []
+    for f in dataclasses.fields(cls):
+        if not f.init:
+            continue
+        typ = hints[f.name]
+        if dataclasses.is_dataclass(typ):
+            out.extend(_leaves(typ, f"{prefix}{f.name}."))
+        else:
+            out.append((prefix + f.name, f, typ))
+    return out
+
+
+def aliases(cls: type) -> dict[str, str]:
+    """Old (flat) parameter names of record class ``cls`` -> their current (dotted) names."""
+    return dict(getattr(cls, "ALIASES", {}))
 
 
 def presets(cls: type) -> dict[str, dict[str, Any]]:
@@ -153,24 +170,52 @@ def build(cls: type[T], overrides: Mapping[str, Any] | None = None, *, context: 
     if not overrides:
         return base
     where = f"{context}: " if context else ""
-    overrides = dict(overrides)
+    alias = aliases(cls)
+    overrides = {alias.get(k, k): v for k, v in flatten(overrides).items()}
     if "preset" in overrides:
         name = str(overrides.pop("preset"))
         table = presets(cls)
         if name not in table:
             known = ", ".join(sorted(table)) or "none"
             raise ConfigError(f"{where}unknown preset '{name}'{_did_you_mean(name, table)}; known: {known}")
-        overrides = {**table[name], **overrides}
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
-    hints = typing.get_type_hints(cls)
+        overrides = {**{alias.get(k, k): v for k, v in table[name].items()}, **overrides}
+    fields = {name: (f, typ) for name, f, typ in _leaves(cls)}
     changes = {}
     for key, value in overrides.items():
         if key not in fields:
-            raise ConfigError(f"{where}unknown parameter '{key}'{_did_you_mean(key, fields)}; "
+            raise ConfigError(f"{where}unknown parameter '{key}'{_did_you_mean(key, [*fields, *alias])}; "
                               f"known: {', '.join(sorted(fields))}")
-        changes[key] = value = coerce(value, hints[key], f"{where}{key}")
-        _check_range(fields[key], value, where)
-    return dataclasses.replace(base, **changes)
+        f, typ = fields[key]
+        changes[key] = value = coerce(value, typ, f"{where}{key}")
+        _check_range(key, f, value, where)
+    return _replace(base, changes)
+
+
+def flatten(values: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested mappings to dotted keys: ``{"passage": {"on": False}}`` -> ``{"passage.on": False}``
+    (a TOML table ``[params.passage]`` or the dotted TOML key ``passage.on = false`` reads as the former)."""
+    out: dict[str, Any] = {}
+    for key, value in values.items():
+        if isinstance(value, Mapping):
+            out.update(flatten(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def _replace(record: Any, changes: Mapping[str, Any]) -> Any:
+    """``record`` with dotted-name ``changes`` applied (nested records replaced, not mutated)."""
+    own: dict[str, Any] = {}
+    nested: dict[str, dict[str, Any]] = {}
+    for key, value in changes.items():
+        head, dot, rest = key.partition(".")
+        if dot:
+            nested.setdefault(head, {})[rest] = value
+        else:
+            own[key] = value
+    for head, sub in nested.items():
+        own[head] = _replace(getattr(record, head), sub)
+    return dataclasses.replace(record, **own) if own else record
 
 
 def _did_you_mean(key: str, known) -> str:
@@ -179,13 +224,13 @@ def _did_you_mean(key: str, known) -> str:
     return f" (did you mean {', '.join(close)}?)" if close else ""
 
 
-def _check_range(f: dataclasses.Field, value: Any, where: str) -> None:
+def _check_range(name: str, f: dataclasses.Field, value: Any, where: str) -> None:
     rng = f.metadata.get("range")
     if rng is None or value is None or isinstance(value, bool):
         return
     if value not in rng:
         unit = f.metadata.get("unit", "")
-        raise ConfigError(f"{where}{f.name} must be in {rng}{' ' + unit if unit else ''}, got {value!r}")
+        raise ConfigError(f"{where}{name} must be in {rng}{' ' + unit if unit else ''}, got {value!r}")
 
 
 def coerce(value: Any, typ: Any, name: str) -> Any:
@@ -243,5 +288,15 @@ def coerce(value: Any, typ: Any, name: str) -> Any:
 
 
 def as_dict(record: Any) -> dict[str, Any]:
-    """Parameter record to a plain JSON-able dict."""
-    return {f.name: getattr(record, f.name) for f in dataclasses.fields(record) if f.init}
+    """Parameter record to a plain JSON-able dict; nested records under dotted names, so that
+    ``build(type(record), as_dict(record)) == record``."""
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(record):
+        if not f.init:
+            continue
+        value = getattr(record, f.name)
+        if dataclasses.is_dataclass(value):
+            out.update({f"{f.name}.{k}": v for k, v in as_dict(value).items()})
+        else:
+            out[f.name] = value
+    return out

@@ -44,7 +44,7 @@ from typing import Any
 
 from swarmnav.errors import ConfigError
 from swarmnav.experiments.paired import check_variants
-from swarmnav.params import coerce
+from swarmnav.params import coerce, flatten
 
 _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "seeds", "n", "params", "variants",
               "matrix",
@@ -116,7 +116,7 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         raise ConfigError(f"{source}: unknown key(s) {sorted(bad)} (allowed: {sorted(_SPEC_KEYS)})")
     name = data.get("name", Path(source).stem)
     base = {k: data[k] for k in _RUN_KEYS if k in data}
-    base_params = dict(data.get("params", {}))
+    base_params = _params(data.get("params", {}), f"{source}: params")
     raw_variants = list(data.get("variants", []))
     matrix = data.get("matrix", {})
     if not isinstance(matrix, dict) or set(matrix) - _MATRIX_KEYS:
@@ -142,7 +142,7 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
                 raise ConfigError(f"{source}: variants[{k}] has no '{req}' (set it in the variant or at top level)")
         if "steps" not in cfg and "horizon" not in cfg:
             raise ConfigError(f"{source}: variants[{k}] has no 'steps' or 'horizon' (set one in the variant or at top level)")
-        params = {**base_params, **v.get("params", {})}
+        params = {**base_params, **_params(v.get("params", {}), f"{source}: variants[{k}].params")}
         horizon = float(cfg["horizon"]) if "horizon" in cfg and "steps" not in v else None
         if horizon is not None:
             cfg["steps"] = steps_for(str(cfg["method"]), params, horizon)
@@ -167,6 +167,13 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         raise ConfigError(f"{source}: variant names must be unique, got {names}")
     return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants),
                       seeds=seed_list, report=dict(report))
+
+
+def _params(table: Any, where: str) -> dict[str, Any]:
+    """A params table, nested tables as dotted names (``[params.passage] on = false`` is ``passage.on``)."""
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} must be a table of KEY = VALUE, got {table!r}")
+    return flatten(table)
 
 
 def _check_params(variants: list[Variant], source: str) -> None:

@@ -12,7 +12,7 @@ from swarmnav.methods.hes.params import HesParams
 
 P = HesParams()
 G = F.gain_vector(P)
-DS = np.full(4, P.d_safe)  # the paper's d_safe for every agent of the 4-agent cases
+DS = np.full(4, P.paper.d_safe)  # the paper's d_safe for every agent of the 4-agent cases
 R = 360
 TH = 2 * np.pi * np.arange(R) / R
 COS, SIN = np.cos(TH), np.sin(TH)
@@ -25,7 +25,7 @@ def test_table_a1_gains_are_the_papers():
               d_safe=1.5, sigma_occ=0.2, t_cd=10.0, r_in=8.0, r_out=11.0, r_merge=12.0, d_merge=8.0, w_sl=1.0,
               w_c=0.5, delta_min=2.0, tau_ra=2.0, n_move_max=3, dt=0.1)
     for k, v in a1.items():
-        assert getattr(P, k) == v, k
+        assert getattr(P.paper, k) == v, k
     from swarmnav.methods.hes import Hes
 
     dyn = Hes().dynamics
@@ -87,15 +87,15 @@ def test_nearest_in_group():
 
 def omega(d):
     """Eq. (36), transcribed."""
-    w = P.k_rep * max(0, 1 / d - 1 / P.r_trigger) / d**2 * (1 + P.k_b * (max(0, P.r_trigger - d) / P.r_trigger) ** P.gamma)
-    return w + (P.k_e * (P.d_safe - d + 1) ** 2 if d < P.d_safe else 0.0)
+    w = P.paper.k_rep * max(0, 1 / d - 1 / P.paper.r_trigger) / d**2 * (1 + P.paper.k_b * (max(0, P.paper.r_trigger - d) / P.paper.r_trigger) ** P.paper.gamma)
+    return w + (P.paper.k_e * (P.paper.d_safe - d + 1) ** 2 if d < P.paper.d_safe else 0.0)
 
 
 @pytest.mark.parametrize("d", [0.8, 1.49, 1.51, 3.0, 13.0])
 def test_lidar_repulsion_eq35_37_single_minimum(d):
     ring = np.full((1, R), 20.0)
     ring[0, 85:96] = d + 0.01 * np.abs(np.arange(85, 96) - 90)  # a dip with its minimum on ray 90
-    f = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, P.d_safe, 0.05)
+    f = F.lidar_repulsion(ring, COS, SIN, P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, P.paper.k_e, P.paper.d_safe, 0.05)
     np.testing.assert_allclose(f[0], [-omega(d) * COS[90], -omega(d) * SIN[90]], atol=1e-12)
 
 
@@ -133,15 +133,15 @@ def test_force_terms_match_the_terms_and_sum():
     nav = np.ones(4, dtype=bool)
     sig = np.ones((4, 4))
     t = F.force_terms(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G, DS)
-    np.testing.assert_allclose(t[0], F.attraction(x, v, slot, vslot, P.k_p, P.k_v))
-    np.testing.assert_allclose(t[1], F.separation(x, group, P.k_sep, P.r_sep, P.d_floor, False))
-    np.testing.assert_allclose(t[2], F.centering(x, wp, P.k_path))
-    np.testing.assert_allclose(t[3], F.spring(x, x[nn], P.k_intra, P.d_thr, nn >= 0))
-    np.testing.assert_allclose(t[4], F.separation(x, group, P.k_ir, P.d_ir, P.d_floor, True))
-    np.testing.assert_allclose(t[5], F.spring(x, slp, P.k_l, P.d_0, follower) + F.velocity_match(v, slv, P.k_vl, follower))
-    np.testing.assert_allclose(t[6], F.spring(x, cent, P.k_coh, P.d_c, np.ones(4, dtype=bool)))
-    np.testing.assert_allclose(t[7], F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e,
-                                                       P.d_safe, P.d_floor))
+    np.testing.assert_allclose(t[0], F.attraction(x, v, slot, vslot, P.paper.k_p, P.paper.k_v))
+    np.testing.assert_allclose(t[1], F.separation(x, group, P.paper.k_sep, P.core.r_sep, P.core.d_floor, False))
+    np.testing.assert_allclose(t[2], F.centering(x, wp, P.paper.k_path))
+    np.testing.assert_allclose(t[3], F.spring(x, x[nn], P.paper.k_intra, P.core.d_thr, nn >= 0))
+    np.testing.assert_allclose(t[4], F.separation(x, group, P.paper.k_ir, P.core.d_ir, P.core.d_floor, True))
+    np.testing.assert_allclose(t[5], F.spring(x, slp, P.paper.k_l, P.core.d_0, follower) + F.velocity_match(v, slv, P.paper.k_vl, follower))
+    np.testing.assert_allclose(t[6], F.spring(x, cent, P.paper.k_coh, P.core.d_c, np.ones(4, dtype=bool)))
+    np.testing.assert_allclose(t[7], F.lidar_repulsion(ring, COS, SIN, P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, P.paper.k_e,
+                                                       P.paper.d_safe, P.core.d_floor))
     assert np.all(t[5][~follower] == 0)  # subleaders have no coupling term
     a = F.synthesize(x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn, sig, ring, COS, SIN, G, DS)
     np.testing.assert_allclose(a, t.sum(axis=0))
@@ -154,10 +154,10 @@ def test_occlusion_scales_exactly_its_attraction_term(column, term):
     args = (x, v, group, slp, slv, follower, cent, wp, nav, slot, vslot, nn)
     free = F.force_terms(*args, np.ones((4, 4)), ring, COS, SIN, G, DS)
     sig = np.ones((4, 4))
-    sig[1, column] = P.sigma_occ  # agent 1's segment to this target is blocked
+    sig[1, column] = P.paper.sigma_occ  # agent 1's segment to this target is blocked
     occ = F.force_terms(*args, sig, ring, COS, SIN, G, DS)
     expect = free.copy()
-    expect[term, 1] *= P.sigma_occ
+    expect[term, 1] *= P.paper.sigma_occ
     np.testing.assert_array_equal(occ, expect)
 
 
@@ -235,12 +235,12 @@ def _follow(lead_brake_step, v0=3.0, gap0=4.0, steps=200):
     active = np.array([True, False])
     d_min = np.inf
     for k in range(steps):
-        a = np.array([[P.a_max, 0.0], [0.0, 0.0]])
+        a = np.array([[P.paper.a_max, 0.0], [0.0, 0.0]])
         if k >= lead_brake_step:
-            a[1, 0] = -min(P.a_max, v[1, 0] / P.dt)
-        a = F.saturate(B.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max), P.a_max)
-        v = v + P.dt * a
-        x = x + P.dt * v
+            a[1, 0] = -min(P.paper.a_max, v[1, 0] / P.paper.dt)
+        a = F.saturate(B.agent_barrier(a, x, v, active, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max), P.paper.a_max)
+        v = v + P.paper.dt * a
+        x = x + P.paper.dt * v
         d_min = min(d_min, x[1, 0] - x[0, 0])
     return d_min
 
@@ -250,12 +250,12 @@ def test_agent_barrier_follower_never_reaches_the_contact_distance(brake_at):
     # The follower pushes toward the leader at a_max while the leader brakes to a stop at a_max:
     # with the barrier the gap stays above the 0.4 m contact distance of the collision metric
     # (discrete-time slack of one step at <= 3.9 m/s: 0.1 m below agent_margin = 0.6 m).
-    assert _follow(brake_at) >= P.agent_margin - 0.1
+    assert _follow(brake_at) >= P.passage.agent_margin - 0.1
     # without it (inactive) the follower runs into the leader
     x = np.array([[0.0, 0.0], [4.0, 0.0]])
-    a = np.array([[P.a_max, 0.0], [0.0, 0.0]])
+    a = np.array([[P.paper.a_max, 0.0], [0.0, 0.0]])
     v = np.array([[3.0, 0.0], [2.0, 0.0]])
-    out = B.agent_barrier(a, x, v, np.array([False, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    out = B.agent_barrier(a, x, v, np.array([False, False]), P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max)
     np.testing.assert_allclose(out, a, atol=1e-12)
 
 
@@ -265,18 +265,18 @@ def test_agent_barrier_only_brakes():
     x = np.array([[0.0, 0.0], [0.8, 0.0]])
     v = np.array([[0.0, 0.0], [-3.0, 0.0]])
     a = np.zeros((2, 2))
-    out = B.agent_barrier(a, x, v, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    out = B.agent_barrier(a, x, v, np.array([True, False]), P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max)
     np.testing.assert_array_equal(out[0], [0.0, 0.0])
     v2 = np.array([[-1.0, 2.0], [0.0, 0.0]])
-    out2 = B.agent_barrier(a, x, v2, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
+    out2 = B.agent_barrier(a, x, v2, np.array([True, False]), P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max)
     np.testing.assert_allclose(out2[0], [0.0, 0.0], atol=1e-12)
     # closing at 2 m/s from 1 m: the closing part is cut to sqrt(2 a_brake (1 - agent_margin)),
     # the sideways part is kept
     v3 = np.array([[2.0, 1.0], [0.0, 0.0]])
     x3 = np.array([[0.0, 0.0], [1.0, 0.0]])
-    out3 = B.agent_barrier(a, x3, v3, np.array([True, False]), P.dt, P.agent_brake, P.agent_margin, P.a_max)
-    w = v3[0] + P.dt * out3[0]
-    assert w[0] == pytest.approx(math.sqrt(2 * P.agent_brake * (1.0 - P.agent_margin)))
+    out3 = B.agent_barrier(a, x3, v3, np.array([True, False]), P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max)
+    w = v3[0] + P.paper.dt * out3[0]
+    assert w[0] == pytest.approx(math.sqrt(2 * P.passage.agent_brake * (1.0 - P.passage.agent_margin)))
     assert w[1] == pytest.approx(1.0)
 
 
@@ -288,12 +288,12 @@ def _guarded_rollout(x, v, target_acc, steps=150, guard=True):
     d_min, a_top = np.inf, 0.0
     n = x.shape[0]
     for _ in range(steps):
-        a = F.saturate(target_acc(x, v), P.a_max)
+        a = F.saturate(target_acc(x, v), P.paper.a_max)
         if guard:
-            a = B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
+            a = B.agent_guard(a, x, v, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max)
         a_top = max(a_top, float(np.linalg.norm(a, axis=1).max()))
-        v = v + P.dt * a
-        x = x + P.dt * v
+        v = v + P.paper.dt * a
+        x = x + P.paper.dt * v
         d = np.linalg.norm(x[:, None] - x[None], axis=-1) + np.diag(np.full(n, np.inf))
         d_min = min(d_min, float(d.min()))
     return d_min, a_top, x
@@ -315,8 +315,8 @@ def test_agent_guard_head_on_pair_never_touches(speed, offset):
 
     d_min, a_top, end = _guarded_rollout(x, v, push)
     assert d_min >= 0.4
-    assert d_min >= P.guard_margin - 0.1
-    assert a_top <= P.a_max + 1e-9
+    assert d_min >= P.guard.margin - 0.1
+    assert a_top <= P.paper.a_max + 1e-9
     if offset == 0.0:  # exactly head-on: they stop, neither slides past (sideways passing is allowed)
         assert end[1, 0] > end[0, 0]
         d_off, _, end_off = _guarded_rollout(x, v, push, guard=False)
@@ -337,7 +337,7 @@ def test_agent_guard_agents_converging_on_one_point_never_touch(n, speed):
     v = -speed * np.column_stack([np.cos(th), np.sin(th)])
     d_min, a_top, _ = _guarded_rollout(x, v, lambda x, v: -100.0 * x, steps=200)
     assert d_min >= 0.4
-    assert a_top <= P.a_max + 1e-9
+    assert a_top <= P.paper.a_max + 1e-9
     assert _guarded_rollout(x, v, lambda x, v: -100.0 * x, steps=200, guard=False)[0] < 0.4
 
 
@@ -347,23 +347,23 @@ def test_agent_guard_priority_over_the_clip():
     # sideways rest is scaled down to keep the norm at a_max, not the braking.
     x = np.array([[0.0, 0.0], [1.0, 0.0]])
     v = np.array([[1.6, 0.0], [0.0, 0.0]])
-    a = np.array([[0.0, P.a_max], [0.0, 0.0]])
-    out = B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
-    c_max = math.sqrt(2 * P.guard_brake * (1.0 - P.guard_margin))
-    b = (c_max - v[0, 0]) / P.dt
-    assert 0.0 < -b < P.a_max
+    a = np.array([[0.0, P.paper.a_max], [0.0, 0.0]])
+    out = B.agent_guard(a, x, v, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max)
+    c_max = math.sqrt(2 * P.guard.brake * (1.0 - P.guard.margin))
+    b = (c_max - v[0, 0]) / P.paper.dt
+    assert 0.0 < -b < P.paper.a_max
     assert out[0, 0] == pytest.approx(b)  # the braking, whole
-    assert np.linalg.norm(out[0]) == pytest.approx(P.a_max)  # within eq. (39)'s bound
-    assert out[0, 1] == pytest.approx(math.sqrt(P.a_max**2 - b * b))  # the rest scaled, lam < 1
-    assert (v[0] + P.dt * out[0])[0] == pytest.approx(c_max)
+    assert np.linalg.norm(out[0]) == pytest.approx(P.paper.a_max)  # within eq. (39)'s bound
+    assert out[0, 1] == pytest.approx(math.sqrt(P.paper.a_max**2 - b * b))  # the rest scaled, lam < 1
+    assert (v[0] + P.paper.dt * out[0])[0] == pytest.approx(c_max)
     # braking beyond a_max (2.5 m/s closing from 1 m): a_max of pure braking, nothing else
-    out2 = B.agent_guard(a, x, np.array([[2.5, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
-    np.testing.assert_allclose(out2[0], [-P.a_max, 0.0], atol=1e-12)
+    out2 = B.agent_guard(a, x, np.array([[2.5, 0.0], [0.0, 0.0]]), P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max)
+    np.testing.assert_allclose(out2[0], [-P.paper.a_max, 0.0], atol=1e-12)
     # an agent at rest, one it closes on at rest beside it, and a pair moving apart: untouched
     x2 = np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]])
     v2 = np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]])
     a2 = np.array([[0.0, 0.0], [0.5, 0.0], [1.0, 0.0]])
-    np.testing.assert_allclose(B.agent_guard(a2, x2, v2, P.dt, P.guard_brake, P.guard_margin, P.a_max), a2, atol=1e-12)
+    np.testing.assert_allclose(B.agent_guard(a2, x2, v2, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max), a2, atol=1e-12)
 
 
 def test_agent_guard_counts_the_neighbours_own_stopping_distance():
@@ -371,17 +371,17 @@ def test_agent_guard_counts_the_neighbours_own_stopping_distance():
     # moving away at the same speed leaves i free to follow; one closing in tightens i's bound.
     x = np.array([[0.0, 0.0], [1.5, 0.0]])
     a = np.zeros((2, 2))
-    away = B.agent_guard(a, x, np.array([[3.0, 0.0], [3.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    away = B.agent_guard(a, x, np.array([[3.0, 0.0], [3.0, 0.0]]), P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max)
     np.testing.assert_allclose(away[0], [0.0, 0.0], atol=1e-12)
     # at 0.9 m, i closing at 1 m/s: free beside a neighbour at rest (bound sqrt(1.6) m/s), cut to
     # sqrt(1.6 - 1) m/s when the neighbour closes in at 1 m/s
     x = np.array([[0.0, 0.0], [0.9, 0.0]])
-    rest = B.agent_guard(a, x, np.array([[1.0, 0.0], [0.0, 0.0]]), P.dt, P.guard_brake, P.guard_margin, P.a_max)
+    rest = B.agent_guard(a, x, np.array([[1.0, 0.0], [0.0, 0.0]]), P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max)
     np.testing.assert_allclose(rest[0], [0.0, 0.0], atol=1e-12)
     v = np.array([[1.0, 0.0], [-1.0, 0.0]])
-    out = B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max)
-    c_max = math.sqrt(2 * P.guard_brake * (0.9 - P.guard_margin) - 1.0)
-    w = v[0] + P.dt * out[0]
+    out = B.agent_guard(a, x, v, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max)
+    c_max = math.sqrt(2 * P.guard.brake * (0.9 - P.guard.margin) - 1.0)
+    w = v[0] + P.paper.dt * out[0]
     assert w[0] == pytest.approx(c_max)
 
 
@@ -404,23 +404,23 @@ def test_pair_kernels_on_neighbour_rows_equal_all_pairs_bit_for_bit(n, seed):
     # The cell-list rows (N >= 64) must give the all-pairs result exactly: partners beyond the
     # radius add nothing and partners are visited in the same ascending order.
     x, v, a, group = _swarm(n, seed)
-    rows = F.neighbour_rows(x, max(P.r_sep, P.d_ir))
+    rows = F.neighbour_rows(x, max(P.core.r_sep, P.core.d_ir))
     assert len(rows[1]) < n * n  # a real cell list, not every pair
-    for k, r, same in ((P.k_sep, P.r_sep, False), (P.k_ir, P.d_ir, True)):
-        assert np.array_equal(F.separation(x, group, k, r, P.d_floor, same, *rows),
-                              F.separation(x, group, k, r, P.d_floor, same))
+    for k, r, same in ((P.paper.k_sep, P.core.r_sep, False), (P.paper.k_ir, P.core.d_ir, True)):
+        assert np.array_equal(F.separation(x, group, k, r, P.core.d_floor, same, *rows),
+                              F.separation(x, group, k, r, P.core.d_floor, same))
     assert np.array_equal(F.nearest_in_group(x, group, *rows), F.nearest_in_group(x, group))
     lone = group.copy()
     lone[0] = 7  # alone in its group: found by the fallback over all agents (-1)
     lone[1], lone[-1] = 8, 8  # a pair far apart: nobody of its group in its row
     assert np.array_equal(F.nearest_in_group(x, lone, *rows), F.nearest_in_group(x, lone))
-    rg = F.neighbour_rows(x, B.brake_radius(a, v, P.dt, P.guard_brake, P.guard_margin))
-    assert np.array_equal(B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max, 4, *rg),
-                          B.agent_guard(a, x, v, P.dt, P.guard_brake, P.guard_margin, P.a_max))
+    rg = F.neighbour_rows(x, B.brake_radius(a, v, P.paper.dt, P.guard.brake, P.guard.margin))
+    assert np.array_equal(B.agent_guard(a, x, v, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max, 4, *rg),
+                          B.agent_guard(a, x, v, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max))
     active = np.arange(n) % 2 == 0
-    rb = F.neighbour_rows(x, B.brake_radius(a, v, P.dt, P.agent_brake, P.agent_margin))
-    assert np.array_equal(B.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max, *rb),
-                          B.agent_barrier(a, x, v, active, P.dt, P.agent_brake, P.agent_margin, P.a_max))
+    rb = F.neighbour_rows(x, B.brake_radius(a, v, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin))
+    assert np.array_equal(B.agent_barrier(a, x, v, active, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max, *rb),
+                          B.agent_barrier(a, x, v, active, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max))
 
 
 def test_neighbour_rows_hold_every_agent_within_the_radius():

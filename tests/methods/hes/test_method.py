@@ -36,7 +36,7 @@ def test_encircles_the_goal_at_r_enc():
     res = swarmnav.run("hes", from_dict(OPEN), seed=3, steps=350)
     d = np.linalg.norm(res.positions[-1] - np.array([20.0, 0.0]), axis=1)
     p = Hes().params
-    assert np.all(np.abs(d - p.r_enc) < 0.6)  # on the ring (eq. 12: encircle within r_in)
+    assert np.all(np.abs(d - p.core.r_enc) < 0.6)  # on the ring (eq. 12: encircle within r_in)
     assert res.metrics["R_goal"] == 1.0
     ang = np.sort(np.arctan2(*(res.positions[-1] - [20.0, 0.0]).T[::-1]))
     assert np.diff(ang).min() > 0.3  # spread around the goal, not bunched
@@ -51,13 +51,13 @@ def test_orbiting_ring_keeps_the_swarm_moving_on_the_circle():
         v = np.linalg.norm(res.velocities[-50:], axis=2)  # the last 5 s, on the ring
         speed[orbit] = float(v.mean())
         d = np.linalg.norm(res.positions[-1] - np.array([20.0, 0.0]), axis=1)
-        assert res.metrics["R_goal"] == 1.0 and np.all(np.abs(d - p.r_enc) < 2.5)  # about the ring
+        assert res.metrics["R_goal"] == 1.0 and np.all(np.abs(d - p.core.r_enc) < 2.5)  # about the ring
         if orbit:  # every agent turns the same way round the goal (counter-clockwise, omega > 0)
             rel = res.positions[-1] - [20.0, 0.0]
             vel = res.velocities[-1]
             assert np.all(rel[:, 0] * vel[:, 1] - rel[:, 1] * vel[:, 0] > 0.0)
-    assert speed[False] < 0.2 * p.v_s
-    assert speed[True] > 0.5 * p.v_s
+    assert speed[False] < 0.2 * p.core.v_s
+    assert speed[True] > 0.5 * p.core.v_s
 
 
 class AlwaysSplit:
@@ -79,7 +79,7 @@ def test_every_proposal_goes_through_the_projection():
     splits = [e for e in res.events if e["action"] == "split"]
     assert len(splits) >= 1 and all(e["source"] == "test" for e in splits)
     assert res.metrics["hes_projected_to_keep"] == 250 - len(splits)  # infeasible ones became keep
-    assert res.n_subswarms.max() <= Hes().params.max_subswarms
+    assert res.n_subswarms.max() <= Hes().params.core.max_subswarms
 
 
 def test_decision_state_reads_reports_and_matches_feasibility():
@@ -120,9 +120,9 @@ def test_occlusion_factor_of_each_target():
 def test_ablation_switches():
     assert Hes().params.a_bound == 2.6 and Hes().params.adaptive
     off = Hes(safety_stack_off=True).params
-    assert off.a_bound == off.a_max_relaxed and not off.adaptive and off.sigma == 0.2
+    assert off.a_bound == off.ablation.a_max_relaxed and not off.adaptive and off.sigma == 0.2
     nob = Hes(acceleration_bound=False).params
-    assert nob.a_bound == nob.a_max_relaxed and nob.adaptive
+    assert nob.a_bound == nob.ablation.a_max_relaxed and nob.adaptive
     assert Hes(occlusion_attenuation=False).params.sigma == 1.0
 
 
@@ -131,10 +131,10 @@ def test_parameter_errors():
         registry.make("hes", decision="gpt9")
     with pytest.raises(swarmnav.ConfigError, match="unknown parameter 'k_pp'"):
         registry.make("hes", k_pp=1.0)
-    with pytest.raises(swarmnav.ConfigError, match="r_out > r_in"):
+    with pytest.raises(swarmnav.ConfigError, match=r"paper.r_out > paper.r_in"):
         registry.make("hes", r_in=12.0)
-    with pytest.raises(swarmnav.ConfigError, match=r"passage_band must be in \[0, inf\) m, got -1.0"):
+    with pytest.raises(swarmnav.ConfigError, match=r"passage.band must be in \[0, inf\) m, got -1.0"):
         registry.make("hes", passage_band=-1.0)
-    with pytest.raises(swarmnav.ConfigError, match="passage_relief must be < d_safe"):
+    with pytest.raises(swarmnav.ConfigError, match=r"passage.relief must be < paper.d_safe"):
         registry.make("hes", passage_relief=1.5)
     assert registry.make("hes", decision="rule").params.decision == "rule"

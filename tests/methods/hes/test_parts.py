@@ -29,11 +29,19 @@ def _parts(**kw) -> list[str]:
 
 
 @pytest.mark.parametrize("switch, name", [
-    ("split_commit", "commit"), ("route_hold", "hold"), ("trail_follow", "trail"), ("passage_mode", "passage"),
-    ("stall_plan", "stall"), ("agent_guard", "guard")])
+    ("commit.on", "commit"), ("hold.on", "hold"), ("trail.on", "trail"), ("passage.on", "passage"),
+    ("stall.on", "stall"), ("barrier.on", "wall"), ("guard.on", "guard")])
 def test_each_switch_removes_exactly_its_part(switch, name):
     assert _parts() == ALL  # the default build, in hook order
     assert _parts(**{switch: False}) == [q for q in ALL if q != name]
+    assert _parts(**{switch: "off"}) == _parts(**{switch: False})  # as --set passes it
+
+
+@pytest.mark.parametrize("old, new", [
+    ("split_commit", "commit.on"), ("route_hold", "hold.on"), ("trail_follow", "trail.on"),
+    ("passage_mode", "passage.on"), ("stall_plan", "stall.on"), ("agent_guard", "guard.on")])
+def test_the_old_flat_switch_names_still_work(old, new):
+    assert _parts(**{old: False}) == _parts(**{new: False})
 
 
 def test_the_faithful_preset_and_the_safety_stack_ablation():
@@ -53,8 +61,8 @@ def test_the_step_context_holds_every_stage_output():
     for name in ("own", "routed", "speed", "dsafe", "nn", "follower", "nav", "exit_free"):
         assert getattr(s, name).shape == (6,), name
     assert s.sig.shape == s.blocked.shape == (6, 4)
-    assert np.all(s.dsafe == m.params.d_safe) and np.all(s.own == -1)  # open field: no passage
-    assert np.all(np.hypot(*a.T) <= m.params.a_max + 1e-12)
+    assert np.all(s.dsafe == m.params.paper.d_safe) and np.all(s.own == -1)  # open field: no passage
+    assert np.all(np.hypot(*a.T) <= m.params.paper.a_max + 1e-12)
 
 
 # ---------------------------------------------------------------- split commitment

@@ -20,14 +20,14 @@ from swarmnav.sensing import lidar_ring, ray_table
 from swarmnav.world.catalog import load_scenario
 
 P = HesParams()
-COS, SIN = ray_table(P.n_rays)
+COS, SIN = ray_table(P.paper.n_rays)
 GATES = "narrow_alternating_gates"
 MID, NORMAL, W = np.array([11.6, -9.25]), np.array([1.0, 0.0]), 2.3  # gate 1's 2.3 m gap (x = 11.6..12.4)
 
 
 def _tube(x, width=W):
-    return passage_dsafe(np.atleast_2d(x), MID, NORMAL, width, P.d_safe, P.passage_margin, P.passage_len,
-                         P.passage_reach)
+    return passage_dsafe(np.atleast_2d(x), MID, NORMAL, width, P.paper.d_safe, P.passage.margin, P.passage.length,
+                         P.passage.reach)
 
 
 @pytest.mark.parametrize("width", [2.0, 2.3, 2.9, 3.5, 3.6, 4.0, 8.0])
@@ -35,21 +35,21 @@ def test_d_safe_eff_never_exceeds_half_the_throat_nor_d_safe(width):
     rng = np.random.default_rng(0)
     x = MID + rng.uniform(-6.0, 6.0, size=(400, 2))
     d = _tube(x, width)
-    assert np.all(d <= P.d_safe)
-    inside = d < P.d_safe
+    assert np.all(d <= P.paper.d_safe)
+    inside = d < P.paper.d_safe
     # inside the tube the centre line keeps `margin` of clearance beyond d_safe_eff
-    assert np.all(d[inside] <= 0.5 * width - P.passage_margin + 1e-12)
-    if width >= 2 * (P.d_safe + P.passage_margin):  # wide corridors are not affected
+    assert np.all(d[inside] <= 0.5 * width - P.passage.margin + 1e-12)
+    if width >= 2 * (P.paper.d_safe + P.passage.margin):  # wide corridors are not affected
         assert not inside.any()
 
 
 def test_leaving_the_tube_restores_d_safe():
-    along = np.array([-P.passage_len - 0.1, -1.0, 0.0, 0.4, 1.0, P.passage_len - 0.1, P.passage_len + 0.1, 6.0])
+    along = np.array([-P.passage.length - 0.1, -1.0, 0.0, 0.4, 1.0, P.passage.length - 0.1, P.passage.length + 0.1, 6.0])
     d = _tube(MID + along[:, None] * NORMAL)
-    eff = 0.5 * W - P.passage_margin
-    np.testing.assert_allclose(d, [P.d_safe, eff, eff, eff, eff, eff, P.d_safe, P.d_safe])
-    far_across = MID + np.array([0.0, 0.5 * W + P.passage_reach + 0.1])
-    assert _tube(far_across)[0] == P.d_safe
+    eff = 0.5 * W - P.passage.margin
+    np.testing.assert_allclose(d, [P.paper.d_safe, eff, eff, eff, eff, eff, P.paper.d_safe, P.paper.d_safe])
+    far_across = MID + np.array([0.0, 0.5 * W + P.passage.reach + 0.1])
+    assert _tube(far_across)[0] == P.paper.d_safe
 
 
 def test_eq36_closes_the_gap_and_passage_mode_opens_it():
@@ -58,23 +58,23 @@ def test_eq36_closes_the_gap_and_passage_mode_opens_it():
     channel wall); inside the tube with d_safe_eff the near-obstacle term is off, only the base
     term of eq. (36) remains."""
     x = np.array([[11.0, -9.25]])
-    ring = lidar_ring(load_scenario(GATES).geometry, x, P.n_rays, P.lidar_range)
-    paper = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, P.d_safe, P.d_floor)
-    assert paper[0, 0] < -10 * P.a_max
+    ring = lidar_ring(load_scenario(GATES).geometry, x, P.paper.n_rays, P.paper.lidar_range)
+    paper = F.lidar_repulsion(ring, COS, SIN, P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, P.paper.k_e, P.paper.d_safe, P.core.d_floor)
+    assert paper[0, 0] < -10 * P.paper.a_max
     ds = _tube(x)
-    assert ds[0] < P.d_safe
-    relaxed = F.lidar_repulsion_each(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, ds, P.d_floor)
-    base = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, 0.0, P.d_safe, P.d_floor)
+    assert ds[0] < P.paper.d_safe
+    relaxed = F.lidar_repulsion_each(ring, COS, SIN, P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, P.paper.k_e, ds, P.core.d_floor)
+    base = F.lidar_repulsion(ring, COS, SIN, P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, 0.0, P.paper.d_safe, P.core.d_floor)
     np.testing.assert_allclose(relaxed, base)
     assert abs(relaxed[0, 0]) < 0.15 * abs(paper[0, 0])
 
 
 def test_lidar_repulsion_each_with_equal_d_safe_is_the_papers_law():
     rng = np.random.default_rng(3)
-    ring = rng.uniform(0.3, 20.0, size=(5, P.n_rays))
-    a = F.lidar_repulsion(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, P.d_safe, P.d_floor)
-    b = F.lidar_repulsion_each(ring, COS, SIN, P.k_rep, P.r_trigger, P.k_b, P.gamma, P.k_e, np.full(5, P.d_safe),
-                               P.d_floor)
+    ring = rng.uniform(0.3, 20.0, size=(5, P.paper.n_rays))
+    a = F.lidar_repulsion(ring, COS, SIN, P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, P.paper.k_e, P.paper.d_safe, P.core.d_floor)
+    b = F.lidar_repulsion_each(ring, COS, SIN, P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, P.paper.k_e, np.full(5, P.paper.d_safe),
+                               P.core.d_floor)
     np.testing.assert_array_equal(a, b)
 
 
@@ -105,7 +105,7 @@ def test_the_d_safe_actually_used_is_d_safe_outside_passages():
 
         m.act = spy
         swarmnav.run(m, scene, seed=1, steps=250)
-        assert min(seen) == P.d_safe, scene
+        assert min(seen) == P.paper.d_safe, scene
 
 
 def test_concave_corner_seen_at_a_grazing_angle_is_not_a_passage():
@@ -113,9 +113,9 @@ def test_concave_corner_seen_at_a_grazing_angle_is_not_a_passage():
     gate 1 and the upper channel wall (consecutive hits metres apart on the grazed wall); the real
     gap and the channel are kept."""
     p = np.array([[10.33, -7.48]])
-    ring = lidar_ring(load_scenario(GATES).geometry, p, P.n_rays, P.lidar_range)[0]
-    gaps = detect_gaps(ring, p[0, 0], p[0, 1], COS, SIN, P.lidar_range, P.h_open)
-    ok = seen_passages(gaps, ring, p[0, 0], p[0, 1], COS, SIN, P.gap_depth, P.lidar_range)
+    ring = lidar_ring(load_scenario(GATES).geometry, p, P.paper.n_rays, P.paper.lidar_range)[0]
+    gaps = detect_gaps(ring, p[0, 0], p[0, 1], COS, SIN, P.paper.lidar_range, P.core.h_open)
+    ok = seen_passages(gaps, ring, p[0, 0], p[0, 1], COS, SIN, P.passage.gap_depth, P.paper.lidar_range)
     mids = 0.5 * (gaps[:, 0:2] + gaps[:, 2:4])
     corner = np.flatnonzero((mids[:, 1] > 7.0) & (gaps[:, 4] > 2.0) & (gaps[:, 4] < 5.0))
     gap1 = np.flatnonzero(np.hypot(*(mids - MID).T) < 1.0)
@@ -155,20 +155,20 @@ def test_an_agent_through_throat_k_targets_throat_k_plus_1():
     m, x, g1, g2 = _chain_method(c1, c2, route_is_2=False)
     q_idx, q_tgt = m.part("passage").queue(x, m.labels, m.subs)
     np.testing.assert_array_equal(q_idx, [0, 0, 1, 1, 1, -1])
-    np.testing.assert_allclose(q_tgt[:2], np.tile(g1.mid + P.through * g1.normal, (2, 1)))
-    np.testing.assert_allclose(q_tgt[2:5], np.tile(g2.mid + P.through * g2.normal, (3, 1)))
+    np.testing.assert_allclose(q_tgt[:2], np.tile(g1.mid + P.core.through * g1.normal, (2, 1)))
+    np.testing.assert_allclose(q_tgt[2:5], np.tile(g2.mid + P.core.through * g2.normal, (3, 1)))
 
 
 @pytest.mark.parametrize("n_through, queued", [(1, False), (2, True)])
 def test_the_routes_throat_queues_its_tail_once_a_head_is_through(n_through, queued):
     """While gate 2 is the route, its members follow the waypoint until `passage_head` (= 2) members
     are through; then the head moves on and the others queue for gate 2."""
-    assert P.passage_head == 2
+    assert P.passage.head == 2
     c1 = [True] * 6
     c2 = [False] * (6 - n_through) + [True] * n_through
     m, x, _, _ = _chain_method(c1, c2, route_is_2=True)
     q_idx, _ = m.part("passage").queue(x, m.labels, m.subs)
-    near = np.hypot(*(x - np.array([21.6, 9.25])).T) <= P.passage_queue  # agents 2-4 (0-1 are > 20 m away)
+    near = np.hypot(*(x - np.array([21.6, 9.25])).T) <= P.passage.queue  # agents 2-4 (0-1 are > 20 m away)
     behind = np.flatnonzero(~np.asarray(c2) & near)
     assert len(behind) >= 2
     assert np.all(q_idx[behind] == (1 if queued else -1))
@@ -185,8 +185,8 @@ def test_the_queue_holds_in_encircle_mode():
     np.testing.assert_array_equal(q_idx, [-1, -1, 1, 1, -1, -1])  # agents 0-1 are beyond passage_queue
     x2 = x.copy()
     x2[3] = [20.5, 9.25]  # in gate 2's mouth: the tube relaxation stays available in encircle mode
-    d = m.part("passage").safe_distance(x2, m.labels, np.full(6, P.d_safe), np.zeros((6, 2)))
-    assert d[3] == pytest.approx(0.5 * W - P.passage_margin) and d[0] == P.d_safe
+    d = m.part("passage").safe_distance(x2, m.labels, np.full(6, P.paper.d_safe), np.zeros((6, 2)))
+    assert d[3] == pytest.approx(0.5 * W - P.passage.margin) and d[0] == P.paper.d_safe
 
 
 def test_the_head_does_not_wait_for_the_tail():
@@ -280,7 +280,7 @@ def test_a_passage_outlives_its_memory_while_members_are_in_front_of_it(front):
     c1 = [not front, not front, True, True, True, True]  # agents 0-1 at (8, -8), (9, -9): in front of gate 1
     m, x, g1, g2 = _chain_method(c1, [True] * 6, route_is_2=False)
     part = m.part("passage")
-    k = int(100.0 / P.dt)
+    k = int(100.0 / P.paper.dt)
     part.remember(0, None, None, x, k)
     assert any(q.throat is g1 for q in part.passages(0)) == front
     assert not any(q.throat is g2 for q in part.passages(0))
@@ -290,11 +290,11 @@ def test_passage_relief_widens_a_4m_throat_and_leaves_narrow_ones_alone():
     """A 4 m throat leaves a 1 m band under d_safe = 1.5 m; in its tube d_safe_eff is
     d_safe - passage_relief (band 1.4 m), outside the tube d_safe. A 2.3 m throat keeps
     w/2 - margin, which is already below d_safe - relief."""
-    x = MID + np.array([[0.0, 0.0], [0.0, 1.0], [-P.passage_len - 0.1, 0.0]])  # centre, off centre, before the tube
+    x = MID + np.array([[0.0, 0.0], [0.0, 1.0], [-P.passage.length - 0.1, 0.0]])  # centre, off centre, before the tube
     args = (MID, NORMAL)
-    wide = passage_dsafe(x, *args, 4.0, P.d_safe, P.passage_margin, P.passage_len, P.passage_reach, P.passage_relief)
-    np.testing.assert_allclose(wide, [P.d_safe - P.passage_relief] * 2 + [P.d_safe])
-    narrow = passage_dsafe(x, *args, 2.3, P.d_safe, P.passage_margin, P.passage_len, P.passage_reach, P.passage_relief)
-    np.testing.assert_allclose(narrow[:2], 2.3 / 2 - P.passage_margin)
+    wide = passage_dsafe(x, *args, 4.0, P.paper.d_safe, P.passage.margin, P.passage.length, P.passage.reach, P.passage.relief)
+    np.testing.assert_allclose(wide, [P.paper.d_safe - P.passage.relief] * 2 + [P.paper.d_safe])
+    narrow = passage_dsafe(x, *args, 2.3, P.paper.d_safe, P.passage.margin, P.passage.length, P.passage.reach, P.passage.relief)
+    np.testing.assert_allclose(narrow[:2], 2.3 / 2 - P.passage.margin)
     # which throats are passages: the free band under d_safe narrower than passage_band
-    assert 4.0 - 2 * P.d_safe < P.passage_band <= 4.5 - 2 * P.d_safe
+    assert 4.0 - 2 * P.paper.d_safe < P.passage.band <= 4.5 - 2 * P.paper.d_safe

@@ -26,11 +26,11 @@ def test_a_gap_behind_the_swarm_is_not_a_split_path():
     """The situation traced on hes_gates_4p5m: the swarm threads a gate at x = 26 m; its subleader
     reports the bay ahead (toward gate 3) and the bay it has just crossed, seen back through the
     gate (mouth at x = 19 m). Only the first leads to the goal at (66, 0)."""
-    ring = np.full(360, P.lidar_range)  # nothing in view blocks either exit
+    ring = np.full(360, P.paper.lidar_range)  # nothing in view blocks either exit
     pos = np.array([[26.6, -8.2], [28.8, -7.2]])
     pack = Pack(0, 0, np.array([0, 1]), pos, np.zeros_like(pos), pos.mean(axis=0))
     ahead, behind, narrow = _corridor([36.7, 8.0], 7.5), _corridor([19.0, -5.9], 13.2, (0.0, 1.0)), _corridor([35, 0], 3.0)
-    paths = split_paths(Report(pack, (ahead, behind, narrow), 5.0), GOAL, ring, P.w_split, P.rho_vis, P.lidar_range)
+    paths = split_paths(Report(pack, (ahead, behind, narrow), 5.0), GOAL, ring, P.core.w_split, P.core.rho_vis, P.paper.lidar_range)
     assert paths == [ahead]  # behind: farther from the goal than the swarm; narrow: under w_split
 
 
@@ -50,10 +50,10 @@ def test_a_path_whose_exit_lies_in_an_obstacles_shadow_is_not_a_split_path():
 
     sensor = np.array([38.95, 8.24])
     ring = lidar_ring(Geometry.from_obstacles([Box((39.6, -10.4), (40.4, 5.9)), Box((-12.0, -11.4), (65.0, -10.4))]),
-                      sensor[None], n_rays=P.n_rays, max_range=P.lidar_range)[0]
+                      sensor[None], n_rays=P.paper.n_rays, max_range=P.paper.lidar_range)[0]
 
     def seen(q):
-        return in_view(ring, *sensor, np.array(q), P.rho_vis, P.lidar_range)
+        return in_view(ring, *sensor, np.array(q), P.core.rho_vis, P.paper.lidar_range)
 
     assert not seen([42.4, -7.5])  # behind the gate's wall
     assert seen([46.5, 2.9])  # over the gate's top, in view

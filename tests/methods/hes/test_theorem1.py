@@ -58,13 +58,13 @@ def core(x, v, t):
     slot, cs, q_nn, q_sl = refs(t)
     vs = np.tile(v_s(t), (6, 1))
     everyone = np.ones(6, dtype=bool)
-    return (F.attraction(x, v, slot, vs, P.k_p, P.k_v)
-            + F.separation(x, GROUP, P.k_sep, P.r_sep, 1e-6, False)
-            + F.centering(x, cs, P.k_path)
-            + F.spring(x, q_nn, P.k_intra, D_THR, everyone)
-            + F.separation(x, GROUP, P.k_ir, P.d_ir, 1e-6, True)
-            + F.spring(x, q_sl, P.k_l, D_0, FOLLOWER) + F.velocity_match(v, vs, P.k_vl, FOLLOWER)
-            + F.spring(x, cs, P.k_coh, D_C, everyone)
+    return (F.attraction(x, v, slot, vs, P.paper.k_p, P.paper.k_v)
+            + F.separation(x, GROUP, P.paper.k_sep, P.core.r_sep, 1e-6, False)
+            + F.centering(x, cs, P.paper.k_path)
+            + F.spring(x, q_nn, P.paper.k_intra, D_THR, everyone)
+            + F.separation(x, GROUP, P.paper.k_ir, P.core.d_ir, 1e-6, True)
+            + F.spring(x, q_sl, P.paper.k_l, D_0, FOLLOWER) + F.velocity_match(v, vs, P.paper.k_vl, FOLLOWER)
+            + F.spring(x, cs, P.paper.k_coh, D_C, everyone)
             + v_s_dot(t))  # feedforward of the known cruise acceleration
 
 
@@ -72,16 +72,16 @@ def energy(x, v, t):
     slot, cs, q_nn, q_sl = refs(t)
     dead = lambda d, d0: np.maximum(d - d0, 0.0) ** 2  # noqa: E731
     V = 0.5 * np.sum((v - v_s(t)) ** 2)
-    V += 0.5 * P.k_p * np.sum((x - slot) ** 2) + 0.5 * P.k_path * np.sum((x - cs) ** 2)
-    V += 0.5 * P.k_intra * np.sum(dead(np.linalg.norm(x - q_nn, axis=1), D_THR))
-    V += 0.5 * P.k_l * np.sum(dead(np.linalg.norm(x - q_sl, axis=1), D_0)[FOLLOWER])
-    V += 0.5 * P.k_coh * np.sum(dead(np.linalg.norm(x - cs, axis=1), D_C))
+    V += 0.5 * P.paper.k_p * np.sum((x - slot) ** 2) + 0.5 * P.paper.k_path * np.sum((x - cs) ** 2)
+    V += 0.5 * P.paper.k_intra * np.sum(dead(np.linalg.norm(x - q_nn, axis=1), D_THR))
+    V += 0.5 * P.paper.k_l * np.sum(dead(np.linalg.norm(x - q_sl, axis=1), D_0)[FOLLOWER])
+    V += 0.5 * P.paper.k_coh * np.sum(dead(np.linalg.norm(x - cs, axis=1), D_C))
     for i in range(6):
         for j in range(i + 1, 6):
             d = np.linalg.norm(x[i] - x[j])
-            V += P.k_sep * max(0.0, math.log(P.r_sep / d))
+            V += P.paper.k_sep * max(0.0, math.log(P.core.r_sep / d))
             if GROUP[i] == GROUP[j]:
-                V += P.k_ir * max(0.0, math.log(P.d_ir / d))
+                V += P.paper.k_ir * max(0.0, math.log(P.core.d_ir / d))
     return V
 
 
@@ -102,7 +102,7 @@ def active_set(x, t):
     stretched beyond its dead band): the gradient jumps only where this set changes."""
     d = np.linalg.norm(x[:, None] - x[None], axis=2)[np.triu_indices(6, 1)]
     slot, cs, q_nn, q_sl = refs(t)
-    return np.concatenate([d < P.r_sep, d < P.d_ir, np.linalg.norm(x - q_nn, axis=1) > D_THR,
+    return np.concatenate([d < P.core.r_sep, d < P.core.d_ir, np.linalg.norm(x - q_nn, axis=1) > D_THR,
                            np.linalg.norm(x - q_sl, axis=1) > D_0, np.linalg.norm(x - cs, axis=1) > D_C])
 
 
@@ -123,7 +123,7 @@ def test_theorem1_energy_non_increasing_and_error_bounded():
     v = v_s(0.0) + rng.normal(0.0, 0.8, (6, 2))  # and error velocities
     h, T = 4e-3, 10.0
     V0 = energy(x, v, 0.0)
-    bound = math.sqrt(2 * V0 / P.k_p)
+    bound = math.sqrt(2 * V0 / P.paper.k_p)
     Vs, errs, active = [V0], [], np.zeros(3, dtype=bool)
     t = 0.0
     for _ in range(int(T / h)):
@@ -132,7 +132,7 @@ def test_theorem1_energy_non_increasing_and_error_bounded():
         Vs.append(energy(x, v, t))
         errs.append(np.linalg.norm(x - refs(t)[0], axis=1).max())
         d = np.linalg.norm(x[:, None] - x[None], axis=2)[np.triu_indices(6, 1)]
-        active |= [bool(np.any(d < P.r_sep)), bool(np.any(d < P.d_ir)), True]
+        active |= [bool(np.any(d < P.core.r_sep)), bool(np.any(d < P.core.d_ir)), True]
     Vs = np.array(Vs)
     # Non-increasing up to the integrator's error (RK4, 4 ms steps refined at gradient jumps).
     assert np.max(np.diff(Vs)) <= 1e-8 * V0

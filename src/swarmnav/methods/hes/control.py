@@ -85,12 +85,12 @@ def control(h, step: Step) -> np.ndarray:
     x, v = step.x, step.v
     couplings(h, step)
     occlusion(h, step)
-    step.dsafe = np.full(h.n, p.d_safe)
+    step.dsafe = np.full(h.n, p.paper.d_safe)
     step.exit_dir = np.zeros((h.n, 2))
     step.exit_free = np.zeros(h.n, dtype=np.bool_)
     for part in h.at["steer"]:
         part.steer(step)
-    vslot = F.slot_velocity(x, step.slot, step.speed, p.eps_v)
+    vslot = F.slot_velocity(x, step.slot, step.speed, p.core.eps_v)
     args = (x, v, h.labels, x[step.sl_idx], v[step.sl_idx], step.follower, step.cent, step.wp, step.nav,
             step.slot, vslot, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe, *step.rows)
     edit = [part for part in h.at["push_back"] if part.push_back(step)]

@@ -43,11 +43,11 @@ N_GAINS = 21
 def gain_vector(p) -> np.ndarray:
     """The kernels' gain vector from a :class:`HesParams`."""
     g = np.empty(N_GAINS)
-    g[G_KP], g[G_KV], g[G_KSEP], g[G_RSEP] = p.k_p, p.k_v, p.k_sep, p.r_sep
-    g[G_KPATH], g[G_KINTRA], g[G_DTHR], g[G_KIR], g[G_DIR] = p.k_path, p.k_intra, p.d_thr, p.k_ir, p.d_ir
-    g[G_KL], g[G_KVL], g[G_D0], g[G_KCOH], g[G_DC] = p.k_l, p.k_vl, p.d_0, p.k_coh, p.d_c
-    g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE] = p.k_rep, p.r_trigger, p.k_b, p.gamma, p.k_e
-    g[G_DSAFE], g[G_DFLOOR] = p.d_safe, p.d_floor
+    g[G_KP], g[G_KV], g[G_KSEP], g[G_RSEP] = p.paper.k_p, p.paper.k_v, p.paper.k_sep, p.core.r_sep
+    g[G_KPATH], g[G_KINTRA], g[G_DTHR], g[G_KIR], g[G_DIR] = p.paper.k_path, p.paper.k_intra, p.core.d_thr, p.paper.k_ir, p.core.d_ir
+    g[G_KL], g[G_KVL], g[G_D0], g[G_KCOH], g[G_DC] = p.paper.k_l, p.paper.k_vl, p.core.d_0, p.paper.k_coh, p.core.d_c
+    g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE] = p.paper.k_rep, p.paper.r_trigger, p.paper.k_b, p.paper.gamma, p.paper.k_e
+    g[G_DSAFE], g[G_DFLOOR] = p.paper.d_safe, p.core.d_floor
     return g
 
 

@@ -54,25 +54,25 @@ def build_parts(p: HesParams) -> list[Part]:
     ============== ====================== ==========================================
     part           switch                 module
     ============== ====================== ==========================================
-    SplitCommit    ``split_commit``       routes.py
-    RouteHold      ``route_hold``         routes.py
-    TrailFollow    ``trail_follow``       trail.py
-    PassageMode    ``passage_mode``       passage.py (its queue barrier: ``agent_brake`` > 0)
-    StallPlanner   ``stall_plan``         stall.py
-    WallBarrier    safety stack on        safety.py (``safety_stack_off = false``)
-    ContactGuard   ``agent_guard``        safety.py (with the safety stack)
+    SplitCommit    ``commit.on``          routes.py
+    RouteHold      ``hold.on``            routes.py
+    TrailFollow    ``trail.on``           trail.py
+    PassageMode    ``passage.on``         passage.py (its queue barrier: ``passage.agent_brake`` > 0)
+    StallPlanner   ``stall.on``           stall.py
+    WallBarrier    ``barrier.on``         safety.py (with the safety stack: ``ablation.safety_stack_off = false``)
+    ContactGuard   ``guard.on``           safety.py (with the safety stack)
     ============== ====================== ==========================================
     """
-    stall = StallPlanner(p, narrow_relief=p.passage_mode) if p.stall_plan else None
-    passage = PassageMode(p, stall) if p.passage_mode else None
+    stall = StallPlanner(p, narrow_relief=p.passage.on) if p.stall.on else None
+    passage = PassageMode(p, stall) if p.passage.on else None
     parts: list[Part | None] = [
-        SplitCommit(p) if p.split_commit else None,
-        RouteHold(p, passage) if p.route_hold else None,
-        TrailFollow(p) if p.trail_follow else None,
+        SplitCommit(p) if p.commit.on else None,
+        RouteHold(p, passage) if p.hold.on else None,
+        TrailFollow(p) if p.trail.on else None,
         passage,
         stall,
-        WallBarrier(p, passage if p.agent_brake > 0.0 else None) if p.adaptive else None,
-        ContactGuard(p) if p.adaptive and p.agent_guard else None,
+        WallBarrier(p, passage if p.passage.agent_brake > 0.0 else None) if p.adaptive and p.barrier.on else None,
+        ContactGuard(p) if p.adaptive and p.guard.on else None,
     ]
     return [q for q in parts if q is not None]
 
@@ -85,13 +85,13 @@ class Hes:
 
     def __init__(self, **overrides: Any):
         self.params = build(HesParams, overrides, context="hes")
-        self.dt = self.params.dt
+        self.dt = self.params.paper.dt
         self.dynamics = DampedDoubleIntegrator()  # eq. (5)-(7): m = 5 kg, c_d = 0.5, inverse model
         self.gains = F.gain_vector(self.params)
-        self.cos, self.sin = ray_table(self.params.n_rays)
-        self.pair_radius = max(self.params.r_sep, self.params.d_ir)  # [m] reach of the pair terms (eq. 25, 31)
+        self.cos, self.sin = ray_table(self.params.paper.n_rays)
+        self.pair_radius = max(self.params.core.r_sep, self.params.core.d_ir)  # [m] reach of the pair terms (eq. 25, 31)
         p = self.params
-        self.ring_angles = np.linspace(0.0, 2 * np.pi, p.enc_samples, endpoint=False)  # encircle slot candidates
+        self.ring_angles = np.linspace(0.0, 2 * np.pi, p.core.enc_samples, endpoint=False)  # encircle slot candidates
         self._source_override: DecisionSource | None = None
         self.parts: list[Part] = []
         self.at: dict[str, list[Part]] = hook_table([])  # hook name -> the parts that override it
@@ -119,7 +119,7 @@ class Hes:
         n = len(positions)
         self.n = n
         self.arange = np.arange(n)  # agent indices (compared with per-agent indices every step)
-        rule = RulePolicy(p.d_merge, p.t_cd, merge=p.merge_rule)
+        rule = RulePolicy(p.paper.d_merge, p.paper.t_cd, merge=p.core.merge_rule)
         self.source: DecisionSource = self._source_override or decision_source(p, rule, project)
         c = positions.mean(axis=0)
         self.leader = int(np.argmin(np.sum((positions - c) ** 2, axis=1)))  # one leader, eq. (1) roles
@@ -128,8 +128,8 @@ class Hes:
         self._next_id = 1
         self.k_last: int | None = None
         self.last_move = np.full(n, NEVER, dtype=np.int64)
-        self.cd_steps = int(round(p.t_cd / p.dt))
-        self.ra_steps = int(round(p.tau_ra / p.dt))
+        self.cd_steps = int(round(p.paper.t_cd / p.paper.dt))
+        self.ra_steps = int(round(p.paper.tau_ra / p.paper.dt))
         self.stats = {"splits": 0, "merges": 0, "reassigned": 0, "projected_to_keep": 0, "plan_engaged": 0}
         self.last_z: DecisionState | None = None
         self.last_reports: dict[int, Report] = {}
@@ -171,7 +171,7 @@ class Hes:
     def split_paths(self, step: Step, rep: Report) -> list[Corridor]:
         """The split paths of one report (n_c of eq. 13, see :func:`report.split_paths`)."""
         p = self.params
-        return split_paths(rep, self.goal, step.ring[rep.pack.subleader], p.w_split, p.rho_vis, p.lidar_range)
+        return split_paths(rep, self.goal, step.ring[rep.pack.subleader], p.core.w_split, p.core.rho_vis, p.paper.lidar_range)
 
     # ------------------------------------------------------------------ one step
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:

@@ -33,7 +33,7 @@ def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
     sl = x[sub.subleader]
     gx, gy = h.goal
     delta = target_proximity(math.hypot(cent[0] - gx, cent[1] - gy), math.hypot(sl[0] - gx, sl[1] - gy))
-    mode = task_mode(sub.mode, delta, p.r_in, p.r_out)
+    mode = task_mode(sub.mode, delta, p.paper.r_in, p.paper.r_out)
     if mode != sub.mode:
         sub.slot_step = NEVER
         sub.ring_offsets = None
@@ -58,7 +58,7 @@ def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
         target = route.target
     else:  # `through` metres past the throat, or past the centroid once that is beyond the throat
         along = max(float(np.dot(cent - route.mid, route.normal)), 0.0)
-        target = route.mid + (along + p.through) * route.normal
+        target = route.mid + (along + p.core.through) * route.normal
         for part in h.at["target"]:
             target = part.target(step, sub, route, target, cent, along)
     for part in h.at["restart"]:
@@ -76,22 +76,22 @@ def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, 
     p = h.params
     x = step.x
     if p.adaptive:
-        step_len = cruise(p, rep.clearance) * p.dt
+        step_len = cruise(p, rep.clearance) * p.paper.dt
         d = target - sub.waypoint
         dn = math.hypot(d[0], d[1])
         sub.waypoint = target.copy() if dn <= step_len else sub.waypoint + d * (step_len / dn)
         off = sub.waypoint - cent
         on = math.hypot(off[0], off[1])
-        if on > p.lead:
-            sub.waypoint = cent + off * (p.lead / on)
+        if on > p.core.lead:
+            sub.waypoint = cent + off * (p.core.lead / on)
     else:
         sub.waypoint = np.asarray(target, dtype=float).copy()
     w = route.width if route is not None else math.inf
     if p.adaptive:
         a = sub.subleader
-        clear = min(p.wp_clear, 0.5 * w)
+        clear = min(p.safety.wp_clear, 0.5 * w)
         sub.waypoint = np.array(push_clear(sub.waypoint[0], sub.waypoint[1], step.ring[a], x[a, 0], x[a, 1],
-                                           h.cos, h.sin, clear, p.lidar_range, 3))
+                                           h.cos, h.sin, clear, p.paper.lidar_range, 3))
     # formation axis along the motion of c_s; squeeze across a corridor narrower than the formation
     hd = target - sub.waypoint
     hn = math.hypot(hd[0], hd[1])
@@ -99,8 +99,8 @@ def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, 
         hd = 0.8 * sub.heading + 0.2 * hd / hn
         sub.heading = hd / max(math.hypot(hd[0], hd[1]), 1e-9)
     m = len(rep.pack.members)
-    w_iso = hex_width(m) * p.spacing + p.spacing if m > 1 else p.spacing
-    lam = _clip((w - 2 * p.lane_margin) / w_iso, 1 / math.sqrt(p.aspect_max), 1.0) if math.isfinite(w) else 1.0
+    w_iso = hex_width(m) * p.core.spacing + p.core.spacing if m > 1 else p.core.spacing
+    lam = _clip((w - 2 * p.core.lane_margin) / w_iso, 1 / math.sqrt(p.core.aspect_max), 1.0) if math.isfinite(w) else 1.0
     sub.squeeze += _clip(lam - sub.squeeze, -0.05, 0.05)
 
 
@@ -115,7 +115,7 @@ def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
     cands = list(rep.corridors)
     cent = rep.pack.centroid
     if segment_clear(step.ring[a], sl[0], sl[1], h.cos, h.sin, cent[0], cent[1], h.goal[0], h.goal[1],
-                     p.d_safe, p.lidar_range):
+                     p.paper.d_safe, p.paper.lidar_range):
         cands.insert(0, direct_corridor(cent, h.goal))
     prev = sub.route
     for part in h.at["hold"]:
@@ -128,7 +128,7 @@ def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
             return None
         return prev
     m = len(rep.pack.members)
-    cost = [c.cost + (width_penalty(c.width, m, p.penalty_width) if p.width_penalty else 0.0) for c in cands]
+    cost = [c.cost + (width_penalty(c.width, m, p.width.penalty_width) if p.width.on else 0.0) for c in cands]
     best = int(np.argmin(cost))
     if prev is None:
         return cands[best]
@@ -137,7 +137,7 @@ def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
         for part in h.at["lost"]:
             part.lost(sub)
         return cands[best]
-    if cost[best] >= cost[same] - p.switch_margin:
+    if cost[best] >= cost[same] - p.core.switch_margin:
         return cands[same]
     return cands[best]
 
@@ -173,9 +173,9 @@ def cruise(p, clearance: float) -> float:
     from v_s (clearance >= clr_slow) to v_min_frac v_s (clearance <= d_safe) by the nearest
     LiDAR return of its members (adaptive cruise, ours)."""
     if not p.adaptive:
-        return p.v_s
-    f = _clip((clearance - p.d_safe) / max(p.clr_slow - p.d_safe, 1e-9), 0.0, 1.0)
-    return p.v_s * (p.v_min_frac + (1.0 - p.v_min_frac) * f)
+        return p.core.v_s
+    f = _clip((clearance - p.paper.d_safe) / max(p.safety.clr_slow - p.paper.d_safe, 1e-9), 0.0, 1.0)
+    return p.core.v_s * (p.safety.v_min_frac + (1.0 - p.safety.v_min_frac) * f)
 
 
 def _clip(v: float, lo: float, hi: float) -> float:

@@ -1,41 +1,36 @@
-"""Parameters of the HES method: Table A1 of the paper, and the values it leaves open.
+"""Parameters of the HES method: the paper's Table A1 (:class:`PaperParams`), the values it leaves
+open (:class:`CoreParams`), and one nested record per extension of ours (``extension_params``).
 
 Every field carries its unit and its source. ``Table A1`` / ``eq. (n)`` values are the
 paper's and must not be tuned. Fields marked ``ours`` are not given by the paper; the reason
-for each value is in the comment and in ``docs/methods/hes.md``. One parameter set serves all
-scenes (nothing here is scene-specific).
+for each value is in its line and in ``docs/methods/hes.md``. One parameter set serves all
+scenes (nothing here is scene-specific). Names are dotted (``paper.k_p``, ``passage.on``); the
+flat names of earlier versions are aliases (``HesParams.ALIASES``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from swarmnav.errors import ConfigError
-from swarmnav.params import param
 from swarmnav.llm.config import DECISIONS, validate as validate_llm  # noqa: F401  DECISIONS: rule + LLM back ends
+from swarmnav.methods.hes.extension_params import (
+    AblationParams, BarrierParams, CommitParams, GuardParams, HoldParams, PassageParams, SafetyParams, StallParams,
+    TrailParams, WidthParams,
+)
+from swarmnav.params import param
 
 
 @dataclass(frozen=True, slots=True)
-class HesParams:
-    #: Named parameter sets (``--set preset=NAME``): ``swarmnav`` is the default build;
-    #: ``faithful`` is the paper as written: every extension of ours switched off, the encircle ring
-    #: circulating and merges by eq. (16) under the split-merge cooldown (docs/methods/hes.md).
-    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
-        "swarmnav": {},
-        "faithful": {"passage_mode": False, "agent_guard": False, "stall_plan": False, "trail_follow": False,
-                     "split_commit": False, "route_hold": False, "width_penalty": False,
-                     "enc_orbit": True, "merge_rule": "paper_cooldown"},
-    }
+class PaperParams:
+    """The paper's parameters: Table A1 and the step of Section 5.1 (never tuned)."""
 
-    # ---------------------------------------------------------------- dynamics and sensing
     dt: float = param(0.1, "s", "[0.0001, 1]", "Section 5.1", "integration / decision step")
     n_rays: int = param(360, "", "[8, 36000]", "Table A1", "LiDAR rays n_theta (1 deg resolution)")
     lidar_range: float = param(20.0, "m", "(0, inf)", "Table A1", "LiDAR range R_L")
     r_trigger: float = param(14.0, "m", "(0, inf)", "eq. (35)-(36), Table A1", "R_t avoidance trigger radius")
     a_max: float = param(2.6, "m/s^2", "(0, inf)", "eq. (39), Table A1", "a_xy^max acceleration saturation")
-
-    # ---------------------------------------------------------------- force gains, Table A1
     k_p: float = param(0.7, "1/s^2", "[0, inf)", "eq. (24), Table A1", "slot position gain")
     k_v: float = param(0.8, "1/s", "[0, inf)", "eq. (24), Table A1", "slot velocity gain")
     k_rep: float = param(9.0, "m^3/s^2", "[0, inf)", "eq. (36), Table A1", "LiDAR repulsion base gain")
@@ -52,22 +47,22 @@ class HesParams:
     d_safe: float = param(1.5, "m", "(0, inf)", "eq. (36), Table A1",
         "safety distance of eq. (36) (also the metric threshold)")
     sigma_occ: float = param(0.2, "", "(0, 1]", "eq. (30), Table A1", "occlusion attenuation factor")
-
-    # ---------------------------------------------------------------- structural decisions, Table A1
     t_cd: float = param(10.0, "s", "[0, inf)", "eq. (13), Table A1", "T_cd split-merge cooldown")
     r_in: float = param(8.0, "m", "(0, inf)", "eq. (12), Table A1", "encircle entry threshold")
     r_out: float = param(11.0, "m", "(0, inf)", "eq. (12), Table A1", "encircle exit threshold")
     r_merge: float = param(12.0, "m", "(0, inf)", "eqs. (13), (15), Table A1", "near-goal radius")
     d_merge: float = param(8.0, "m", "(0, inf)", "eq. (16), Table A1", "inter-sub-swarm merge distance")
-
-    # ---------------------------------------------------------------- follower reassignment, Table A1
     w_sl: float = param(1.0, "", "[0, inf)", "eq. (41), Table A1", "w subleader-distance weight")
     w_c: float = param(0.5, "", "[0, inf)", "eq. (41), Table A1", "w_c waypoint-distance weight")
     delta_min: float = param(2.0, "m", "[0, inf)", "eq. (41), Table A1", "Delta_min minimum cost improvement")
     tau_ra: float = param(2.0, "s", "[0, inf)", "Section 4.4, Table A1", "tau_ra per-follower cooldown")
     n_move_max: int = param(3, "", "[0, inf)", "Section 4.4, Table A1", "N_move^max transfers per planner update")
 
-    # ---------------------------------------------------------------- reference trajectory (ours)
+
+@dataclass(frozen=True, slots=True)
+class CoreParams:
+    """Values the paper leaves open in its own method (ours: each value's reason in its line)."""
+
     v_s: float = param(3.0, "m/s", "(0, inf)", "ours",
         "cruise speed v_s: crosses the 70 m scenes in ~40 s, leaving time to form the encircle "
         "ring")
@@ -99,8 +94,6 @@ class HesParams:
     stray: float = param(4.0, "m", "(0, inf)", "ours",
         "a subleader farther than this from its sub-swarm's centroid (or cut off from it) hands "
         "its role to the member nearest the centroid (the paper fixes no rule for who leads)")
-
-    # ---------------------------------------------------------------- interaction radii (ours)
     r_sep: float = param(1.6, "m", "(0, inf)", "ours",
         "r_sep of eq. (25): global separation acts inside ~one UAV spacing")
     d_ir: float = param(1.2, "m", "(0, inf)", "ours", "d_ir of eq. (31): shorter than r_sep, as Section 4.2 requires")
@@ -113,8 +106,6 @@ class HesParams:
         "d_c of eq. (29): > r_enc, so the ring is not pulled in; acts on stragglers only")
     d_floor: float = param(0.05, "m", "(0, inf)", "ours",
         "distances are floored here before 1/d and 1/d^2 (bounded forces)")
-
-    # ---------------------------------------------------------------- corridor detection (ours)
     w_pass: float = param(2.0, "m", "(0, inf)", "ours",
         "narrowest gap a UAV may be routed through (0.4 m body + margins)")
     w_split: float = param(6.0, "m", "[0, inf)", "ours",
@@ -125,170 +116,165 @@ class HesParams:
     toward_deg: float = param(80.0, "deg", "(0, 180]", "ours",
         "a corridor leads toward the goal if its exit direction is within this of the goal "
         "bearing (< 90: never back)")
-    gap_depth: float = param(0.6, "m", "[0, inf)", "ours",
-        "(passage mode) the peak return must lie this far from the throat: a concave corner seen "
-        "at a grazing angle (<= one ray spacing, 0.35 m at R_L) is no passage")
     switch_margin: float = param(3.0, "m", "[0, inf)", "ours",
         "route-cost margin before a sub-swarm switches corridor (hysteresis)")
     rho_vis: float = param(0.4, "m", "[0, inf)", "ours",
         "half-width of the straight line from the centroid to a throat (or from a member to a trail "
         "point) that must be free of LiDAR returns for it to count as reachable / in view")
-    width_penalty: bool = param(True, "", None, "ours",
-        "route cost of a narrow corridor grows by m (penalty_width - w) / penalty_width for a "
-        "sub-swarm of m agents (the queue of funnelling them through); False = route length only")
-    penalty_width: float = param(6.0, "m", "(0, inf)", "ours",
-        "corridors at least this wide carry no width penalty (three abreast at 2 m)")
-    split_commit: bool = param(True, "", None, "ours",
-        "a split's corridor is followed until the centroid has passed its throat or commit_time "
-        "has lapsed; False = the route is re-chosen every step from the split on")
-    commit_time: float = param(20.0, "s", "[0, inf)", "ours",
-        "a split's corridor assignment lapses after this long if the throat is not passed")
-    route_hold: bool = param(True, "", None, "ours",
-        "a throat stays the route while members in line with it are still in front of it (at most "
-        "hold_time after the first passed); False = the next corridor is chosen at once")
-    hold_time: float = param(15.0, "s", "[0, inf)", "ours",
-        "longest a sub-swarm waits at a throat for its last members")
     max_subswarms: int = param(3, "", "[1, 1000]", "ours", "a split creates at most this many sub-swarms")
     min_size: int = param(4, "", "[1, inf)", "ours", "smallest sub-swarm a split may create")
-
-    # ---------------------------------------------------------------- safety stack (ours; Section 5.3)
-    v_min_frac: float = param(0.5, "", "(0, 1]", "ours",
-        "adaptive cruise: v_s is scaled down to this fraction in tight places")
-    clr_slow: float = param(3.0, "m", "[0, inf)", "ours",
-        "adaptive cruise acts when the sub-swarm's closest LiDAR return is nearer than this")
-    v_cap_frac: float = param(1.3, "", "(0, inf)", "ours",
-        "speed cap of the safety filter: 1.3 v_s (room to catch up with the formation)")
-    brake_margin: float = param(0.5, "m", "[0, inf)", "ours",
-        "braking barrier: stopping distance kept from every LiDAR return")
-    a_brake: float = param(1.5, "m/s^2", "[0, inf)", "ours",
-        "braking barrier: deceleration budget (< a_max, leaves room for the other terms)")
-    agent_brake: float = param(2.0, "m/s^2", "[0, inf)", "ours",
-        "(passage mode) agent braking barrier: a member's own braking budget when closing on a "
-        "neighbour (1.5: gates R_goal 0.8 on seed 4; 2.6: more contacts); 0 switches the barrier "
-        "off")
-    agent_margin: float = param(0.7, "m", "[0, inf)", "ours",
-        "(passage mode) agent braking barrier: a member stops this far from the neighbour in "
-        "front (contact 0.4 m + 0.3 m; 0.6: twice the contacts on the gates, 0.8: R_goal 0.6-0.8 "
-        "on some gates seeds before the tube change, 1.0: Y = 0)")
-    agent_guard: bool = param(True, "", None, "ours",
-        "contact guard (forces.agent_guard), every agent brakes for its neighbours with priority "
-        "over the clip of eq. (39); False = eq. (39) alone (the faithful build)")
-    guard_brake: float = param(2.2, "m/s^2", "[0, inf)", "ours",
-        "contact guard: braking each agent of a closing pair is assumed to use (< a_max: head-on "
-        "pairs need exactly this each; 2.0: one box_field_2 seed of ten stalls in a pocket, 1.8: "
-        "dense_cross_blocks R_unsafe 0.228)")
-    guard_margin: float = param(0.5, "m", "[0, inf)", "ours",
-        "contact guard: a closing pair stops this far apart (contact 0.4 m + 0.1 m)")
-    wall_passes: int = param(3, "", "[1, 1000]", "ours",
-        "braking barrier: sweeps over the rays before what is left is scaled away (one is not "
-        "enough between two obstacles)")
-    trail_follow: bool = param(True, "", None, "ours",
-        "a member cut off from its sub-swarm (slot, subleader and centroid behind obstacles, > "
-        "d_c from the centroid) retraces its teammates' trail instead of pulling at its slot "
-        "through the wall (trail.py); False = eqs. (24)/(32) toward the slot and c_s "
-        "always")
-    trail_every: int = param(10, "steps", "[1, inf)", "ours",
-        "trail following: steps between two samples of the members' positions (10: 1 s)")
-    trail_len: int = param(200, "", "[1, 100000]", "ours",
-        "trail following: samples kept (200 at 1 s: longer than a run)")
-    trail_reach: float = param(10.0, "m", "[0, inf)", "ours",
-        "trail following: a cut-off member looks for trail points this close (half R_L)")
-    cut_time: float = param(2.0, "s", "[0, inf)", "ours",
-        "trail following: a member cut off this long follows the trail (not one briefly behind a "
-        "corner)")
-    wp_clear: float = param(2.0, "m", "[0, inf)", "ours",
-        "the waypoint c_s is pushed this far from LiDAR returns (half the corridor width if "
-        "narrower)")
-
-    # ---------------------------------------------------------------- passage mode (ours, beyond the paper; docs "Passage mode")
-    passage_mode: bool = param(True, "", None, "ours",
-        "members inside the tube of their route's throat use d_safe_eff = min(d_safe - "
-        "passage_relief, w/2 - passage_margin) in eq. (36); False = the paper's law everywhere")
-    passage_margin: float = param(0.3, "m", "[0, inf)", "ours",
-        "clearance kept between the throat's centre line and d_safe_eff: the near-obstacle term "
-        "engages beyond 0.3 m off centre")
-    passage_band: float = param(1.2, "m", "[0, inf)", "ours",
-        "a route throat is a passage when the free band the paper's law leaves in it, w - 2 "
-        "d_safe, is narrower than this (3 body diameters: room for one file). The first rule, w < "
-        "2 (d_safe + passage_margin), was a 0.6 m band: 4 m gates left 1 m and the swarm queued "
-        "there without passage mode (hes_gates_4m_shifted Y 0). 1.6 m was tried and dropped: "
-        "centred 4.2 m gates fell from Y 1 to 0.6")
-    passage_relief: float = param(0.2, "m", "[0, inf)", "ours",
-        "inside a passage's tube d_safe_eff <= d_safe - passage_relief, so a throat wider than 2 "
-        "(d_safe + passage_margin) still widens its band (4 m gate: 1.0 -> 1.4 m) and its members "
-        "queue as in any passage")
-    passage_len: float = param(2.5, "m", "[0, inf)", "ours",
-        "tube half-length along the throat normal: d_safe (corner reach) + 1 m (wall thickness "
-        "either side of the detected throat)")
-    passage_confirm: float = param(5.0, "s", "[0, inf)", "ours",
-        "a narrow throat becomes a passage after being the route, with no wider corridor "
-        "reported, this long (2 s engaged passages beside blocks that the swarm can fly around: "
-        "dense_cross_blocks R_unsafe 0.25)")
-    passage_memory: float = param(20.0, "s", "[0, inf)", "ours",
-        "a throat keeps its passage this long after the sub-swarm's route moved on (members still "
-        "in front of it)")
-    passage_queue: float = param(20.0, "m", "[0, inf)", "ours",
-        "a member in front of an earlier throat queues for it when within this distance (R_L: it "
-        "can see the throat)")
-    passage_head: int = param(2, "", "[1, inf)", "ours",
-        "once this many members have crossed the route's passage they are the head (waypoint, "
-        "subleader) and the rest queue for it: the head moves on while the tail streams through "
-        "(1 jams the mouth; 3 leaves the whole sub-swarm in formation at the mouth longer, gates "
-        "seed 4 fails)")
-    passage_reach: float = param(1.5, "m", "[0, inf)", "ours",
-        "tube half-width beyond w/2: an agent approaching within d_safe of the throat's corners "
-        "is inside")
-    passage_count: int = param(3, "", "[1, 1000]", "ours",
-        "throats remembered per sub-swarm (the current one and the two before)")
-
-    # ---------------------------------------------------------------- stall planner (ours, beyond the paper; docs "Stall planner")
-    stall_plan: bool = param(True, "", None, "ours",
-        "a sub-swarm whose most advanced member has not come plan_progress closer to the goal for "
-        "plan_stall s follows a path planned on the map of its rings' returns (plan.py) instead "
-        "of the reactive corridor choice; False = the reactive choice always")
-    plan_stall: float = param(10.0, "s", "[0, inf)", "ours",
-        "no progress this long engages the planner (a queue streaming through a gate, or a "
-        "formation squeezing round a block, advances its head well within it)")
-    plan_progress: float = param(1.0, "m", "[0, inf)", "ours",
-        "progress = the most advanced member comes this much closer to the goal than ever before")
-    plan_cell: float = param(0.2, "m", "[0.05, 5]", "ours", "map cell (half the 0.4 m body)")
-    plan_clear: float = param(0.6, "m", "(0, inf)", "ours",
-        "a path keeps this from every return seen: > brake_margin (0.5 m), where the wall braking "
-        "barrier stops an agent dead (0.4: four agents froze in the middle of a 0.98 m gap); gaps "
-        "from ~1.2 m up are passable")
-    plan_weight: float = param(1.0, "", "[0, inf)", "ours",
-        "path cost per metre is 1 + plan_weight (d_safe - clearance) / clearance below d_safe: a "
-        "squeeze at 0.5 m clearance costs 3 m per metre, at 0.75 m (a 1.5 m gap) 2 m, so wider "
-        "ways round win unless much shorter and a path keeps to the middle of a gap")
-    plan_look: float = param(2.0, "m", "[0, inf)", "ours",
-        "the corridor target is the path point this far (arc length) past the centroid's nearest "
-        "path point")
-    plan_every: float = param(1.0, "s", "(0, inf)", "ours",
-        "replanning interval while engaged (the map grows as the swarm moves)")
-    plan_map_every: int = param(5, "steps", "[1, inf)", "ours",
-        "steps between two updates of the map of returns (0.5 s; every step while engaged)")
-    plan_margin: float = param(20.0, "m", "[0, 200]", "ours",
-        "the map covers the box of the start and the goal plus this margin (R_L)")
-
-    # ---------------------------------------------------------------- ablations (Simulation 2)
-    safety_stack_off: bool = param(False, "", None, "ours",
-        "True: waypoint regulation (rate limit, leash, clearance), adaptive cruise and safety "
-        "filter off; a_max -> a_max_relaxed")
-    occlusion_attenuation: bool = param(True, "", None, "ours",
-        "False: sigma_occ = 1 (Table 4 \"w/o occ. attenuation\")")
-    acceleration_bound: bool = param(True, "", None, "ours",
-        "False: a_max -> a_max_relaxed (Table 4 \"w/o acc. bound\")")
-    a_max_relaxed: float = param(26.0, "m/s^2", "(0, inf)", "ours",
-        "the \"very loose\" bound of the ablations: 10 x a_max")
-
-    # ---------------------------------------------------------------- structural rules
     merge_rule: str = param("swarmnav", "", None, "ours",
         "swarmnav: merge two sub-swarms closer than d_merge only once their corridors have "
         "rejoined and T_cd has passed (RulePolicy rule 3); paper: merge whenever eq. (16) holds; "
         "paper_cooldown: eq. (16) once T_cd has passed since the last change (Table A1's "
         "split-merge cooldown read as holding merges too)")
 
-    # ---------------------------------------------------------------- decision source
+
+@dataclass(frozen=True, slots=True)
+class HesParams:
+    """Every parameter of HES: the paper's Table A1 (``paper``), the values it leaves open (``core``),
+    one record per extension of ours (switched by its ``on``), the ablations, and the decision source.
+
+    ``--set`` names are dotted (``paper.k_p=0.7``, ``passage.on=false``); the flat names of earlier
+    versions (``k_p``, ``passage_mode``) are accepted as aliases (``ALIASES``)."""
+
+    #: Named parameter sets (``--set preset=NAME``): ``swarmnav`` is the default build;
+    #: ``faithful`` is the paper as written: every extension of ours that changes its decisions or
+    #: its control law switched off, the encircle ring circulating and merges by eq. (16) under the
+    #: split-merge cooldown (docs/methods/hes.md).
+    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
+        "swarmnav": {},
+        "faithful": {"passage.on": False, "guard.on": False, "stall.on": False, "trail.on": False,
+                     "commit.on": False, "hold.on": False, "width.on": False,
+                     "core.enc_orbit": True, "core.merge_rule": "paper_cooldown"},
+    }
+    #: Flat names of earlier versions -> their dotted name (accepted by ``--set``, specs and the API).
+    ALIASES: ClassVar[dict[str, str]] = {
+        "dt": "paper.dt",
+        "n_rays": "paper.n_rays",
+        "lidar_range": "paper.lidar_range",
+        "r_trigger": "paper.r_trigger",
+        "a_max": "paper.a_max",
+        "k_p": "paper.k_p",
+        "k_v": "paper.k_v",
+        "k_rep": "paper.k_rep",
+        "k_e": "paper.k_e",
+        "k_b": "paper.k_b",
+        "gamma": "paper.gamma",
+        "k_sep": "paper.k_sep",
+        "k_intra": "paper.k_intra",
+        "k_ir": "paper.k_ir",
+        "k_path": "paper.k_path",
+        "k_l": "paper.k_l",
+        "k_vl": "paper.k_vl",
+        "k_coh": "paper.k_coh",
+        "d_safe": "paper.d_safe",
+        "sigma_occ": "paper.sigma_occ",
+        "t_cd": "paper.t_cd",
+        "r_in": "paper.r_in",
+        "r_out": "paper.r_out",
+        "r_merge": "paper.r_merge",
+        "d_merge": "paper.d_merge",
+        "w_sl": "paper.w_sl",
+        "w_c": "paper.w_c",
+        "delta_min": "paper.delta_min",
+        "tau_ra": "paper.tau_ra",
+        "n_move_max": "paper.n_move_max",
+        "v_s": "core.v_s",
+        "eps_v": "core.eps_v",
+        "spacing": "core.spacing",
+        "aspect_max": "core.aspect_max",
+        "lane_margin": "core.lane_margin",
+        "lead": "core.lead",
+        "through": "core.through",
+        "r_enc": "core.r_enc",
+        "enc_orbit": "core.enc_orbit",
+        "enc_clear": "core.enc_clear",
+        "enc_samples": "core.enc_samples",
+        "slot_refresh": "core.slot_refresh",
+        "assign_exact": "core.assign_exact",
+        "stray": "core.stray",
+        "r_sep": "core.r_sep",
+        "d_ir": "core.d_ir",
+        "d_thr": "core.d_thr",
+        "d_0": "core.d_0",
+        "d_c": "core.d_c",
+        "d_floor": "core.d_floor",
+        "w_pass": "core.w_pass",
+        "w_split": "core.w_split",
+        "h_open": "core.h_open",
+        "toward_deg": "core.toward_deg",
+        "switch_margin": "core.switch_margin",
+        "rho_vis": "core.rho_vis",
+        "max_subswarms": "core.max_subswarms",
+        "min_size": "core.min_size",
+        "merge_rule": "core.merge_rule",
+        "v_min_frac": "safety.v_min_frac",
+        "clr_slow": "safety.clr_slow",
+        "v_cap_frac": "safety.v_cap_frac",
+        "wp_clear": "safety.wp_clear",
+        "brake_margin": "barrier.margin",
+        "a_brake": "barrier.a_brake",
+        "wall_passes": "barrier.passes",
+        "width_penalty": "width.on",
+        "penalty_width": "width.penalty_width",
+        "split_commit": "commit.on",
+        "commit_time": "commit.time",
+        "route_hold": "hold.on",
+        "hold_time": "hold.time",
+        "agent_guard": "guard.on",
+        "guard_brake": "guard.brake",
+        "guard_margin": "guard.margin",
+        "trail_follow": "trail.on",
+        "trail_every": "trail.every",
+        "trail_len": "trail.length",
+        "trail_reach": "trail.reach",
+        "cut_time": "trail.cut_time",
+        "passage_mode": "passage.on",
+        "passage_margin": "passage.margin",
+        "passage_band": "passage.band",
+        "passage_relief": "passage.relief",
+        "passage_len": "passage.length",
+        "passage_confirm": "passage.confirm",
+        "passage_memory": "passage.memory",
+        "passage_queue": "passage.queue",
+        "passage_head": "passage.head",
+        "passage_reach": "passage.reach",
+        "passage_count": "passage.count",
+        "gap_depth": "passage.gap_depth",
+        "agent_brake": "passage.agent_brake",
+        "agent_margin": "passage.agent_margin",
+        "stall_plan": "stall.on",
+        "plan_stall": "stall.time",
+        "plan_progress": "stall.progress",
+        "plan_cell": "stall.cell",
+        "plan_clear": "stall.clear",
+        "plan_weight": "stall.weight",
+        "plan_look": "stall.look",
+        "plan_every": "stall.every",
+        "plan_map_every": "stall.map_every",
+        "plan_margin": "stall.margin",
+        "safety_stack_off": "ablation.safety_stack_off",
+        "occlusion_attenuation": "ablation.occlusion_attenuation",
+        "acceleration_bound": "ablation.acceleration_bound",
+        "a_max_relaxed": "ablation.a_max_relaxed",
+    }
+
+    paper: PaperParams = field(default_factory=PaperParams, metadata={"doc": "Table A1 and Section 5.1"})
+    core: CoreParams = field(default_factory=CoreParams, metadata={"doc": "values the paper leaves open"})
+    safety: SafetyParams = field(default_factory=SafetyParams, metadata={"doc": "adaptive motion regulation (safety stack)"})
+    barrier: BarrierParams = field(default_factory=BarrierParams, metadata={"doc": "wall braking barrier"})
+    guard: GuardParams = field(default_factory=GuardParams, metadata={"doc": "contact guard"})
+    width: WidthParams = field(default_factory=WidthParams, metadata={"doc": "route-cost width penalty"})
+    commit: CommitParams = field(default_factory=CommitParams, metadata={"doc": "split commitment"})
+    hold: HoldParams = field(default_factory=HoldParams, metadata={"doc": "route hold"})
+    trail: TrailParams = field(default_factory=TrailParams, metadata={"doc": "trail following"})
+    passage: PassageParams = field(default_factory=PassageParams, metadata={"doc": "passage mode"})
+    stall: StallParams = field(default_factory=StallParams, metadata={"doc": "stall planner"})
+    ablation: AblationParams = field(default_factory=AblationParams, metadata={"doc": "Simulation 2 ablations"})
+
+    # ---------------------------------------------------------------- decision source (Section 3.3)
+    # the fields of swarmnav.llm.LlmParams, under the same names (shared with ``swarmnav llm``)
     decision: str = param("rule", "", None, "Section 3.3",
         "rule | ollama | openai | llamacpp | replay, Section 3.3 (docs/llm.md)")
     llm_url: str = param("", "", None, "ours",
@@ -312,27 +298,33 @@ class HesParams:
         # single values are checked against their declared ranges by params.build; here the
         # relations between them
         validate_llm(self)  # decision and llm_* (raises ConfigError)
-        if self.merge_rule not in ("swarmnav", "paper", "paper_cooldown"):
-            raise ConfigError(f"hes: merge_rule must be swarmnav, paper or paper_cooldown, got {self.merge_rule!r}")
-        if not self.r_out > self.r_in:
-            raise ConfigError(f"hes: need r_out > r_in (eq. 12), got r_in={self.r_in}, r_out={self.r_out}")
-        if not self.passage_relief < self.d_safe:
-            raise ConfigError(f"hes: passage_relief must be < d_safe ({self.d_safe} m), got {self.passage_relief}")
+        c, a = self.core, self.paper
+        if c.merge_rule not in ("swarmnav", "paper", "paper_cooldown"):
+            raise ConfigError(f"hes: core.merge_rule must be swarmnav, paper or paper_cooldown, got {c.merge_rule!r}")
+        if not a.r_out > a.r_in:
+            raise ConfigError(f"hes: need paper.r_out > paper.r_in (eq. 12), got r_in={a.r_in}, r_out={a.r_out}")
+        if not self.passage.relief < a.d_safe:
+            raise ConfigError(f"hes: passage.relief must be < paper.d_safe ({a.d_safe} m), got {self.passage.relief}")
 
     # -- derived
     @property
+    def dt(self) -> float:
+        """The step [s] (``paper.dt``)."""
+        return self.paper.dt
+
+    @property
     def sigma(self) -> float:
         """Occlusion factor actually applied (1 when the ablation switches it off)."""
-        return self.sigma_occ if self.occlusion_attenuation else 1.0
+        return self.paper.sigma_occ if self.ablation.occlusion_attenuation else 1.0
 
     @property
     def a_bound(self) -> float:
         """Acceleration bound actually applied [m/s^2]."""
-        if self.safety_stack_off or not self.acceleration_bound:
-            return self.a_max_relaxed
-        return self.a_max
+        if self.ablation.safety_stack_off or not self.ablation.acceleration_bound:
+            return self.ablation.a_max_relaxed
+        return self.paper.a_max
 
     @property
     def adaptive(self) -> bool:
         """The adaptive motion-regulation layers (waypoint regulation, adaptive cruise, safety filter) are on."""
-        return not self.safety_stack_off
+        return not self.ablation.safety_stack_off

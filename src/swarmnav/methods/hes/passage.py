@@ -99,9 +99,9 @@ class PassageMode(Part):
         # a throat narrower than w_wide [m] is narrow for gap detection and the corridor filter
         # (w/2 - margin < d_safe); one narrower than w_passage can become a passage (the band the
         # paper's law leaves in it, w - 2 d_safe, is under passage_band)
-        self.w_wide = 2.0 * (p.d_safe + p.passage_margin)
-        self.w_passage = 2.0 * p.d_safe + max(p.passage_band, 2.0 * p.passage_margin)
-        self.approach, self.approach_w = p.passage_len, self.w_wide
+        self.w_wide = 2.0 * (p.paper.d_safe + p.passage.margin)
+        self.w_passage = 2.0 * p.paper.d_safe + max(p.passage.band, 2.0 * p.passage.margin)
+        self.approach, self.approach_w = p.passage.length, self.w_wide
 
     def reset(self, hes, positions):
         self.h = hes
@@ -145,7 +145,7 @@ class PassageMode(Part):
         a, h = sub.subleader, self.h
         keep = ~narrow
         keep[narrow] = seen_passages(gaps[narrow], step.ring[a], step.x[a, 0], step.x[a, 1], h.cos, h.sin,
-                                     self.p.gap_depth, self.p.lidar_range)
+                                     self.p.passage.gap_depth, self.p.paper.lidar_range)
         return gaps[keep]
 
     def corridors(self, step, sub, cors):
@@ -161,7 +161,7 @@ class PassageMode(Part):
         """Members inside a passage's tube (or queued for one) do not slow the sub-swarm's cruise."""
         if self.last_dsafe is None:
             return None
-        return (self.last_dsafe[members] >= self.p.d_safe) & (self.q_idx[members] < 0)
+        return (self.last_dsafe[members] >= self.p.paper.d_safe) & (self.q_idx[members] < 0)
 
     # ------------------------------------------------------------ structure
     def split(self, old, new, k):
@@ -173,7 +173,7 @@ class PassageMode(Part):
         """The merged sub-swarm keeps the passages of both parts (members in front of a throat
         stay queued for it)."""
         gone, kept = self.mem.pop(drop), self.mem[keep]
-        kept.passages = sorted(gone.passages + kept.passages, key=lambda q: q.step)[-self.p.passage_count:]
+        kept.passages = sorted(gone.passages + kept.passages, key=lambda q: q.step)[-self.p.passage.count:]
 
     # ------------------------------------------------------------ route
     def encircle(self, step, sub, rep):
@@ -186,7 +186,7 @@ class PassageMode(Part):
         members still in front of it queue for it). Replaces the route hold for narrow throats."""
         behind = [q.throat for q in self.mem[sub.sid].passages if q.crossed[rep.pack.members].any()]
         return [c for c in cands if c.width >= self.w_wide or (
-            float(np.dot(cent - c.mid, c.normal)) <= self.p.through
+            float(np.dot(cent - c.mid, c.normal)) <= self.p.core.through
             and not any(math.hypot(*(c.mid - b.mid)) <= 0.5 * b.width for b in behind))]
 
     def end_route(self, step, sub, prev):
@@ -210,8 +210,8 @@ class PassageMode(Part):
         p, mem = self.p, self.mem[sid]
         w_wide = self.w_passage
         members = self.h.labels == sid
-        keep = [q for q in mem.passages if (k - q.step) * p.dt <= p.passage_memory or bool(np.any(
-            members & ~q.crossed & (np.hypot(*(x - q.throat.mid).T) <= p.passage_queue)))]
+        keep = [q for q in mem.passages if (k - q.step) * p.paper.dt <= p.passage.memory or bool(np.any(
+            members & ~q.crossed & (np.hypot(*(x - q.throat.mid).T) <= p.passage.queue)))]
         narrow = route is not None and not route.direct and route.width < w_wide
         same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
         planned = self.stall is not None and self.stall.engaged(sid)
@@ -220,13 +220,13 @@ class PassageMode(Part):
         mem.narrow_steps = mem.narrow_steps + 1 if only else 0
         # in a chain of narrow throats (a passage is remembered) the next narrow route is confirmed at once
         chain = narrow and only and bool(keep)
-        if narrow and (same or chain or planned or mem.narrow_steps * p.dt >= p.passage_confirm):
+        if narrow and (same or chain or planned or mem.narrow_steps * p.paper.dt >= p.passage.confirm):
             keep = [q for q in keep if not any(q is r for r in same)]
             crossed = same[-1].crossed if same else np.zeros(self.n, dtype=bool)
             keep.append(Passage(route, k, crossed))
         for q in keep:
             q.crossed |= (x - q.throat.mid) @ q.throat.normal > 0.0
-        mem.passages = keep[-p.passage_count:]
+        mem.passages = keep[-p.passage.count:]
 
     def target(self, step, sub, route, target, cent, along):
         """A narrow throat the subleader does not see straight from the centroid is reached through
@@ -234,8 +234,8 @@ class PassageMode(Part):
         p, h, a, x = self.p, self.h, sub.subleader, step.x
         if route.width < self.w_wide and along <= 0.0 and not segment_clear(
                 step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, cent[0], cent[1], route.mid[0], route.mid[1],
-                p.rho_vis, p.lidar_range):
-            return route.mid - p.passage_len * route.normal
+                p.core.rho_vis, p.paper.lidar_range):
+            return route.mid - p.passage.length * route.normal
         return target
 
     def restart(self, step, sub, cent):
@@ -248,7 +248,7 @@ class PassageMode(Part):
             a = sub.subleader
             start = cent if mem.passages else x[a]
             if not segment_clear(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, start[0], start[1],
-                                 sub.waypoint[0], sub.waypoint[1], 0.2, self.p.lidar_range):
+                                 sub.waypoint[0], sub.waypoint[1], 0.2, self.p.paper.lidar_range):
                 sub.waypoint = start.copy()
         mem.chained = mem.chained or bool(mem.passages)
 
@@ -281,12 +281,12 @@ class PassageMode(Part):
             for j, q in enumerate(self.mem[s].passages):
                 c = q.throat
                 if (sub.route is not None and math.hypot(*(c.mid - sub.route.mid)) <= 0.5 * c.width
-                        and np.count_nonzero(members & q.crossed) < p.passage_head):
+                        and np.count_nonzero(members & q.crossed) < p.passage.head):
                     continue  # the current route, not yet crossed by a head: its members follow c_s
-                near = np.hypot(*(x - c.mid).T) <= p.passage_queue
+                near = np.hypot(*(x - c.mid).T) <= p.passage.queue
                 pend = members & ~q.crossed & near & (q_idx < 0)
                 q_idx[pend] = j
-                q_tgt[pend] = c.mid + p.through * c.normal
+                q_tgt[pend] = c.mid + p.core.through * c.normal
         return q_idx, q_tgt
 
     def chained_agents(self, step) -> np.ndarray:
@@ -315,17 +315,17 @@ class PassageMode(Part):
             members = np.flatnonzero(labels == s)
             for q in mem.passages:
                 c = q.throat
-                eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.d_safe, p.passage_margin,
-                                    p.passage_len, p.passage_reach, p.passage_relief)
+                eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.paper.d_safe, p.passage.margin,
+                                    p.passage.length, p.passage.reach, p.passage.relief)
                 inside = members[eff < out[members]]
                 rel = x[inside] - c.mid
-                lined = np.abs(rel @ np.array([-c.normal[1], c.normal[0]])) <= 0.5 * c.width - p.passage_margin
+                lined = np.abs(rel @ np.array([-c.normal[1], c.normal[0]])) <= 0.5 * c.width - p.passage.margin
                 exit_dir[inside] = np.where(lined[:, None], c.normal, 0.0)
                 out[members] = np.minimum(out[members], eff)
         return out
 
     def push_back(self, step):
-        return bool((step.dsafe < self.p.d_safe).any())
+        return bool((step.dsafe < self.p.paper.d_safe).any())
 
     def edit_terms(self, step, t):
         """For a queued member inside a throat's tube and lined up with the gap, the LiDAR
@@ -341,5 +341,5 @@ class PassageMode(Part):
     def queue_barrier(self, step, a: np.ndarray, active: np.ndarray) -> np.ndarray:
         """The agents' braking barrier for the ``active`` members (``barriers.agent_barrier``)."""
         p = self.p
-        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.dt, p.agent_brake, p.agent_margin))
-        return agent_barrier(a, step.x, step.v, active, p.dt, p.agent_brake, p.agent_margin, p.a_bound, ptr, idx)
+        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.paper.dt, p.passage.agent_brake, p.passage.agent_margin))
+        return agent_barrier(a, step.x, step.v, active, p.paper.dt, p.passage.agent_brake, p.passage.agent_margin, p.a_bound, ptr, idx)

@@ -22,8 +22,8 @@ def sense(h, x: np.ndarray) -> np.ndarray:
     """Every agent's LiDAR ring (N, R) [m] (= ``swarmnav.sensing.lidar_ring``)."""
     p = h.params
     if h.geom.is_empty:
-        return np.full((len(x), p.n_rays), p.lidar_range)
-    return h.obstacles.lidar_into(x, h.cos, h.sin, p.lidar_range, np.empty((len(x), p.n_rays)))
+        return np.full((len(x), p.paper.n_rays), p.paper.lidar_range)
+    return h.obstacles.lidar_into(x, h.cos, h.sin, p.paper.lidar_range, np.empty((len(x), p.paper.n_rays)))
 
 
 def reelect(h, step: Step) -> None:
@@ -37,7 +37,7 @@ def reelect(h, step: Step) -> None:
     cents = F.group_centroids(x, part.col, len(ids))
     sl = np.array([h.subs[s].subleader for s in ids])
     sl_pos = x[sl]
-    far = np.hypot(*(sl_pos - cents).T) > h.params.stray
+    far = np.hypot(*(sl_pos - cents).T) > h.params.core.stray
     if not h.geom.is_empty:
         far |= h.obstacles.blocked_into(sl_pos, cents, np.empty(len(ids), dtype=np.bool_))
     if far.any():
@@ -59,13 +59,13 @@ def report(h, step: Step, s: int) -> Report:
     pack = make_pack(s, sub.subleader, members, x, step.v)
     a = sub.subleader
     ra, sa = ring[a], x[a]
-    gaps = detect_gaps(ra, sa[0], sa[1], h.cos, h.sin, p.lidar_range, p.h_open)
+    gaps = detect_gaps(ra, sa[0], sa[1], h.cos, h.sin, p.paper.lidar_range, p.core.h_open)
     for q in h.at["gaps"]:
         gaps = q.gaps(step, sub, gaps)
     approach, approach_w = h.approach
-    cors = corridors_toward(gaps, sa, h.goal, w_pass=p.w_pass, toward_deg=p.toward_deg, through=p.through,
-                            ring=ra, sensor=sa, origin=pack.centroid, rho_vis=p.rho_vis,
-                            max_range=p.lidar_range, rays=(h.cos, h.sin), approach=approach, approach_w=approach_w)
+    cors = corridors_toward(gaps, sa, h.goal, w_pass=p.core.w_pass, toward_deg=p.core.toward_deg, through=p.core.through,
+                            ring=ra, sensor=sa, origin=pack.centroid, rho_vis=p.core.rho_vis,
+                            max_range=p.paper.lidar_range, rays=(h.cos, h.sin), approach=approach, approach_w=approach_w)
     for q in h.at["corridors"]:
         cors = q.corridors(step, sub, cors)
     clr = step.ring_min[members]
@@ -110,17 +110,17 @@ def decision_state(h, step: Step) -> DecisionState:
     d_goal = [math.hypot(cx - gx, cy - gy) for cx, cy in cents]
     widths = [c.width for s in ids for c in reports[s].corridors]
     n_c = max(len(h.split_paths(step, reports[s])) for s in ids)
-    n_near = sum(d < p.r_merge for d in d_goal)  # eq. (15)
+    n_near = sum(d < p.paper.r_merge for d in d_goal)  # eq. (15)
     d_swarm_min = math.inf
     for a in range(S):  # eq. (14)
         for b in range(a + 1, S):
             d_swarm_min = min(d_swarm_min, math.hypot(cents[a][0] - cents[b][0], cents[a][1] - cents[b][1]))
     n_all = sum(len(reports[s].pack.members) for s in ids)
     gbar = sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all  # global centroid, eq. (2)
-    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbar[0] - gx, gbar[1] - gy), p.r_merge)
-    can_merge = merge_feasible(S, n_near, d_swarm_min, p.d_merge)
+    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbar[0] - gx, gbar[1] - gy), p.paper.r_merge)
+    can_merge = merge_feasible(S, n_near, d_swarm_min, p.paper.d_merge)
     return DecisionState(
-        k=int(k), dt=p.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,
+        k=int(k), dt=p.paper.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,
         w_min=float(min(widths)) if widths else 0.0, d_goal_avg=sum(d_goal) / S, n_near=n_near,
         d_swarm_min=d_swarm_min, can_split=bool(can_split), can_merge=bool(can_merge),
     )

@@ -51,7 +51,7 @@ class SplitCommit(Part):
         if sub.sid not in self.since or prev is None:
             return False
         passed = float(np.dot(rep.pack.centroid - prev.mid, prev.normal)) > 0.0
-        if passed or (step.k - self.since[sub.sid]) * self.p.dt > self.p.commit_time:
+        if passed or (step.k - self.since[sub.sid]) * self.p.paper.dt > self.p.commit.time:
             del self.since[sub.sid]
             return False
         return True
@@ -91,9 +91,9 @@ class RouteHold(Part):
         a, cent = sub.subleader, rep.pack.centroid
         sl = step.x[a]
         seen = segment_clear(step.ring[a], sl[0], sl[1], h.cos, h.sin, cent[0], cent[1], prev.mid[0],
-                             prev.mid[1], p.rho_vis, p.lidar_range)
+                             prev.mid[1], p.core.rho_vis, p.paper.lidar_range)
         if through > 0 and before > 0 and seen:
             start = self.since.setdefault(sub.sid, step.k)
-            return (step.k - start) * p.dt <= p.hold_time
+            return (step.k - start) * p.paper.dt <= p.hold.time
         self.since.pop(sub.sid, None)
         return False

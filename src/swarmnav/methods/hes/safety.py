@@ -35,8 +35,8 @@ class WallBarrier(Part):
 
     def wall(self, step, a: np.ndarray) -> np.ndarray:
         p, h = self.p, self.h
-        return safety_filter(a, step.v, step.ring, h.cos, h.sin, p.dt, p.v_cap_frac * p.v_s, p.a_brake,
-                             p.brake_margin, p.lidar_range, p.wall_passes)
+        return safety_filter(a, step.v, step.ring, h.cos, h.sin, p.paper.dt, p.safety.v_cap_frac * p.core.v_s, p.barrier.a_brake,
+                             p.barrier.margin, p.paper.lidar_range, p.barrier.passes)
 
     def brake(self, step, a):
         chained = self.queue.chained_agents(step) if self.queue is not None else None
@@ -56,5 +56,5 @@ class ContactGuard(Part):
 
     def guard(self, step, a):
         p = self.p
-        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.dt, p.guard_brake, p.guard_margin))
-        return agent_guard(a, step.x, step.v, p.dt, p.guard_brake, p.guard_margin, p.a_bound, 4, ptr, idx)
+        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.paper.dt, p.guard.brake, p.guard.margin))
+        return agent_guard(a, step.x, step.v, p.paper.dt, p.guard.brake, p.guard.margin, p.a_bound, 4, ptr, idx)

@@ -55,7 +55,7 @@ class StallPlanner(Part):
     def __init__(self, p, narrow_relief: bool):
         self.p = p
         self.narrow_relief = narrow_relief  # passage mode is on: narrow places get its safety distance
-        self.w_passage = 2.0 * p.d_safe + max(p.passage_band, 2.0 * p.passage_margin)
+        self.w_passage = 2.0 * p.paper.d_safe + max(p.passage.band, 2.0 * p.passage.margin)
 
     def reset(self, hes, positions):
         p = self.p
@@ -63,17 +63,17 @@ class StallPlanner(Part):
         self.mem = {0: Progress()}
         goal = hes.goal
         # the map of the returns every ring has seen, over the start/goal box + margin
-        lo = np.minimum(positions.min(axis=0), goal) - p.plan_margin
-        hi = np.maximum(positions.max(axis=0), goal) + p.plan_margin
-        shape = np.ceil((hi - lo) / p.plan_cell).astype(int)
+        lo = np.minimum(positions.min(axis=0), goal) - p.stall.margin
+        hi = np.maximum(positions.max(axis=0), goal) + p.stall.margin
+        shape = np.ceil((hi - lo) / p.stall.cell).astype(int)
         self.map0 = lo
         self.occ = np.zeros((int(shape[1]), int(shape[0])), dtype=np.bool_)
         self.ctg_step = NEVER
         # the field is read at the agents' cells (and descended from there) until its next update:
         # Dijkstra stops once it is exact for every cell an agent can reach before then, plus the
         # look-ahead and the start search of a blocked centroid (d_safe), at the dearest cost per metre
-        c_max = 1.0 + p.plan_weight * max(p.d_safe - p.plan_clear, 0.0) / p.plan_clear
-        self.slack = c_max * (p.v_cap_frac * p.v_s * p.plan_every + p.plan_look + p.d_safe)
+        c_max = 1.0 + p.stall.weight * max(p.paper.d_safe - p.stall.clear, 0.0) / p.stall.clear
+        self.slack = c_max * (p.safety.v_cap_frac * p.core.v_s * p.stall.every + p.stall.look + p.paper.d_safe)
 
     def engaged(self, sid: int) -> bool:
         """The planner is engaged for sub-swarm ``sid``."""
@@ -81,9 +81,9 @@ class StallPlanner(Part):
 
     def observe(self, step):
         p = self.p
-        if step.k % p.plan_map_every == 0 or any(m.planned for m in self.mem.values()):
-            mark_hits(self.occ, step.ring, step.x, self.h.cos, self.h.sin, p.lidar_range, self.map0[0],
-                      self.map0[1], p.plan_cell)
+        if step.k % p.stall.map_every == 0 or any(m.planned for m in self.mem.values()):
+            mark_hits(self.occ, step.ring, step.x, self.h.cos, self.h.sin, p.paper.lidar_range, self.map0[0],
+                      self.map0[1], p.stall.cell)
 
     def split(self, old, new, k):
         del self.mem[old]
@@ -102,9 +102,9 @@ class StallPlanner(Part):
         mem.prog_step = None  # the head's progress is counted in navigate mode only
         d = rep.pack.positions - self.h.goal
         dmax = float(np.hypot(d[:, 0], d[:, 1]).max())
-        if mem.tail_step is None or dmax <= p.r_out or dmax < mem.tail_d - p.plan_progress:
+        if mem.tail_step is None or dmax <= p.paper.r_out or dmax < mem.tail_d - p.stall.progress:
             mem.tail_d, mem.tail_step = dmax, k
-        if not mem.planned and (k - mem.tail_step) * p.dt >= p.plan_stall:
+        if not mem.planned and (k - mem.tail_step) * p.paper.dt >= p.stall.time:
             mem.planned = True
             self.h.stats["plan_engaged"] += 1
         if mem.planned:
@@ -121,28 +121,28 @@ class StallPlanner(Part):
         mem.tail_step = None  # the tail's progress is counted in encircle mode only
         d = rep.pack.positions - self.h.goal
         dmin = float(np.hypot(d[:, 0], d[:, 1]).min())
-        if mem.prog_step is None or dmin < mem.prog_d - p.plan_progress:
+        if mem.prog_step is None or dmin < mem.prog_d - p.stall.progress:
             mem.prog_d, mem.prog_step = min(dmin, mem.prog_d), k
         if not mem.planned:
-            if (k - mem.prog_step) * p.dt < p.plan_stall:
+            if (k - mem.prog_step) * p.paper.dt < p.stall.time:
                 return None
             mem.planned = True
             self.h.stats["plan_engaged"] += 1
-        if mem.path is None or (k - mem.path_step) * p.dt >= p.plan_every - 1e-9:
+        if mem.path is None or (k - mem.path_step) * p.paper.dt >= p.stall.every - 1e-9:
             self.replan(mem, k, step.x, cent)
         if mem.path is None or len(mem.path) < 2:
             return None
         path, clr, arc = mem.path, mem.path_clr, mem.path_arc
         i0 = int(np.argmin(np.sum((path - cent) ** 2, axis=1)))
-        ie = min(int(np.searchsorted(arc, arc[i0] + p.plan_look + p.lead)), len(path) - 1)
+        ie = min(int(np.searchsorted(arc, arc[i0] + p.stall.look + p.core.lead)), len(path) - 1)
         ib = i0 + int(np.argmin(clr[i0:ie + 1]))
         d = path[min(ib + 2, len(path) - 1)] - path[max(ib - 2, 0)]
         nrm = d / max(math.hypot(d[0], d[1]), 1e-9)
         w = 2.0 * float(clr[ib])
         # the target leads `through` past a narrow place ahead, as the reactive target leads past a throat
-        look = max(arc[i0] + p.plan_look, arc[ib] + p.through if w < self.w_passage else 0.0)
+        look = max(arc[i0] + p.stall.look, arc[ib] + p.core.through if w < self.w_passage else 0.0)
         it = min(int(np.searchsorted(arc, look)), len(path) - 1)
-        route = Corridor(mid=path[ib].copy(), normal=nrm, width=w, target=path[ib] + p.through * nrm,
+        route = Corridor(mid=path[ib].copy(), normal=nrm, width=w, target=path[ib] + p.core.through * nrm,
                          cost=float(arc[-1] - arc[i0]))
         return route, path[it].copy()
 
@@ -151,13 +151,13 @@ class StallPlanner(Part):
         otherwise every ``plan_every`` s (or at once with ``now``); exact wherever the agents at
         ``x`` can read it before the next update (``slack``)."""
         p = self.p
-        if self.ctg_step == k or (not now and (k - self.ctg_step) * p.dt < p.plan_every - 1e-9):
+        if self.ctg_step == k or (not now and (k - self.ctg_step) * p.paper.dt < p.stall.every - 1e-9):
             return
-        self.clr = clearance(self.occ, p.plan_cell)
-        g = np.floor((self.h.goal - self.map0) / p.plan_cell).astype(int)
-        need = np.floor((x - self.map0) / p.plan_cell).astype(np.int64)[:, ::-1].copy()
-        self.ctg = cost_to_go(self.clr, int(g[1]), int(g[0]), p.plan_cell, p.plan_clear, p.d_safe,
-                              p.plan_weight, need, self.slack)
+        self.clr = clearance(self.occ, p.stall.cell)
+        g = np.floor((self.h.goal - self.map0) / p.stall.cell).astype(int)
+        need = np.floor((x - self.map0) / p.stall.cell).astype(np.int64)[:, ::-1].copy()
+        self.ctg = cost_to_go(self.clr, int(g[1]), int(g[0]), p.stall.cell, p.stall.clear, p.paper.d_safe,
+                              p.stall.weight, need, self.slack)
         self.ctg_step = k
 
     def replan(self, mem: Progress, k: int, x: np.ndarray, start: np.ndarray) -> None:
@@ -166,16 +166,16 @@ class StallPlanner(Part):
         self.field(k, x, now=True)
         mem.path_step = k
         ny, nx = self.ctg.shape
-        c = np.floor((start - self.map0) / p.plan_cell).astype(int)
+        c = np.floor((start - self.map0) / p.stall.cell).astype(int)
         si, sj = int(np.clip(c[1], 0, ny - 1)), int(np.clip(c[0], 0, nx - 1))
         if not np.isfinite(self.ctg[si, sj]):
-            near = nearest_reachable(self.ctg, si, sj, int(round(p.d_safe / p.plan_cell)), p.plan_cell)
+            near = nearest_reachable(self.ctg, si, sj, int(round(p.paper.d_safe / p.stall.cell)), p.stall.cell)
             if near is None:
                 mem.path = mem.path_clr = None
                 return
             si, sj = near
         cells = descend(self.ctg, si, sj, nx * ny)
-        mem.path = self.map0 + (cells[:, ::-1] + 0.5) * p.plan_cell
+        mem.path = self.map0 + (cells[:, ::-1] + 0.5) * p.stall.cell
         mem.path_clr = self.clr[cells[:, 0], cells[:, 1]]
         mem.path_arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(mem.path, axis=0).T))])
 
@@ -200,7 +200,7 @@ class StallPlanner(Part):
             return
         idx = np.flatnonzero(act)
         pt, half = lookahead(self.ctg, self.clr, np.ascontiguousarray(x[idx]), self.map0[0], self.map0[1],
-                             p.plan_cell, p.plan_look, p.passage_len)
+                             p.stall.cell, p.stall.look, p.passage.length)
         narrow = 2.0 * half < self.w_passage
         b = step.blocked[idx]
         use = (b[:, SIG_SLOT] | narrow) & np.isfinite(half)
@@ -212,8 +212,8 @@ class StallPlanner(Part):
         sig[i, SIG_CENT] = np.where(b[use, SIG_CENT], 0.0, sig[i, SIG_CENT])
         if self.narrow_relief:
             j = idx[use & narrow]
-            step.dsafe[j] = np.minimum(step.dsafe[j], throat_dsafe(half[use & narrow], p.d_safe, p.passage_margin,
-                                                                   p.passage_relief))
+            step.dsafe[j] = np.minimum(step.dsafe[j], throat_dsafe(half[use & narrow], p.paper.d_safe, p.passage.margin,
+                                                                   p.passage.relief))
             u = pt[use & narrow] - x[j]
             un = np.hypot(*u.T)
             ok = un > 1e-6

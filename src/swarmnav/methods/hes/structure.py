@@ -23,13 +23,13 @@ def split(h, step: Step, prop: Proposal) -> dict:
     rep = step.reports[s0]
     members = rep.pack.members
     cors = h.split_paths(step, rep)
-    m = max(2, min(len(cors), p.max_subswarms, len(members) // max(p.min_size, 1)))
+    m = max(2, min(len(cors), p.core.max_subswarms, len(members) // max(p.core.min_size, 1)))
     cors = cors[:m]
     cent = rep.pack.centroid
     heading = h.goal - cent
     heading = heading / max(np.hypot(*heading), 1e-9)
     groups = split_members(x, members, [c.mid - cent for c in cors], [min(c.width, 10.0) for c in cors],
-                           heading, p.min_size)
+                           heading, p.core.min_size)
     old = h.subs.pop(s0)
     new = []
     for c, g in zip(cors, groups):
@@ -54,8 +54,8 @@ def merge(h, step: Step, prop: Proposal) -> dict:
     p = h.params
     ids = sorted(h.subs)
     cents = np.array([step.reports[s].pack.centroid for s in ids])
-    near = np.hypot(*(cents - h.goal).T) < p.r_merge
-    a, b = merge_pair(cents, ids, near, p.d_merge)
+    near = np.hypot(*(cents - h.goal).T) < p.paper.r_merge
+    a, b = merge_pair(cents, ids, near, p.paper.d_merge)
     size = {s: int(np.count_nonzero(h.labels == s)) for s in (a, b)}
     keep, drop = (a, b)
     if h.subs[b].subleader == h.leader or (h.subs[a].subleader != h.leader and size[b] > size[a]):
@@ -86,7 +86,7 @@ def reassign_followers(h, x: np.ndarray, k: int) -> None:
     protected[[h.subs[s].subleader for s in ids]] = True
     protected[h.leader] = True
     new, moved = reassign(x, h.labels, ids, sl_pos, wps, protected, h.last_move, k, h.ra_steps,
-                          p.w_sl, p.w_c, p.delta_min, p.n_move_max)
+                          p.paper.w_sl, p.paper.w_c, p.paper.delta_min, p.paper.n_move_max)
     if len(moved):
         for s in set(h.labels[moved].tolist()) | set(new[moved].tolist()):
             h.subs[s].slot_step = NEVER

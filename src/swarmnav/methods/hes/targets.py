@@ -29,7 +29,7 @@ def references(h, step: Step) -> None:
     any_queued = bool(queued.any())
     if any_queued:
         slot[queued] = step.own_target[queued]
-        speed[queued] = p.v_s
+        speed[queued] = p.core.v_s
     part = h.partition()
     for s, sub in h.subs.items():
         members = part.members[part.index[s]]
@@ -40,15 +40,15 @@ def references(h, step: Step) -> None:
             continue
         if sub.mode == ENCIRCLE:
             slot[members] = h.goal + ring_offsets(h, step, sub, members)
-            speed[members] = p.v_s
+            speed[members] = p.core.v_s
             continue
         tmpl = template(p, m, sub)
-        if k - sub.slot_step >= p.slot_refresh or not np.array_equal(sub.slot_members, members):
+        if k - sub.slot_step >= p.core.slot_refresh or not np.array_equal(sub.slot_members, members):
             sub.slot_members = members
-            sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl, p.assign_exact)
+            sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl, p.core.assign_exact)
             sub.slot_step = k
         slot[members] = sub.waypoint + tmpl[sub.slot_index]
-        speed[members] = p.v_s
+        speed[members] = p.core.v_s
     step.slot, step.speed = slot, speed
 
 
@@ -61,20 +61,20 @@ def ring_offsets(h, step: Step, sub: SubSwarm, members: np.ndarray) -> np.ndarra
     it at the next assignment and turn back."""
     p, x, k = h.params, step.x, step.k
     m = len(members)
-    omega = p.v_s / p.r_enc if p.enc_orbit else 0.0  # [rad/s]
+    omega = p.core.v_s / p.core.r_enc if p.core.enc_orbit else 0.0  # [rad/s]
     if sub.ring_offsets is None or len(sub.ring_offsets) != m or (
-            not omega and k - sub.slot_step >= p.slot_refresh):
+            not omega and k - sub.slot_step >= p.core.slot_refresh):
         a = sub.subleader
-        ang = h.ring_angles + omega * k * p.dt if omega else h.ring_angles
-        pts = h.goal[None, :] + p.r_enc * np.column_stack([np.cos(ang), np.sin(ang)])
-        free = free_points(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, pts, p.enc_clear, p.lidar_range)
-        ring = ring_slots(h.goal, p.r_enc, m, free, ang)
-        r_i = assign_slots(x[members], ring, p.assign_exact)
+        ang = h.ring_angles + omega * k * p.paper.dt if omega else h.ring_angles
+        pts = h.goal[None, :] + p.core.r_enc * np.column_stack([np.cos(ang), np.sin(ang)])
+        free = free_points(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, pts, p.core.enc_clear, p.paper.lidar_range)
+        ring = ring_slots(h.goal, p.core.r_enc, m, free, ang)
+        r_i = assign_slots(x[members], ring, p.core.assign_exact)
         sub.ring_offsets = ring[r_i] - h.goal
         sub.slot_step = k
     if not omega:
         return sub.ring_offsets
-    turn = omega * (k - sub.slot_step) * p.dt
+    turn = omega * (k - sub.slot_step) * p.paper.dt
     c, s = math.cos(turn), math.sin(turn)
     o = sub.ring_offsets
     return np.column_stack([c * o[:, 0] - s * o[:, 1], s * o[:, 0] + c * o[:, 1]])
@@ -87,7 +87,7 @@ def template(p, m: int, sub: SubSwarm) -> np.ndarray:
     stretched along it by ``1 / squeeze``; alpha_s = spacing (k_p + k_path) / k_p, so that
     where the slot attraction (eq. 24) balances the corridor centering toward c_s (eq. 32) the
     agents sit ``spacing`` apart."""
-    alpha = p.spacing * (p.k_p + p.k_path) / p.k_p
+    alpha = p.core.spacing * (p.paper.k_p + p.paper.k_path) / p.paper.k_p
     t = hex_template(m)
     hx, hy = sub.heading
     u = t[:, 0] / sub.squeeze

@@ -32,7 +32,7 @@ class TrailFollow(Part):
     def reset(self, hes, positions):
         n = len(positions)
         self.h = hes
-        self.trail = np.zeros((self.p.trail_len, n, 2))  # members' positions every trail_every steps
+        self.trail = np.zeros((self.p.trail.length, n, 2))  # members' positions every trail_every steps
         self.count = 0
         self.cut_steps = np.zeros(n, dtype=np.int64)  # consecutive steps cut off from the sub-swarm
         self.last_cut = np.zeros(n, dtype=np.bool_)  # members following the trail this step
@@ -46,7 +46,7 @@ class TrailFollow(Part):
         self.count += 1
 
     def observe(self, step):
-        if step.k % self.p.trail_every == 0:
+        if step.k % self.p.trail.every == 0:
             self.record(step.x)
 
     def steer(self, step):
@@ -65,9 +65,9 @@ class TrailFollow(Part):
             self.last_cut = cut
             return
         cut &= ~step.routed & (step.sl_idx != np.arange(h.n))  # a passage chain routes its own members
-        cut &= np.hypot(*(step.x - step.cent).T) > p.d_c
+        cut &= np.hypot(*(step.x - step.cent).T) > p.core.d_c
         self.cut_steps = np.where(cut, self.cut_steps + 1, 0)
-        cut &= self.cut_steps * p.dt >= p.cut_time
+        cut &= self.cut_steps * p.paper.dt >= p.trail.cut_time
         self.last_cut = cut
         if not cut.any() or self.count == 0:
             return
@@ -75,7 +75,7 @@ class TrailFollow(Part):
         for i in np.flatnonzero(cut):
             mates = np.flatnonzero((h.labels == h.labels[i]) & ~cut)
             t, j = newest_visible(step.ring[i], x[i, 0], x[i, 1], h.cos, h.sin, self.trail, self.count,
-                                  mates, p.rho_vis, p.trail_reach, p.lidar_range)
+                                  mates, p.core.rho_vis, p.trail.reach, p.paper.lidar_range)
             if t >= 0:
                 step.slot[i] = step.wp[i] = self.trail[t, j]
                 sig[i, SIG_SLOT] = 1.0
