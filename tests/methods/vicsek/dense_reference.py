@@ -85,14 +85,16 @@ def weight_matrix(model, A, layers, iu, *, p1=0.1, p2=5.0, use_nei=True, k_alpha
 
 
 def genuine_heading(model, A, theta, theta_g, layers, avoiding, iu, theta_d, ivem_unsigned=False, ivem_self=False,
-                    **kw):
+                    keys=None, **kw):
     """Eq. (18) without noise: the new genuine direction of every agent.
 
     Weighted models: atan2(sum h o sin, sum h o cos); all weights zero but contributing
     neighbours present (only unreached layers among them) -> plain average over them;
     no contributing neighbour -> keep theta_g. IVEM / IVEM-A away from the IU: eq. (30)-(31),
     the headings compared as numbers in [-pi, pi), or in [0, 2 pi) (``ivem_unsigned``), the
-    agent's own heading among the neighbours' min and max if ``ivem_self``.
+    agent's own heading among the neighbours' min and max if ``ivem_self``. With ``keys`` (the
+    unwrapped numbers of ``ivem_range = raw``) eq. (30)-(31) compare those, and the function
+    returns the new headings and the new numbers (eq. 30's sum, the arc tangent, theta_d).
     """
     N = len(theta)
     o = (~avoiding).astype(float)
@@ -102,20 +104,29 @@ def genuine_heading(model, A, theta, theta_g, layers, avoiding, iu, theta_d, ive
     if iu is not None:
         plain[iu, :] = 0.0
     out = np.array(theta_g, dtype=float)
+    # an agent that keeps theta_g turns its number with its heading
+    new_keys = None if keys is None else np.asarray(keys, dtype=float) + wrap(np.asarray(theta_g) - theta)
     for i in range(N):
         if iu is not None and i == iu:
             out[i] = theta_d
+            if keys is not None:
+                new_keys[i] = theta_d
             continue
         ivem_row = model == IVEM or (model == IVEM_A and not A[i, iu])
         if ivem_row:
             nb = np.nonzero(plain[i] > 0)[0]
             if len(nb) == 0:
                 continue
-            num = np.mod(theta, 2 * np.pi) if ivem_unsigned else theta  # the headings as numbers
+            if keys is not None:
+                num = np.asarray(keys, dtype=float)
+            else:
+                num = np.mod(theta, 2 * np.pi) if ivem_unsigned else theta  # the headings as numbers
             group = np.append(nb, i) if ivem_self else nb
             lo, hi = num[group].min(), num[group].max()
             lam = 1.0 if num[i] <= lo else (-1.0 if num[i] >= hi else 0.0)
             out[i] = wrap(theta[i] + lam * (hi - lo) / 2.0)
+            if keys is not None:
+                new_keys[i] = num[i] + lam * (hi - lo) / 2.0
             continue
         h = H[i]
         if h.sum() <= 0.0:
@@ -123,7 +134,9 @@ def genuine_heading(model, A, theta, theta_g, layers, avoiding, iu, theta_d, ive
             if h.sum() <= 0.0:
                 continue
         out[i] = math.atan2(np.sum(h * np.sin(theta)), np.sum(h * np.cos(theta)))
-    return out
+        if keys is not None:
+            new_keys[i] = out[i]
+    return out if keys is None else (out, new_keys)
 
 
 def att_rep(pos, box, r_rep, r_att):

@@ -142,6 +142,34 @@ def test_ivem_readings_match_dense_paper_equations(model, unsigned, own, box, wr
         assert np.any(np.abs(R.wrap(out - signed)) > 1e-6)  # the reading changes some agent's heading
 
 
+@pytest.mark.parametrize("model", ["ivem", "ivem-a"])
+@pytest.mark.parametrize("box,wrap", WORLDS[:3])
+def test_ivem_raw_numbers_match_dense_paper_equations(model, box, wrap):
+    """ivem_range = raw: eq. (30)-(31) compare the unwrapped numbers given (here spread over
+    [-pi, 2 pi), as a run that mixes [0, 2 pi) draws and arc tangents holds them), and the kernel
+    returns eq. (30)'s sums, the arc tangents and theta_d as the new numbers."""
+    rng = np.random.default_rng(13)
+    side = box if box else 5.0
+    for trial in range(4):
+        pos, theta, theta_g, layers, avoiding, iu = random_state(rng, 90, side, model == "ivem-a")
+        keys = np.where((theta < 0) & (rng.random(len(theta)) < 0.5), theta + 2 * np.pi, theta)  # half in [pi, 2 pi)
+        nb, _ = csr(pos, 1.0, box, wrap)
+        iu_nb = np.zeros(len(pos), dtype=np.bool_)
+        if iu >= 0:
+            iu_nb[row(nb, iu)[0]] = True
+        out = np.empty(len(pos))
+        new_keys = np.empty(len(pos))
+        K.genuine_heading(MODELS[model], *nb, 1.0, theta, theta_g, layers, avoiding, iu, iu_nb, 0.7,
+                          0.1, 5.0, True, 30.0, 18.0, 1.0, 100.0, NO_NOISE, out, K.IVEM_PRINTED, 0.0, False,
+                          keys, new_keys)
+        A = R.adjacency(pos, 1.0, dense_box(box, wrap))
+        ref, ref_keys = R.genuine_heading(model, A, theta, theta_g, dense_layers(layers), avoiding,
+                                          iu if iu >= 0 else None, 0.7, keys=keys, **KW[0])
+        np.testing.assert_allclose(R.wrap(out - ref), 0.0, atol=1e-9, err_msg=f"trial {trial}")
+        np.testing.assert_allclose(new_keys, ref_keys, atol=1e-9, err_msg=f"trial {trial}")
+        np.testing.assert_allclose(R.wrap(new_keys - out), 0.0, atol=1e-9)  # the numbers are the headings
+
+
 def test_heading_kernel_ignores_entries_beyond_the_alignment_radius():
     """The CSR may be built at the attraction range; alignment uses only r."""
     rng = np.random.default_rng(5)

@@ -269,6 +269,26 @@ def test_ivem_unsigned_and_self_readings_by_hand():
     assert with_self[1] == pytest.approx(-3.0 + (3.1 + 3.0) / 2)  # the minimum: up by half of 6.1
 
 
+@pytest.mark.parametrize("scene", ["box", "mission"])
+def test_ivem_raw_numbers_stay_the_headings(scene):
+    """ivem_range = raw keeps IVEM-A's headings as unwrapped numbers: drawn in [0, 2 pi), then
+    eq. (30)'s sums, arc tangents and tangent headings; wrapped, they are always the flown
+    headings, and with the information UAV's reference near 0 (the mission's first leg) both
+    signs occur."""
+    from swarmnav.world.catalog import load_scenario
+
+    scn = periodic_box(80, 4.102) if scene == "box" else load_scenario("hwvem_mission", n=20)
+    kw = ALIGN if scene == "box" else {}
+    m, st, step = stepper("ivem-a", scn, seed=4, ivem_range="raw", **kw)
+    assert m.theta_num.min() >= 0.0 and m.theta_num.max() < 2 * np.pi + 1e-12  # the draw, Sec. 2.2
+    seen_negative = False
+    for _ in range(60):
+        step()
+        np.testing.assert_allclose(wrap(m.theta_num - m.theta), 0.0, atol=1e-9)
+        seen_negative |= bool(np.any(m.theta_num < 0))
+    assert seen_negative == (scene == "mission")
+
+
 def test_layer_update_eq4_is_the_current_hop_distance():
     """layer_update = "eq4" (Algorithm 1, line 13): after every step the layers are the shortest
     neighbour sequence from the information UAV in the graph of that step (eq. 2-4)."""

@@ -114,7 +114,7 @@ def bfs_layers(order, start, end, indices, dist2, r2, iu, out):
 @njit(cache=True)
 def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g, layers, avoiding, iu, iu_nb,
                     theta_d, p1, p2, use_nei, k_alpha, k_beta, k_gamma, info_weight, noise, out,
-                    ivem_rule=IVEM_PRINTED, ivem_shift=0.0, ivem_self=False):
+                    ivem_rule=IVEM_PRINTED, ivem_shift=0.0, ivem_self=False, key_in=None, key_out=None):
     """New genuine desired heading of every agent (HWVEM eq. 18) plus the noise of eq. (6).
 
     Weighted models (VEM, VEM-A, WVEM, HWVEM, and IVEM-A next to the information UAV)::
@@ -144,6 +144,12 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
     ``[ivem_shift - pi, ivem_shift + pi)`` (0: ``[-pi, pi)``; pi: ``[0, 2 pi)``, the range the
     initial headings are drawn from). ``ivem_self``: the agent's own heading counts among the
     neighbours' min and max (the original Vicsek neighbourhood, ``|x_i - x_j| <= r``).
+    ``key_in`` (N,), if given, are the numbers the non-circular readings compare instead (the
+    headings as the paper's equations leave them, never wrapped: ``ivem_range = raw``), and
+    ``key_out`` (N,) receives the new numbers: eq. (30)'s sum for the IVEM rows, the arc tangent
+    of eq. (9) (in ``[-pi, pi]``) for the weighted rows, ``theta_d`` for the information UAV,
+    each plus its noise and unwrapped (an agent that keeps ``theta_g`` turns its number by
+    ``wrap(theta_g - theta)``); the wrapped headings go to ``out`` as always.
 
     An agent with no contributing neighbour keeps ``theta_g``; the information UAV gets
     ``theta_d`` (eq. 9 with ``b_ij = 0`` for ``i`` in layer 1). ``noise`` (N,) [rad] is added to
@@ -169,39 +175,58 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
         i = order[t]
         if i == iu:
             out[i] = theta_d
+            if key_out is not None:
+                key_out[i] = theta_d
             continue
         a = start[i]
         b = end[i]
         if code == IVEM or (code == IVEM_A and not iu_nb[i]):
             circ = ivem_rule == IVEM_PRINTED_CIRCULAR or ivem_rule == IVEM_MIDDLE_CIRCULAR
-            # the agent's heading in the frame of lo, hi: relative to itself (circular), or as
-            # a number in [ivem_shift - pi, ivem_shift + pi)
-            own = 0.0 if circ else wrap_angle(theta[i] - ivem_shift)
+            # the agent's heading in the frame of lo, hi: relative to itself (circular), as a
+            # number in [ivem_shift - pi, ivem_shift + pi), or the number key_in holds
+            own = 0.0
+            if not circ:
+                if key_in is None:
+                    own = wrap_angle(theta[i] - ivem_shift)
+                else:
+                    own = key_in[i]
             lo = np.inf  # min and max neighbour heading
             hi = -np.inf
             for e in range(a, b):
                 if dist2[e] <= r2:
                     j = indices[e]
                     if not avoiding[j]:
-                        tj = wrap_angle(theta[j] - theta[i]) if circ else wrap_angle(theta[j] - ivem_shift)
+                        if circ:
+                            tj = wrap_angle(theta[j] - theta[i])
+                        elif key_in is None:
+                            tj = wrap_angle(theta[j] - ivem_shift)
+                        else:
+                            tj = key_in[j]
                         lo = min(lo, tj)
                         hi = max(hi, tj)
             if lo <= hi and ivem_self:
                 lo = min(lo, own)
                 hi = max(hi, own)
+            new_key = own
             if lo > hi:
                 out[i] = theta_g[i]
+                new_key = own + wrap_angle(theta_g[i] - theta[i])  # the number turns with the heading
             elif ivem_rule == IVEM_MIDDLE or ivem_rule == IVEM_MIDDLE_CIRCULAR:
-                out[i] = wrap_angle(theta[i] - own + (hi + lo) / 2.0)
+                new_key = (hi + lo) / 2.0
+                out[i] = wrap_angle(theta[i] - own + new_key)
             else:
                 lam = 0.0
                 if own <= lo:
                     lam = 1.0
                 elif own >= hi:
                     lam = -1.0
+                new_key = own + lam * (hi - lo) / 2.0
                 out[i] = wrap_angle(theta[i] + lam * (hi - lo) / 2.0)
             if noisy:
                 out[i] = wrap_angle(out[i] + noise[i])
+                new_key += noise[i]
+            if key_out is not None:
+                key_out[i] = out[i] if circ else new_key
             continue
 
         l_min = NO_LAYER
@@ -270,15 +295,23 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
                     w = (1.0 / lj + p1) * math.exp(-(lj - l_min) * log_p2) * w_nei
             s += w * sj
             c += w * cj
-        if n_contrib == 0:
+        kept = n_contrib == 0
+        if kept:
             out[i] = theta_g[i]
         elif s == 0.0 and c == 0.0:
             # every weight vanished (only unreached contributors): plain average of them
             out[i] = math.atan2(su, cu)
         else:
             out[i] = math.atan2(s, c)
+        raw = out[i]
         if noisy:
-            out[i] = wrap_angle(out[i] + noise[i])
+            raw += noise[i]
+            out[i] = wrap_angle(raw)
+        if key_out is not None:
+            if kept and key_in is not None:  # the number turns with the heading
+                key_out[i] = key_in[i] + wrap_angle(theta_g[i] - theta[i]) + (noise[i] if noisy else 0.0)
+            else:
+                key_out[i] = raw
 
 
 @njit(cache=True)

@@ -122,10 +122,13 @@ class VicsekParams:
         "printed", "", None, "eq. (30)-(31), Sec. 3.1.2 (our reading)",
         "IVEM update: the printed eq. (30)-(31), or the middle of the extreme neighbours' headings")
     # Which numbers eq. (30)-(31) compare (audit: docs/methods/vicsek.md): "signed" = headings in
-    # [-pi, pi); "unsigned" = in [0, 2 pi), the range Sec. 2.2 draws the initial headings from.
-    # The circular readings do not depend on it.
-    ivem_range: Literal["signed", "unsigned"] = param("signed", "", None, "eq. (30)-(31), Sec. 2.2 (our reading)",
-        "IVEM compares headings as numbers in [-pi, pi) (signed) or [0, 2 pi) (unsigned)")
+    # [-pi, pi); "unsigned" = in [0, 2 pi), the range Sec. 2.2 draws the initial headings from;
+    # "raw" = as the equations leave them, never wrapped: drawn in [0, 2 pi), eq. (30)'s sums
+    # as they come, the arc tangent of eq. (6)/(9) in [-pi, pi] for the weighted rows (IVEM-A next
+    # to the information UAV), theta_d for the information UAV. The circular readings ignore it.
+    ivem_range: Literal["signed", "unsigned", "raw"] = param("raw", "", None,
+        "eq. (30)-(31), Sec. 2.2 (our reading)",
+        "IVEM compares headings as numbers in [-pi, pi) (signed), [0, 2 pi) (unsigned) or unwrapped (raw)")
     ivem_self: bool = param(False, "", None, "eq. (30)-(31), Sec. 2.2 (our reading)",
         "IVEM: the agent's own heading counts among its neighbours' min and max")
     # Layers during the run (audit: docs/methods/vicsek.md): "eq5" = l_i(k) = 1 + min l_j(k-1)
@@ -197,9 +200,16 @@ class VicsekFamily:
             pts = scenario.path if scenario.path else (tuple(x[self.iu]), scenario.goal)
             self.path = Polyline.of(pts)
         self.s_path = 0.0
-        self.theta = wrap(rng.uniform(0.0, 2 * np.pi, n))  # Sec. 2.2: uniform on [0, 2 pi)
+        drawn = rng.uniform(0.0, 2 * np.pi, n)  # Sec. 2.2: uniform on [0, 2 pi)
+        self.theta = wrap(drawn)
         if self.has_info:
             self.theta[self.iu] = self._theta_d(x)
+        # ivem_range = raw: the numbers eq. (30)-(31) compare, never wrapped (None otherwise)
+        self.theta_num = None
+        if self.code in (K.IVEM, K.IVEM_A) and p.ivem_range == "raw":
+            self.theta_num = drawn.copy()
+            if self.has_info:
+                self.theta_num[self.iu] = self.theta[self.iu]
         self.theta_g = self.theta.copy()
         self.avoiding = np.zeros(n, dtype=np.bool_)
 
@@ -247,10 +257,15 @@ class VicsekFamily:
         noise = rng.uniform(-p.eta / 2, p.eta / 2, n) if p.eta > 0 else _NO_NOISE
         theta_g = np.empty(n)
         r2_list = np.inf if self.radius <= p.r else r2  # inf: no entry lies beyond r
-        K.genuine_heading(self.code, *nb, r2_list, self.theta, self.theta_g, self.layers,
-                          self.avoiding, iu, iu_nb, theta_d, p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta,
-                          p.k_gamma, p.info_weight, noise, theta_g, _IVEM_RULES[p.ivem_rule],
-                          math.pi if p.ivem_range == "unsigned" else 0.0, p.ivem_self)
+        args = (self.code, *nb, r2_list, self.theta, self.theta_g, self.layers, self.avoiding, iu, iu_nb, theta_d,
+                p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta, p.k_gamma, p.info_weight, noise, theta_g,
+                _IVEM_RULES[p.ivem_rule], math.pi if p.ivem_range == "unsigned" else 0.0, p.ivem_self)
+        num = None
+        if self.theta_num is None:
+            K.genuine_heading(*args)
+        else:
+            num = np.empty(n)
+            K.genuine_heading(*args, self.theta_num, num)
 
         theta = theta_g
         avoiding = np.zeros(n, dtype=np.bool_)
@@ -259,6 +274,8 @@ class VicsekFamily:
             tested = theta_g if p.trigger_heading == "new" else self.theta_g
             avoiding, theta_obs, dist = avoidance(self.geom, x, tested, self.theta, p.r_avoid, p.theta_obstruct)
             theta = np.where(avoiding, theta_obs, theta_g)
+            if num is not None:
+                num = np.where(avoiding, theta_obs, num)  # the tangent's angle (eq. 22), as computed
 
         att = rep = _NO_FORCE
         if p.c_rep or p.c_att:
@@ -279,6 +296,8 @@ class VicsekFamily:
                 K.bfs_layers(*nb, r2, iu, nxt)
             self.layers = nxt
         self.theta, self.theta_g, self.avoiding = theta, theta_g, avoiding
+        if num is not None:
+            self.theta_num = num
 
         self.deg_series.append(self._deg_con())
         self._streak = self._streak + 1 if self.deg_series[-1] >= p.deg_con_d else 0
