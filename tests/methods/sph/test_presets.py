@@ -27,6 +27,9 @@ def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_valu
     assert (p.kernel, p.env_law, p.clip, p.k_force, p.env_safe) == ("released", "released", "axis", 1000.0, 0.4)
     # Table I values the launch file does not change stay
     assert (p.h, p.k_den, p.rho0, p.T_p) == (10.0, 1.0, 1e6, 0.2)
+    # headroom: the default build with the planner at 0.8 v_max and the position pull capped at a_max
+    h = registry.make("sph", preset="headroom").params
+    assert (h.plan_v_max, h.ref_reset, h.k_p * h.ref_reset) == (0.8, 0.3, pytest.approx(h.a_max))
     # an explicit value applies on top of the preset
     assert registry.make("sph", preset="released", k_p=7.0).params.k_p == 7.0
     with pytest.raises(swarmnav.ConfigError, match="unknown preset 'relased'"):

@@ -16,9 +16,12 @@ class SphParams:
     #: our choices below. ``released`` is the authors' released code (SmartGroupSystems/SPH-planning,
     #: ``water_swarm/launch/sph.launch`` and the C++ it configures): its controller gains and bounds,
     #: its 50 Hz update, its kernel evaluation, its ESDF force law, its planner limits and its
-    #: replanning (docs/methods/sph.md, *Presets*).
+    #: replanning (docs/methods/sph.md, *Presets*). ``headroom`` is ``paper`` with the tracking
+    #: kept below what the swarm forces can hold: the planner plans at 0.8 v_max, so a robot the swarm
+    #: held back can catch up, and the position pull is capped at a_max (ref_reset = a_max / k_p).
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "paper": {},
+        "headroom": {"plan_v_max": 0.8, "ref_reset": 0.3},
         "released": {
             "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
             "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
