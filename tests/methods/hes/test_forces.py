@@ -8,6 +8,7 @@ import pytest
 
 from swarmnav.methods.hes import barriers as B
 from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.params import HesParams
 
 P = HesParams()
@@ -404,7 +405,7 @@ def test_pair_kernels_on_neighbour_rows_equal_all_pairs_bit_for_bit(n, seed):
     # The cell-list rows (N >= 64) must give the all-pairs result exactly: partners beyond the
     # radius add nothing and partners are visited in the same ascending order.
     x, v, a, group = _swarm(n, seed)
-    rows = F.neighbour_rows(x, max(P.core.r_sep, P.core.d_ir))
+    rows = neighbour_rows(x, max(P.core.r_sep, P.core.d_ir))
     assert len(rows[1]) < n * n  # a real cell list, not every pair
     for k, r, same in ((P.paper.k_sep, P.core.r_sep, False), (P.paper.k_ir, P.core.d_ir, True)):
         assert np.array_equal(F.separation(x, group, k, r, P.core.d_floor, same, *rows),
@@ -414,18 +415,18 @@ def test_pair_kernels_on_neighbour_rows_equal_all_pairs_bit_for_bit(n, seed):
     lone[0] = 7  # alone in its group: found by the fallback over all agents (-1)
     lone[1], lone[-1] = 8, 8  # a pair far apart: nobody of its group in its row
     assert np.array_equal(F.nearest_in_group(x, lone, *rows), F.nearest_in_group(x, lone))
-    rg = F.neighbour_rows(x, B.brake_radius(a, v, P.paper.dt, P.guard.brake, P.guard.margin))
+    rg = neighbour_rows(x, B.brake_radius(a, v, P.paper.dt, P.guard.brake, P.guard.margin))
     assert np.array_equal(B.agent_guard(a, x, v, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max, 4, *rg),
                           B.agent_guard(a, x, v, P.paper.dt, P.guard.brake, P.guard.margin, P.paper.a_max))
     active = np.arange(n) % 2 == 0
-    rb = F.neighbour_rows(x, B.brake_radius(a, v, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin))
+    rb = neighbour_rows(x, B.brake_radius(a, v, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin))
     assert np.array_equal(B.agent_barrier(a, x, v, active, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max, *rb),
                           B.agent_barrier(a, x, v, active, P.paper.dt, P.passage.agent_brake, P.passage.agent_margin, P.paper.a_max))
 
 
 def test_neighbour_rows_hold_every_agent_within_the_radius():
     x, *_ = _swarm(200, 3)
-    ptr, idx = F.neighbour_rows(x, 3.0)
+    ptr, idx = neighbour_rows(x, 3.0)
     d = np.hypot(*(x[:, None, :] - x[None, :, :]).transpose(2, 0, 1))
     for i in range(len(x)):
         row = idx[ptr[i]:ptr[i + 1]]

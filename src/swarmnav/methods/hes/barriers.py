@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from swarmnav.methods.hes.forces import all_rows
+from swarmnav.methods.hes.neighbours import all_rows
 
 @njit(cache=True)
 def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_range, passes=3):
@@ -154,7 +154,7 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead, ptr=None, idx=No
     act on positions only; members converging on a gate mouth at 1-2 m/s were not stopped by them
     (narrow_alternating_gates: 146 contacts per run, median closing speed 1.4 m/s at contact).
 
-    ``ptr, idx``: neighbour rows (``forces.neighbour_rows``) covering :func:`brake_radius`, or
+    ``ptr, idx``: neighbour rows (``neighbours.neighbour_rows``) covering :func:`brake_radius`, or
     every pair if not given (the same result).
     """
     n = x.shape[0]

@@ -14,6 +14,7 @@ from numba import njit
 
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.decision import NAVIGATE
+from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.step import Step
 
 
@@ -30,7 +31,7 @@ def couplings(h, step: Step) -> None:
     wp = np.array([sub.waypoint for sub in subs])[col]
     nav = np.array([sub.mode == NAVIGATE for sub in subs])[col]
     follower = sl_idx != h.arange
-    rows = step.rows = F.neighbour_rows(x, h.pair_radius)
+    rows = step.rows = neighbour_rows(x, h.pair_radius)
     queued = step.own >= 0
     if queued.any():
         cgrp = col * (int(step.own.max()) + 2) + step.own + 1  # (sub-swarm, own group) pairs, in that order

@@ -23,13 +23,12 @@ SIG_CENT``.
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
 from numba import njit
 
-from swarmnav.sensing.cells import neighbour_csr
+from swarmnav.methods.hes.neighbours import all_rows
 
 TERMS = ("att", "sep", "path", "intra", "ir", "fol", "coh", "obs")
 SIG_SLOT, SIG_NN, SIG_SL, SIG_CENT = 0, 1, 2, 3
@@ -94,69 +93,6 @@ def group_centroids(x, col, n_groups):
 def attraction(x, v, slot, vslot, k_p, k_v):
     """Eq. (24): ``f_att = k_p (p* - p) + k_v (v* - v)``."""
     return k_p * (slot - x) + k_v * (vslot - v)
-
-
-@njit(cache=True)
-def all_rows(n):
-    """Neighbour rows (see :func:`neighbour_rows`) that list every agent for every agent."""
-    ptr = np.arange(n + 1) * n
-    idx = np.empty(n * n, dtype=np.int64)
-    for i in range(n):
-        for j in range(n):
-            idx[i * n + j] = j
-    return ptr, idx
-
-
-@njit(cache=True)
-def _sorted_rows(start, end, indices):
-    n = start.shape[0]
-    ptr = np.empty(n + 1, dtype=np.int64)
-    ptr[0] = 0
-    for i in range(n):
-        ptr[i + 1] = ptr[i] + end[i] - start[i]
-    idx = np.empty(ptr[n], dtype=np.int64)
-    for i in range(n):
-        a = ptr[i]
-        for t in range(end[i] - start[i]):  # insertion sort: rows are short
-            j = indices[start[i] + t]
-            u = a + t
-            while u > a and idx[u - 1] > j:
-                idx[u] = idx[u - 1]
-                u -= 1
-            idx[u] = j
-    return ptr, idx
-
-
-@functools.lru_cache(maxsize=16)
-def _every_row(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`all_rows` of ``n`` agents, built once (the kernels only read the rows)."""
-    return all_rows(n)
-
-
-ROWS_ALL_BELOW = 64  # agents: below this, every neighbour row lists every agent (a cell list does not pay)
-
-
-def neighbour_rows(x: np.ndarray, radius, all_below: int = ROWS_ALL_BELOW) -> tuple[np.ndarray, np.ndarray]:
-    """Every agent's candidate neighbours for the pair kernels: agent i's are
-    ``idx[ptr[i]:ptr[i + 1]]``, ascending, itself included, and hold every agent within
-    ``radius`` [m] of it (a cell list, ``sensing.neighbour_csr``). Below ``all_below`` agents
-    every row lists every agent (a cell list does not pay there). The kernels visit partners in
-    ascending index either way, so a kernel whose partners beyond ``radius`` add nothing gives
-    the same result, bit for bit, as over all pairs. ``radius`` may be a function returning it,
-    called only when a cell list is built."""
-    n = len(x)
-    if n < all_below:
-        return _every_row(n)
-    radius = radius() if callable(radius) else radius
-    if not math.isfinite(radius):
-        return all_rows(n)
-    cap = 32 * n
-    while True:
-        indices, dist2 = np.empty(cap, dtype=np.int64), np.empty(cap)
-        _, start, end, total = neighbour_csr(x, float(radius), 0.0, False, indices, dist2, -1.0)
-        if total <= cap:
-            return _sorted_rows(start, end, indices)
-        cap = total
 
 
 @njit(cache=True)

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swarmnav.methods.hes.barriers import agent_barrier, brake_radius
-from swarmnav.methods.hes.forces import neighbour_rows
+from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.corridors import GAP_W, Corridor, seen_passages, segment_clear
 from swarmnav.methods.hes.part import Part
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from swarmnav.methods.hes.barriers import agent_guard, brake_radius, safety_filter
-from swarmnav.methods.hes.forces import neighbour_rows
+from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.part import Part
 
 

@@ -69,7 +69,7 @@ class Step:
     queues: the index of its throat), with ``own_target`` (N, 2) its point [m] and ``routed``
     (N,) bool the agents a part routes (trail following leaves them alone); ``slot`` (N, 2) p*_i
     and ``speed`` (N,) v_s of eq. (23). Control (eq. 38): ``rows`` the agents' neighbour rows
-    within the pair terms' reach (``forces.neighbour_rows``), ``col`` column of each agent's
+    within the pair terms' reach (``neighbours.neighbour_rows``), ``col`` column of each agent's
     sub-swarm, ``sl_idx`` its subleader, ``wp`` (N, 2) its centering target c_s, ``cent`` its
     cohesion centroid, ``nn`` nearest neighbour, ``follower``, ``nav``, ``sig`` (N, 4) occlusion
     factors of eq. (30) with ``blocked`` (N, 4) the segments that meet an obstacle, ``dsafe``
