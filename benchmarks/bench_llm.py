@@ -38,7 +38,7 @@ def states(n: int) -> list[dict]:
     from swarmnav.methods.hes import Hes, RulePolicy
 
     hes = Hes()
-    rule = RulePolicy(hes.params.d_merge, hes.params.t_cd)
+    rule = RulePolicy(hes.params.paper.d_merge, hes.params.paper.t_cd)
     seen: list[dict] = []
 
     class Spy:  # the rule policy, recording what it is shown

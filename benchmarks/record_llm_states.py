@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
         for seed in seeds_of(args.seeds):
             hes = Hes()
             p = hes.params
-            rec = Recorder(RulePolicy(p.d_merge, p.t_cd), p.llm_interval)
+            rec = Recorder(RulePolicy(p.paper.d_merge, p.paper.t_cd), p.llm_interval)
             swarmnav.run(hes.use_source(rec), scene, seed=seed, steps=args.steps)
             rows += [{"id": f"{scene}/s{seed}/k{r['k']}", "scene": scene, "seed": seed, **r} for r in rec.rows]
             print(f"{scene} seed {seed}: {len(rec.rows)} states", file=sys.stderr)

@@ -78,7 +78,7 @@ def test_successful_hes_run_reports_no_contradicting_success():
     assert m["Y"] == 1.0 and m["R_goal"] == 1.0
     # E_mean of a successful HES run is its encircle ring, not a miss (docs/metrics.md, Reading E_mean);
     # 0.5 m: the ring's slots hold their radius to a few cm once formed (sigma_E 0.03 m at K = 1000)
-    assert abs(m["E_mean"] - registry.make("hes").params.r_enc) < 0.5
+    assert abs(m["E_mean"] - registry.make("hes").params.core.r_enc) < 0.5
     # no unscoped key that reads as success or arrival says otherwise
     generic = [k for k in m if re.search(r"success|arriv", k, re.I) and not k.startswith(SCOPED)]
     assert not generic, f"success-like keys without the name of their test: {generic}"
