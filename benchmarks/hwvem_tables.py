@@ -17,6 +17,11 @@ UAV began; runs in-process, one core):
 
     PYTHONPATH=src python benchmarks/hwvem_tables.py --losses 50 --seeds 1-100
     PYTHONPATH=src python benchmarks/hwvem_tables.py --losses 50 --variant HWVEM-II --set trigger_heading=previous
+
+HWVEM-II against HWVEM-I on the same seeds (the paired difference with its CI):
+
+    PYTHONPATH=src python benchmarks/hwvem_tables.py --only table2 --sizes 50 --seeds 1-300 \
+        --variant HWVEM-I --variant HWVEM-II --paired HWVEM-I,HWVEM-II --workers 1 --out out/hwvem-pair
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ import csv
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -41,8 +47,11 @@ TABLES = {
 }
 
 
-def run(name: str, sizes: str, out: Path, workers: int, seeds: str | None, extra: dict[str, str]) -> float:
+def run(name: str, sizes: str, out: Path, workers: int, seeds: str | None, extra: dict[str, str],
+        variants: list[str] | None = None) -> float:
     exp = load_experiment(name, overrides={"n": sizes, **extra}, seeds=seeds)
+    if variants:
+        exp = replace(exp, variants=tuple(v for v in exp.variants if v.name.split("[")[0] in variants))
     t0 = time.perf_counter()
     run_experiment(exp, out, workers=workers, save_trajectories=False, progress=sys.stderr.isatty())
     return time.perf_counter() - t0
@@ -228,6 +237,35 @@ def losses(n: int, seeds: str | None, variants: list[str] | None, extra: dict[st
     return "\n".join(lines)
 
 
+def paired(out: Path, first: str, second: str) -> str:
+    """P_s of ``second`` minus ``first`` on the same seeds, per N: mean with its 95 % CI (Student t),
+    the standard deviation of the differences, and how many paired runs would detect the paper's
+    difference (two-sided 5 % test, 80 % power) or resolve ours from 0."""
+    from scipy.stats import t
+
+    ref = paper_results()["hwvem"]["table2"]
+    by: dict[tuple[str, int], dict[int, float]] = {}
+    with open(out / "runs.csv", newline="") as f:
+        for r in csv.DictReader(f):
+            if r["status"] == "done":
+                by.setdefault((r["variant"].split("[")[0], int(r["n"])), {})[int(r["seed"])] = float(r["P_s"])
+    lines = [f"| N | runs | {first} | {second} | {second} − {first} ± 95 % CI | SD of the differences | paper's "
+             "difference | paired runs to detect it | to resolve ours from 0 |", "|---|---|---|---|---|---|---|---|---|"]
+    for n in sorted({n for _, n in by}):
+        a, b = by.get((first, n), {}), by.get((second, n), {})
+        seeds = sorted(set(a) & set(b))
+        if len(seeds) < 2:
+            continue
+        d = np.array([b[k] - a[k] for k in seeds])
+        sd = d.std(ddof=1)
+        half = t.ppf(0.975, len(d) - 1) * sd / math.sqrt(len(d))
+        paper = ref[f"N{n}"][second]["P_s"][0] - ref[f"N{n}"][first]["P_s"][0]
+        need = (lambda delta: f"{((1.96 + 0.84) * sd / abs(delta)) ** 2:.0f}" if delta and sd else "–")
+        lines.append(f"| {n} | {len(d)} | {np.mean([a[k] for k in seeds]):.2f} | {np.mean([b[k] for k in seeds]):.2f} | "
+                     f"{d.mean():+.2f} ± {half:.2f} | {sd:.2f} | {paper:+.2f} | {need(paper)} | {need(d.mean())} |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out/hwvem"))
@@ -238,7 +276,8 @@ def main(argv=None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="extra override for every run")
     ap.add_argument("--print-only", action="store_true", help="do not run, print what the stores hold")
     ap.add_argument("--losses", type=int, metavar="N", help="tally the failed agents of hwvem-mission at size N")
-    ap.add_argument("--variant", action="append", help="with --losses: only these variants (default: all five)")
+    ap.add_argument("--variant", action="append", help="only these variants (default: all)")
+    ap.add_argument("--paired", metavar="A,B", help="table2: P_s of B minus A on the same seeds, with its CI")
     args = ap.parse_args(argv)
     extra = dict(kv.split("=", 1) for kv in args.set)
     if args.losses:
@@ -251,7 +290,7 @@ def main(argv=None) -> int:
         sizes = args.sizes or sizes
         out = args.out / key
         if not args.print_only:
-            wall = run(name, sizes, out, args.workers, args.seeds, extra)
+            wall = run(name, sizes, out, args.workers, args.seeds, extra, args.variant)
             print(f"\n{key} ({name}, n = {sizes}): {wall / 60:.1f} min wall on {args.workers} worker(s)")
         if not (out / "summary.csv").exists():
             print(f"{key}: no results in {out}")
@@ -259,6 +298,8 @@ def main(argv=None) -> int:
         print(f"\n### {key}: `{name}`\n")
         ns = tuple(int(v) for v in sizes.split("|"))
         print(table1(out, ns) if key == "table1" else table2(out, ns) if key == "table2" else figure_table(out))
+        if key == "table2" and args.paired:
+            print(f"\nPaired on the same seeds:\n\n{paired(out, *args.paired.split(',', 1))}")
         if key != "table2":
             ci = " and its 95 % confidence interval (Student t)" if key == "table1" else ""
             print(f"\n*mean{ci} over the runs that reached Deg_con^d within the step cap (their number in "
