@@ -31,12 +31,14 @@ def random_forest(
     max_tries: int = 200_000,
     min_passage: float = 0.0,
     max_forests: int = 200,
+    spawn_length: float = 6.0,
 ) -> Scenario:
     """A planar forest of non-overlapping discs filling ``density`` of a rectangle.
 
     The forest occupies ``x in [0, length]``, ``y in [-width/2, width/2]`` [m]; solid walls run
     along both long sides so the swarm must cross the forest rather than fly round it. The
-    swarm spawns in a 6 m x 8 m area left of the forest and the goal lies 6 m beyond it.
+    swarm spawns in a ``spawn_length`` x 8 m area (6 m; at most 8 m, for swarms of up to 100
+    robots) ending 2 m before the forest, and the goal lies 6 m beyond it.
 
     Density is the obstacle area fraction of the forest rectangle, ``d_obs = A_obs / A``
     (the SPH paper's ``V_obs / V_total`` for vertical trunks). Discs are placed by random
@@ -53,6 +55,8 @@ def random_forest(
         raise ScenarioError(f"random_forest: density must be in [0, 0.55), got {density}")
     if not (0 < r_min <= r_max):
         raise ScenarioError(f"random_forest: need 0 < r_min <= r_max, got {r_min}, {r_max}")
+    if not 0.0 < spawn_length <= 8.0:
+        raise ScenarioError(f"random_forest: spawn_length must be in (0, 8] m, got {spawn_length}")
     rng = np.random.default_rng(seed)
     for _ in range(max(1, int(max_forests))):
         centers, radii = _place_discs(rng, density, length, width, r_min, r_max, min_gap, max_tries)
@@ -72,7 +76,7 @@ def random_forest(
     scn = Scenario(
         name=f"random_forest:density={density:g},seed={seed}",
         bounds=(-10.0, -width / 2 - wall - 1.0, length + 10.0, width / 2 + wall + 1.0),
-        swarm=Swarm(n=n, spawn=(-8.0, -4.0, -2.0, 4.0)),
+        swarm=Swarm(n=n, spawn=(-2.0 - spawn_length, -4.0, -2.0, 4.0)),
         goal=(length + 6.0, 0.0),
         obstacles=tuple(obstacles),
         description=f"Random forest, obstacle area density {density:g}, seed {seed}",
