@@ -109,9 +109,10 @@ class VicsekParams:
         "carrot distance of the information UAV's path following (= r)")
     deg_con_d: float = param(0.9984, "", "[0, 1]", "Sec. 3.1", "desired consistency degree")
     # The norm of eq. (28), which the paper does not name (audit: docs/methods/vicsek.md). L2
-    # reproduces Table 1's baselines (100 runs per cell: 15 of 18 cells within 30 % of the paper;
-    # L1, our default before issue 21, made VEM, VEM-A and WVEM 1.5-2.2x and IVEM up to 34x
-    # slower than published); HWVEM, limited by how fast its layers spread, moves by 2-6 steps.
+    # reproduces Table 1's baselines (100 runs per cell, with ivem_range = raw: 17 of 18 cells
+    # within 30 % of the paper; L1, our default before issue 21, made VEM, VEM-A and WVEM
+    # 1.5-2.2x and IVEM up to 34x slower than published); HWVEM, limited by how fast its layers
+    # spread, moves by 2-6 steps.
     deg_con_norm: Literal["l1", "l2", "linf"] = param("l2", "", None, "eq. (28), Table 1 (our reading)",
         "norm of eq. (28): ||theta - theta_d|| / N with the L2 (Euclidean), L1 or L-infinity norm")
     # IVEM, eq. (30)-(31) (audit: docs/methods/vicsek.md): "printed" = theta_i + lambda (max - min)/2,
