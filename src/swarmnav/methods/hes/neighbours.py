@@ -27,21 +27,23 @@ def all_rows(n):
 
 @njit(cache=True)
 def _sorted_rows(start, end, indices):
+    """The rows ``indices[start[i]:end[i]]`` of a symmetric neighbour relation (j in i's row iff
+    i in j's: one distance test decides both), each in ascending order, in O(entries): the
+    transpose, filled by visiting i in ascending order, lists row j's members ascending."""
     n = start.shape[0]
-    ptr = np.empty(n + 1, dtype=np.int64)
-    ptr[0] = 0
+    ptr = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
-        ptr[i + 1] = ptr[i] + end[i] - start[i]
+        for t in range(start[i], end[i]):
+            ptr[indices[t] + 1] += 1
+    for j in range(n):
+        ptr[j + 1] += ptr[j]
+    fill = ptr[:n].copy()
     idx = np.empty(ptr[n], dtype=np.int64)
     for i in range(n):
-        a = ptr[i]
-        for t in range(end[i] - start[i]):  # insertion sort: rows are short
-            j = indices[start[i] + t]
-            u = a + t
-            while u > a and idx[u - 1] > j:
-                idx[u] = idx[u - 1]
-                u -= 1
-            idx[u] = j
+        for t in range(start[i], end[i]):
+            j = indices[t]
+            idx[fill[j]] = i
+            fill[j] += 1
     return ptr, idx
 
 
