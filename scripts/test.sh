@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Set up a fresh clone and run the whole test suite: the README's test command, and exactly
 # what CI runs (.ci/run). Installs everything the tests use, from the package registries only:
-#   - Debian's chromium, for the browser tests of the HTML report and the replay viewer (when apt-get is available as root);
+#   - Debian's chromium, for the browser tests of the HTML report and the replay viewer, and ffmpeg, for
+#     the MP4 animation test (when apt-get is available as root);
 #   - a virtual environment .venv with swarmnav and its test extras: pytest, hypothesis, Ray.
 #     This is the core install: if it fails, the script stops with pip's error;
 #   - the optional llm-test extra, for the real-model LLM tests: llama-cpp-python[server]
@@ -14,9 +15,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if ! command -v chromium >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
-  echo "installing chromium (Debian) for the report and replay viewer browser tests..."
-  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium) >/dev/null
+debs=()
+command -v chromium >/dev/null 2>&1 || debs+=(chromium)
+command -v ffmpeg >/dev/null 2>&1 || debs+=(ffmpeg)
+if [ ${#debs[@]} -gt 0 ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+  echo "installing ${debs[*]} (Debian) for the browser tests of the report and replay viewer and the MP4 test..."
+  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${debs[@]}") >/dev/null
 fi
 
 python3 -m venv .venv
