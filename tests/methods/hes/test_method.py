@@ -131,6 +131,9 @@ def test_parameter_errors():
         registry.make("hes", decision="gpt9")
     with pytest.raises(swarmnav.ConfigError, match="unknown parameter 'k_pp'"):
         registry.make("hes", k_pp=1.0)
+    for k_p in (0.0, 1e-200):  # the formation scale spacing (k_p + k_path) / k_p must stay within R_L
+        with pytest.raises(swarmnav.ConfigError, match=r"formation scale .* must be below paper.lidar_range"):
+            registry.make("hes", **{"paper.k_p": k_p})
     with pytest.raises(swarmnav.ConfigError, match=r"paper.r_out > paper.r_in"):
         registry.make("hes", r_in=12.0)
     with pytest.raises(swarmnav.ConfigError, match=r"passage.band must be in \[0, inf\) m, got -1.0"):

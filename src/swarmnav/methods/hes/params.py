@@ -10,6 +10,7 @@ flat names of earlier versions are aliases (``HesParams.ALIASES``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
@@ -239,6 +240,12 @@ class HesParams:
             raise ConfigError(f"hes: core.merge_rule must be swarmnav, paper or paper_cooldown, got {c.merge_rule!r}")
         if not a.r_out > a.r_in:
             raise ConfigError(f"hes: need paper.r_out > paper.r_in (eq. 12), got r_in={a.r_in}, r_out={a.r_out}")
+        # the formation scale of targets.template; beyond the LiDAR range a subleader could not see
+        # its own formation (and k_p -> 0 sends it to infinity)
+        alpha = c.spacing * (a.k_p + a.k_path) / a.k_p if a.k_p > 0 else math.inf
+        if not alpha < a.lidar_range:
+            raise ConfigError(f"hes: the formation scale core.spacing (paper.k_p + paper.k_path) / paper.k_p = {alpha:g} m "
+                              f"must be below paper.lidar_range ({a.lidar_range:g} m); raise paper.k_p or lower core.spacing")
         if not self.passage.relief < a.d_safe:
             raise ConfigError(f"hes: passage.relief must be < paper.d_safe ({a.d_safe} m), got {self.passage.relief}")
 
