@@ -13,9 +13,7 @@ from swarmnav.methods.sph.kernel import environment_force, released_environment_
 from swarmnav.methods.sph.method import AxisClampedDoubleIntegrator
 from swarmnav.world import from_dict
 
-LONE = {"name": "lone", "swarm": {"n": 1, "spawn": [-0.1, -0.1, 0.1, 0.1]}, "goal": {"position": [30.0, 0.0]},
-        "world": {"bounds": [-6.0, -8.0, 36.0, 8.0]},
-        "obstacles": [{"type": "circle", "center": [4.0, 7.0], "radius": 0.5}]}
+from _helpers.sph import LONE, cruise_reference_speed
 
 
 def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_values():
@@ -97,17 +95,7 @@ def test_axis_clamp_bounds_each_axis_not_the_norm():
 def test_planner_speed_bound_sets_the_reference_speed():
     # The planner plans at plan_v_max (the knot span is ctrl_spacing / plan_v_max), below the
     # controller's v_max: a held-back robot has the difference to catch up with.
-    m = registry.make("sph", plan_v_max=0.8)
-    speeds = []
-    orig = m._replan
-
-    def spy(step, x, v):
-        orig(step, x, v)
-        if 4.0 <= step * m.dt <= 8.0:
-            speeds.append(np.linalg.norm(m._ref_v[0], axis=1).mean())
-
-    m._replan = spy
-    res = swarmnav.run(m, from_dict(LONE), seed=1, steps=round(9.0 / m.dt))
-    assert np.mean(speeds) == pytest.approx(0.8, abs=0.05)
+    speed, res = cruise_reference_speed(plan_v_max=0.8)
+    assert speed == pytest.approx(0.8, abs=0.05)
     cruise = np.linalg.norm(res.velocities[400:800, 0], axis=1)
     assert cruise.max() <= 1.0 + 1e-9 and cruise.mean() == pytest.approx(0.8, abs=0.06)

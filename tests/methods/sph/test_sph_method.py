@@ -7,6 +7,8 @@ import swarmnav
 from swarmnav.methods import registry
 from swarmnav.world import from_dict
 
+from _helpers.sph import LONE, cruise_reference_speed
+
 OPEN = {"name": "open", "swarm": {"n": 6, "spawn": [-2.0, -2.0, 2.0, 2.0]}, "goal": {"position": [8.0, 0.0]},
         "world": {"bounds": [-6.0, -8.0, 14.0, 8.0]},
         "obstacles": [{"type": "circle", "center": [4.0, 5.0], "radius": 1.0}]}
@@ -58,33 +60,13 @@ def test_released_kernel_option_runs_and_differs():
     assert np.all(np.isfinite(b.positions)) and not np.array_equal(a.positions, b.positions)
 
 
-LONE = {"name": "lone", "swarm": {"n": 1, "spawn": [-0.1, -0.1, 0.1, 0.1]}, "goal": {"position": [30.0, 0.0]},
-        "world": {"bounds": [-6.0, -8.0, 36.0, 8.0]},
-        "obstacles": [{"type": "circle", "center": [4.0, 7.0], "radius": 0.5}]}
-
-
-def _cruise_reference_speed(**params):
-    """Mean reference speed of a lone robot's replans between 4 s and 8 s of an open flight."""
-    m = registry.make("sph", **params)
-    speeds = []
-    orig = m._replan
-
-    def spy(step, x, v):
-        orig(step, x, v)
-        if 4.0 <= step * m.dt <= 8.0:
-            speeds.append(np.linalg.norm(m._ref_v[0], axis=1).mean())
-
-    m._replan = spy
-    swarmnav.run(m, from_dict(LONE), seed=1, steps=round(9.0 / m.dt))
-    return float(np.mean(speeds))
-
 
 def test_knot_seeding_runs_the_reference_at_v_max():
     # The interior control points on the knots after C_2: the reference cruises at the knot
     # speed ctrl_spacing / dt_knot = v_max (within the smoothing of a 5 m local plan); the
     # released seeding repeats the points C_2 and C_{K-2} stand for and crawls at ~0.72 v_max.
-    assert _cruise_reference_speed() == pytest.approx(1.0, abs=0.06)
-    assert _cruise_reference_speed(ctrl_seed="released") < 0.85
+    assert cruise_reference_speed()[0] == pytest.approx(1.0, abs=0.06)
+    assert cruise_reference_speed(ctrl_seed="released")[0] < 0.85
 
 
 def test_reference_lag_is_bounded_at_each_replan():
