@@ -27,13 +27,14 @@ def couplings(h, step: Step) -> None:
     part = h.partition()
     col = part.col
     subs = [h.subs[s] for s in part.ids]
-    sl_idx = np.array([sub.subleader for sub in subs])[col]
-    wp = np.array([sub.waypoint for sub in subs])[col]
-    nav = np.array([sub.mode == NAVIGATE for sub in subs])[col]
-    follower = sl_idx != h.arange
+    sub_sl = np.array([sub.subleader for sub in subs])
+    sub_wp = np.array([sub.waypoint for sub in subs])
+    sub_nav = np.array([sub.mode == NAVIGATE for sub in subs])
     rows = step.rows = neighbour_rows(x, h.pair_radius)
-    queued = step.own >= 0
-    if queued.any():
+    if step.own.max() >= 0:  # agents routed on their own
+        sl_idx, wp, nav = sub_sl[col], sub_wp[col], sub_nav[col]
+        follower = sl_idx != h.arange
+        queued = step.own >= 0
         cgrp = col * (int(step.own.max()) + 2) + step.own + 1  # (sub-swarm, own group) pairs, in that order
         uniq, cgrp = np.unique(cgrp, return_inverse=True)
         cent = F.group_centroids(x, cgrp, len(uniq))[cgrp]
@@ -41,10 +42,31 @@ def couplings(h, step: Step) -> None:
         follower &= ~queued
         nn = F.nearest_in_group(x, cgrp, *rows)
     else:
-        cent = F.group_centroids(x, col, len(subs))[col]
-        nn = F.nearest_in_group(x, h.labels, *rows)
+        sl_idx, wp, nav, follower, cent, nn = couple(x, h.labels, col, sub_sl, sub_wp, sub_nav, *rows)
     step.col, step.sl_idx, step.wp, step.nav = col, sl_idx, wp, nav
     step.follower, step.cent, step.nn = follower, cent, nn
+
+
+@njit(cache=True)
+def couple(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx):
+    """:func:`couplings` with no agent routed on its own, in one pass: each agent's subleader,
+    c_s and mode from its sub-swarm's (``sub_*``, rows in ``col`` order), whether it is a
+    follower, its sub-swarm's centroid and its nearest neighbour in it."""
+    n = x.shape[0]
+    sl_idx = np.empty(n, dtype=np.int64)
+    wp = np.empty((n, 2))
+    nav = np.empty(n, dtype=np.bool_)
+    follower = np.empty(n, dtype=np.bool_)
+    cent = np.empty((n, 2))
+    g = F.group_centroids(x, col, sub_sl.shape[0])
+    for i in range(n):
+        c = col[i]
+        sl_idx[i] = sub_sl[c]
+        follower[i] = sl_idx[i] != i
+        nav[i] = sub_nav[c]
+        wp[i, 0], wp[i, 1] = sub_wp[c, 0], sub_wp[c, 1]
+        cent[i, 0], cent[i, 1] = g[c, 0], g[c, 1]
+    return sl_idx, wp, nav, follower, cent, F.nearest_in_group(x, labels, ptr, idx)
 
 
 def occlusion(h, step: Step) -> None:

@@ -43,7 +43,11 @@ class Pack:
 
     @property
     def subleader_position(self) -> np.ndarray:
-        return self.positions[int(np.flatnonzero(self.members == self.subleader)[0])]
+        m = self.members
+        i = int(np.searchsorted(m, self.subleader))  # members are ascending (make_pack's callers)
+        if i >= len(m) or m[i] != self.subleader:
+            i = int(np.flatnonzero(m == self.subleader)[0])
+        return self.positions[i]
 
 
 @dataclass(frozen=True, slots=True)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.corridors import Corridor, corridors_toward, detect_gaps
@@ -34,18 +35,27 @@ def reelect(h, step: Step) -> None:
     x = step.x
     part = h.partition()
     ids = part.ids
-    cents = F.group_centroids(x, part.col, len(ids))
     sl = np.array([h.subs[s].subleader for s in ids])
-    sl_pos = x[sl]
-    far = np.hypot(*(sl_pos - cents).T) > h.params.core.stray
+    cents, far = strayed(x, part.col, sl, h.params.core.stray)
     if not h.geom.is_empty:
-        far |= h.obstacles.blocked_into(sl_pos, cents, np.empty(len(ids), dtype=np.bool_))
+        far |= h.obstacles.blocked_into(x[sl], cents, np.empty(len(ids), dtype=np.bool_))
     if far.any():
         for j in np.flatnonzero(far):
             members = part.members[j]
             h.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
     for q in h.at["elect"]:
         q.elect(step, part.col)
+
+
+@njit(cache=True)
+def strayed(x, col, sl, stray):
+    """The sub-swarms' centroids (S, 2) [m] and whether each subleader ``sl`` (S,) is farther
+    than ``stray`` [m] from its sub-swarm's centroid."""
+    cents = F.group_centroids(x, col, sl.shape[0])
+    far = np.empty(sl.shape[0], dtype=np.bool_)
+    for j in range(sl.shape[0]):
+        far[j] = math.hypot(x[sl[j], 0] - cents[j, 0], x[sl[j], 1] - cents[j, 1]) > stray
+    return cents, far
 
 
 def report(h, step: Step, s: int) -> Report:
@@ -116,8 +126,8 @@ def decision_state(h, step: Step) -> DecisionState:
         for b in range(a + 1, S):
             d_swarm_min = min(d_swarm_min, math.hypot(cents[a][0] - cents[b][0], cents[a][1] - cents[b][1]))
     n_all = sum(len(reports[s].pack.members) for s in ids)
-    gbar = sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all  # global centroid, eq. (2)
-    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbar[0] - gx, gbar[1] - gy), p.paper.r_merge)
+    gbx, gby = (sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all).tolist()  # global centroid, eq. (2)
+    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbx - gx, gby - gy), p.paper.r_merge)
     can_merge = merge_feasible(S, n_near, d_swarm_min, p.paper.d_merge)
     return DecisionState(
         k=int(k), dt=p.paper.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,
