@@ -33,6 +33,7 @@ from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
 from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
+from swarmnav.methods.sph.yielding import yield_rates
 from swarmnav.params import build
 from swarmnav.sensing.esdf import Esdf
 from swarmnav.world.scenario import Scenario
@@ -92,7 +93,8 @@ class Sph:
         self._replan_every = max(1, int(round(p.T_p / p.dt)))
         self._ref_q = self._ref_v = self._ref_a = None  # (N, L, D) sampled references
         self._ref_k = 0  # step at which the references were sampled
-        self._hold = np.zeros(n)  # plan_once: steps each robot's reference clock stood still
+        self._hold = np.zeros(n)  # steps each robot's reference clock stood still (since the last plan)
+        self._yield_steps = 0.0  # robot-steps with a slowed reference clock
         self._prev_labels: np.ndarray | None = None
         self._prev_visible = np.zeros(0, dtype=np.int64)
         self._plans = 0
@@ -140,15 +142,23 @@ class Sph:
             self._replan(obs.step, x, v)
         q_ref, v_ref, a_ref = self._reference(obs.step)
         hold = p.once_hold if p.plan_once else p.ref_hold
+        # The reference clock (ours, the hook of the waiting parts): each robot's reference runs at
+        # the rate phi in [0, 1]; time scaling gives v* = phi v(tau), a* = phi^2 a(tau).
+        phi = np.ones(n)
         if hold > 0:
-            # The reference waits for a held robot (ours; with plan_once the paper only says the robots
-            # follow the "trajectory trends"): each robot's reference clock slows as its lag grows past
-            # hold / 2 and stops at hold. Time scaling by the rate phi: v* = phi v(tau), a* = phi^2 a(tau).
+            # The reference waits for a held robot (with plan_once the paper only says the robots
+            # follow the "trajectory trends"): the clock slows as the lag grows past hold / 2 and
+            # stops at hold.
             lag = np.linalg.norm(q_ref - x, axis=1)
             phi = np.clip(2.0 - 2.0 * lag / hold, 0.0, 1.0)
+        if p.yield_range > 0:  # a queue in narrow places (yielding.py)
+            phi = np.minimum(phi, yield_rates(x, self.goals, d, vi, vj, p.yield_range, p.yield_clearance))
+        if hold > 0 or p.yield_range > 0:
             self._hold += 1.0 - phi
+            self._yield_steps += float(np.sum(phi < 1.0))
             v_ref = phi[:, None] * v_ref
             a_ref = (phi * phi)[:, None] * a_ref
+        if hold > 0:
             # a waiting clock cannot bring back a reference that has ended (the goal) or a robot pushed
             # aside: the position error is bounded by hold, as ref_clamp bounds it at a replan
             far = lag > hold
@@ -167,6 +177,7 @@ class Sph:
             "sph_link_merges": float(self._link_merges),
             "sph_link_splits": float(self._link_splits),
             "sph_visible_neighbours_mean": self._neighbours / max(self._steps, 1),
+            "sph_waiting_fraction": self._yield_steps / max(self._steps * len(self._hold), 1),
         }
 
     def timings(self) -> dict[str, float]:

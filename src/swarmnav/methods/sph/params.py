@@ -126,6 +126,13 @@ class SphParams:
         "ref_hold (v* = phi v, a* = phi^2 a), the position error capped at ref_hold, so the reference "
         "waits for a robot the swarm holds back instead of pulling it on; 0 = off (as once_hold "
         "for plan_once)")
+    yield_range: float = param(0.0, "m", "[0, inf)", "ours",
+        "yielding in narrow places (methods/sph/yielding.py): of two visible robots closer than "
+        "this, one within yield_clearance of an obstacle, the one farther from its goal slows its "
+        "reference clock, stopping at yield_range / 2, so they pass one at a time; 0 = off (paper)")
+    yield_clearance: float = param(0.7, "m", "[0, inf)", "ours",
+        "yield_range > 0 only: a pair yields when one of its robots is this close to an obstacle "
+        "(d_thr + a body radius: a robot one body radius off its course enters the obstacle band)")
     goal_spread: float = param(0.0, "", "[0, inf)", "ours",
         "per-robot goal = goal + goal_spread * (spawn_i - spawn centroid)")
     plan_once: bool = param(False, "", None, "ours", "plan the whole path once at t = 0 (Fig. 3B protocol)")
