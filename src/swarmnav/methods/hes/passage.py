@@ -291,6 +291,8 @@ class PassageMode(Part):
 
     def chained_agents(self, step) -> np.ndarray:
         """(N,) bool: the agent's sub-swarm remembers a passage (it is in a chain of throats)."""
+        if not any(m.passages for m in self.mem.values()):
+            return np.zeros(self.n, dtype=np.bool_)
         part = self.h.partition()
         chained = [bool(self.mem[s].passages) for s in part.ids]
         if not any(chained):

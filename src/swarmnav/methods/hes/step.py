@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.decision import NAVIGATE, DecisionState
@@ -106,11 +107,24 @@ class Step:
 
     def __post_init__(self):
         if self.ring_min is None:
-            self.ring_min = self.ring.min(axis=1)
+            self.ring_min = row_min(self.ring)
 
     @property
     def n(self) -> int:
         return len(self.x)
+
+
+@njit(cache=True)
+def row_min(a):
+    """``a.min(axis=1)`` of a 2-D array (NaN-free), in one pass."""
+    out = np.empty(a.shape[0])
+    for i in range(a.shape[0]):
+        m = a[i, 0]
+        for j in range(1, a.shape[1]):
+            if a[i, j] < m:
+                m = a[i, j]
+        out[i] = m
+    return out
 
 
 def in_view(ring: np.ndarray, sx: float, sy: float, q: np.ndarray, rho: float, max_range: float) -> bool:

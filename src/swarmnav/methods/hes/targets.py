@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.corridors import free_points
 from swarmnav.methods.hes.decision import ENCIRCLE
@@ -88,12 +89,18 @@ def template(p, m: int, sub: SubSwarm) -> np.ndarray:
     where the slot attraction (eq. 24) balances the corridor centering toward c_s (eq. 32) the
     agents sit ``spacing`` apart."""
     alpha = p.core.spacing * (p.paper.k_p + p.paper.k_path) / p.paper.k_p
-    t = hex_template(m)
-    hx, hy = sub.heading
-    u = t[:, 0] / sub.squeeze
-    w = t[:, 1] * sub.squeeze
-    out = np.empty((m, 2))
-    out[:, 0] = hx * u - hy * w
-    out[:, 1] = hy * u + hx * w
-    out *= alpha
+    hx, hy = sub.heading.tolist()
+    return oriented(hex_template(m), hx, hy, float(sub.squeeze), alpha)
+
+
+@njit(cache=True)
+def oriented(t, hx, hy, squeeze, alpha):
+    """The template ``t`` (m, 2) squeezed across its axis (x / squeeze, y squeeze), turned to the
+    heading ``(hx, hy)`` and scaled by ``alpha``."""
+    out = np.empty(t.shape)
+    for i in range(t.shape[0]):
+        u = t[i, 0] / squeeze
+        w = t[i, 1] * squeeze
+        out[i, 0] = (hx * u - hy * w) * alpha
+        out[i, 1] = (hy * u + hx * w) * alpha
     return out
