@@ -33,7 +33,7 @@ from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
 from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
-from swarmnav.methods.sph.yielding import yield_rates
+from swarmnav.methods.sph.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
 from swarmnav.sensing.esdf import Esdf
 from swarmnav.world.scenario import Scenario
@@ -91,6 +91,9 @@ class Sph:
         x = np.asarray(positions, dtype=float)
         self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
         self._replan_every = max(1, int(round(p.T_p / p.dt)))
+        if p.yield_range > 0:  # the order of yielding: the way to the goal through free space
+            self._to_goal = goal_distance_field(self.esdf, scenario.goal_array, p.inflation,
+                                                p.yield_resolution)
         self._ref_q = self._ref_v = self._ref_a = None  # (N, L, D) sampled references
         self._ref_k = 0  # step at which the references were sampled
         self._hold = np.zeros(n)  # steps each robot's reference clock stood still (since the last plan)
@@ -152,7 +155,8 @@ class Sph:
             lag = np.linalg.norm(q_ref - x, axis=1)
             phi = np.clip(2.0 - 2.0 * lag / hold, 0.0, 1.0)
         if p.yield_range > 0:  # a queue in narrow places (yielding.py)
-            phi = np.minimum(phi, yield_rates(x, self.goals, d, vi, vj, p.yield_range, p.yield_clearance))
+            to_goal, _ = self._to_goal.query(x)
+            phi = np.minimum(phi, yield_rates(to_goal, x, d, vi, vj, p.yield_range, p.yield_clearance))
         if hold > 0 or p.yield_range > 0:
             self._hold += 1.0 - phi
             self._yield_steps += float(np.sum(phi < 1.0))

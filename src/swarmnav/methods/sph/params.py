@@ -19,9 +19,12 @@ class SphParams:
     #: replanning (docs/methods/sph.md, *Presets*). ``headroom`` is ``paper`` with the tracking
     #: kept below what the swarm forces can hold: the planner plans at 0.8 v_max, so a robot the swarm
     #: held back can catch up, and the position pull is capped at a_max (ref_reset = a_max / k_p).
+    #: ``queue`` is ``headroom`` with yielding in narrow places (yielding.py): two robots near an
+    #: obstacle pass one after the other.
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "paper": {},
         "headroom": {"plan_v_max": 0.8, "ref_reset": 0.3},
+        "queue": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2},
         "released": {
             "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
             "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
@@ -133,6 +136,9 @@ class SphParams:
     yield_clearance: float = param(0.7, "m", "[0, inf)", "ours",
         "yield_range > 0 only: a pair yields when one of its robots is this close to an obstacle "
         "(d_thr + a body radius: a robot one body radius off its course enters the obstacle band)")
+    yield_resolution: float = param(0.2, "m", "[0.01, 1]", "ours",
+        "yield_range > 0 only: grid of the path-length-to-goal field that orders the robots (a "
+        "multiple of esdf_resolution; bilinear between nodes)")
     goal_spread: float = param(0.0, "", "[0, inf)", "ours",
         "per-robot goal = goal + goal_spread * (spawn_i - spawn centroid)")
     plan_once: bool = param(False, "", None, "ours", "plan the whole path once at t = 0 (Fig. 3B protocol)")
