@@ -30,6 +30,7 @@ from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import control
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePolicy, project
+from swarmnav.methods.hes.encircle import RingYield
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.navigate import navigate
 from swarmnav.methods.hes.params import HesParams
@@ -54,6 +55,7 @@ def build_parts(p: HesParams) -> list[Part]:
     ============== ====================== ==========================================
     part           switch                 module
     ============== ====================== ==========================================
+    RingYield      ``core.enc_yield`` > 0 encircle.py
     SplitCommit    ``commit.on``          routes.py
     RouteHold      ``hold.on``            routes.py
     TrailFollow    ``trail.on``           trail.py
@@ -66,6 +68,7 @@ def build_parts(p: HesParams) -> list[Part]:
     stall = StallPlanner(p, narrow_relief=p.passage.on) if p.stall.on else None
     passage = PassageMode(p, stall) if p.passage.on else None
     parts: list[Part | None] = [
+        RingYield(p) if p.core.enc_yield > 0.0 else None,
         SplitCommit(p) if p.commit.on else None,
         RouteHold(p, passage) if p.hold.on else None,
         TrailFollow(p) if p.trail.on else None,
@@ -105,7 +108,7 @@ class Hes:
 
     def part(self, name: str) -> Part | None:
         """The part of ours called ``name`` (``passage``, ``stall``, ``trail``, ``hold``, ``commit``,
-        ``wall``, ``guard``), or None when it is switched off."""
+        ``wall``, ``guard``, ``ring_yield``), or None when it is switched off."""
         return next((q for q in self.parts if q.name == name), None)
 
     # ------------------------------------------------------------------ lifecycle

@@ -85,6 +85,13 @@ class CoreParams:
         "keeps moving, as the paper's path lengths imply); False: fixed slots")
     enc_clear: float = param(2.0, "m", "[0, inf)", "ours",
         "encircle slots keep this clearance from LiDAR returns (> d_safe)")
+    enc_yield: float = param(0.0, "m", "[0, inf)", "ours",
+        "0: off; > 0: an encircling member's slot moves in toward the goal until it lies this far "
+        "from every return of the member's own LiDAR ring, so the turning ring bends around an "
+        "obstacle near the goal (encircle.py). The faithful build's 3.5 m: d_safe plus ~2 m, what a "
+        "member trails outside its slot on the turning ring (v_s^2 / (k_p r_enc) = 2.1 m: the "
+        "centripetal 1.5 m/s^2 from the slot attraction); 3.0 m left default_corridor R_unsafe "
+        "0.197, 4.0 m took sigma_E to 1.22 m")
     enc_samples: int = param(72, "", "[1, 36000]", "ours",
         "candidate angles of the encircle slots on the circle of r_enc (72: every 5 deg)")
     slot_refresh: int = param(10, "steps", "[1, inf)", "ours",
@@ -141,13 +148,13 @@ class HesParams:
 
     #: Named parameter sets (``--set preset=NAME``): ``swarmnav`` is the default build;
     #: ``faithful`` is the paper as written: every extension of ours that changes its decisions or
-    #: its control law switched off, the encircle ring circulating and merges by eq. (16) under the
-    #: split-merge cooldown (docs/methods/hes.md).
+    #: its control law switched off, the encircle ring circulating (and giving way to obstacles near
+    #: the goal) and merges by eq. (16) under the split-merge cooldown (docs/methods/hes.md).
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "swarmnav": {},
         "faithful": {"passage.on": False, "guard.on": False, "stall.on": False, "trail.on": False,
                      "commit.on": False, "hold.on": False, "width.on": False,
-                     "core.enc_orbit": True, "core.merge_rule": "paper_cooldown"},
+                     "core.enc_orbit": True, "core.enc_yield": 3.5, "core.merge_rule": "paper_cooldown"},
     }
     #: Flat names of earlier versions -> their dotted name (accepted by ``--set``, specs and the API):
     #: the fields of ``paper``, ``core``, ``safety`` and ``ablation`` kept their names; then the others.
