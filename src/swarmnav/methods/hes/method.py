@@ -74,7 +74,7 @@ def build_parts(p: HesParams) -> list[Part]:
         TrailFollow(p) if p.trail.on else None,
         passage,
         stall,
-        WallBarrier(p, passage if p.passage.agent_brake > 0.0 else None) if p.adaptive and p.barrier.on else None,
+        WallBarrier(p, passage if p.passage.agent_brake > 0.0 else None) if p.filtered else None,
         ContactGuard(p) if p.adaptive and p.guard.on else None,
     ]
     return [q for q in parts if q is not None]

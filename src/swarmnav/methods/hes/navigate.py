@@ -75,7 +75,7 @@ def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, 
     the walls the subleader sees; off: c_s is the target itself."""
     p = h.params
     x = step.x
-    if p.adaptive:
+    if p.leashed:
         step_len = cruise(p, rep.clearance) * p.paper.dt
         d = target - sub.waypoint
         dn = math.hypot(d[0], d[1])

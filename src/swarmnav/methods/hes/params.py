@@ -112,6 +112,11 @@ class CoreParams:
         "subleader) is not pulled in")
     d_c: float = param(6.5, "m", "(0, inf)", "ours",
         "d_c of eq. (29): > r_enc, so the ring is not pulled in; acts on stragglers only")
+    ke_ratio: bool = param(False, "", None, "ours",
+        "the near-obstacle term of eq. (36), garbled in the paper's text: False = k_e (d_safe - d + "
+        "1)^2 (48 m/s^2 at d_safe, 300 at contact); True = k_e (d_safe / d + 1)^2 (192 m/s^2 at "
+        "d_safe, growing as 1/d^2), the reading under which relaxing the bound of eq. (39) "
+        "degrades the flight as Table 4 reports (docs/reproduction.md)")
     d_floor: float = param(0.05, "m", "(0, inf)", "ours",
         "distances are floored here before 1/d and 1/d^2 (bounded forces)")
     w_pass: float = param(2.0, "m", "(0, inf)", "ours",
@@ -154,7 +159,9 @@ class HesParams:
         "swarmnav": {},
         "faithful": {"passage.on": False, "guard.on": False, "stall.on": False, "trail.on": False,
                      "commit.on": False, "hold.on": False, "width.on": False,
-                     "core.enc_orbit": True, "core.enc_yield": 3.5, "core.merge_rule": "paper_cooldown"},
+                     "core.enc_orbit": True, "core.enc_yield": 3.5, "core.merge_rule": "paper_cooldown",
+                     "core.ke_ratio": True, "ablation.keep_leash": True, "ablation.relax_filter": True,
+                     "ablation.a_max_relaxed": 260.0},
     }
     #: Flat names of earlier versions -> their dotted name (accepted by ``--set``, specs and the API):
     #: the fields of ``paper``, ``core``, ``safety`` and ``ablation`` kept their names; then the others.
@@ -273,6 +280,19 @@ class HesParams:
         if self.ablation.safety_stack_off or not self.ablation.acceleration_bound:
             return self.ablation.a_max_relaxed
         return self.paper.a_max
+
+    @property
+    def filtered(self) -> bool:
+        """The safety filter (speed cap and wall braking barrier, ``WallBarrier``) acts: with the safety
+        stack and ``barrier.on``, unless ``ablation.relax_filter`` lifts it with the bound of eq. (39)."""
+        relaxed = self.ablation.relax_filter and not self.ablation.acceleration_bound
+        return self.adaptive and self.barrier.on and not relaxed
+
+    @property
+    def leashed(self) -> bool:
+        """c_s advances toward its target at the cruise speed on the ``core.lead`` leash (with the
+        safety stack, or without it when ``ablation.keep_leash``); otherwise c_s is the target itself."""
+        return self.adaptive or self.ablation.keep_leash
 
     @property
     def adaptive(self) -> bool:
