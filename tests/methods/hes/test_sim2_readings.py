@@ -65,3 +65,22 @@ def test_relax_filter_lifts_the_safety_filter_only_with_the_bound():
     assert "wall" in _parts(**{"ablation.acceleration_bound": False})
     assert "wall" in _parts(**{"ablation.relax_filter": True})  # the bound on: the filter stays
     assert "wall" not in _parts(**{"ablation.acceleration_bound": False, "ablation.relax_filter": True})
+
+
+WALL = from_dict({"name": "wall", "swarm": {"n": 6, "spawn": [-3.0, -3.0, 3.0, 3.0]}, "goal": {"position": [20.0, 0.0]},
+                  "obstacles": [{"type": "box", "min": [10.0, -30.0], "max": [10.3, 30.0]}]})
+
+
+def test_post_update_projection_keeps_unbounded_agents_out_of_the_wall():
+    # the command unbounded and no safety filter: without the projection agents fly into and
+    # through the wall in one step; with it every step ends core.projection short of the returns
+    crossed, inside = {}, {}
+    for m in (0.0, 0.1):
+        res = swarmnav.run("hes", WALL, seed=1, steps=200, **{"ablation.safety_stack_off": True,
+                                                            "ablation.a_max_relaxed": 1e6, "core.projection": m})
+        x, y = res.positions[..., 0], res.positions[..., 1]
+        span = (np.abs(y[:-1]) < 30.0) & (np.abs(y[1:]) < 30.0)
+        through = span & (x[:-1] < 10.0) & (x[1:] > 10.3)  # a step straight across the wall
+        crossed[m], inside[m] = bool(through.any()), float(res.clearance.min())
+    assert inside[0.0] < 0.0
+    assert inside[0.1] > 0.0 and not crossed[0.1]

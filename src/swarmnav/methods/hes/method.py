@@ -37,6 +37,7 @@ from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.part import Part, hook_table
 from swarmnav.methods.hes.passage import PassageMode
 from swarmnav.methods.hes.report import decision_state, reelect, report, sense, split_paths
+from swarmnav.methods.hes.projection import PostProjection
 from swarmnav.methods.hes.routes import RouteHold, SplitCommit
 from swarmnav.methods.hes.safety import ContactGuard, WallBarrier
 from swarmnav.methods.hes.stall import StallPlanner
@@ -63,6 +64,7 @@ def build_parts(p: HesParams) -> list[Part]:
     StallPlanner   ``stall.on``           stall.py
     WallBarrier    ``barrier.on``         safety.py (with the safety stack: ``ablation.safety_stack_off = false``)
     ContactGuard   ``guard.on``           safety.py (with the safety stack)
+    PostProjection ``core.projection`` >0 projection.py
     ============== ====================== ==========================================
     """
     stall = StallPlanner(p, narrow_relief=p.passage.on) if p.stall.on else None
@@ -76,6 +78,7 @@ def build_parts(p: HesParams) -> list[Part]:
         stall,
         WallBarrier(p, passage if p.passage.agent_brake > 0.0 else None) if p.filtered else None,
         ContactGuard(p) if p.adaptive and p.guard.on else None,
+        PostProjection(p) if p.core.projection > 0.0 else None,
     ]
     return [q for q in parts if q is not None]
 
@@ -108,7 +111,7 @@ class Hes:
 
     def part(self, name: str) -> Part | None:
         """The part of ours called ``name`` (``passage``, ``stall``, ``trail``, ``hold``, ``commit``,
-        ``wall``, ``guard``, ``ring_yield``), or None when it is switched off."""
+        ``wall``, ``guard``, ``ring_yield``, ``projection``), or None when it is switched off."""
         return next((q for q in self.parts if q.name == name), None)
 
     # ------------------------------------------------------------------ lifecycle

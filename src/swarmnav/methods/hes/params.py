@@ -117,6 +117,10 @@ class CoreParams:
         "1)^2 (48 m/s^2 at d_safe, 300 at contact); True = k_e (d_safe / d + 1)^2 (192 m/s^2 at "
         "d_safe, growing as 1/d^2), the reading under which relaxing the bound of eq. (39) "
         "degrades the flight as Table 4 reports (docs/reproduction.md)")
+    projection: float = param(0.0, "m", "[0, inf)", "ours",
+        "the geometric post-update safety projection of Section 5.3 (no formula given): 0 = off; > "
+        "0: each agent's next step is shortened until it ends this far short of every LiDAR return "
+        "ahead of it, so no agent crosses a wall in one step (projection.py)")
     d_floor: float = param(0.05, "m", "(0, inf)", "ours",
         "distances are floored here before 1/d and 1/d^2 (bounded forces)")
     w_pass: float = param(2.0, "m", "(0, inf)", "ours",
@@ -160,7 +164,8 @@ class HesParams:
         "faithful": {"passage.on": False, "guard.on": False, "stall.on": False, "trail.on": False,
                      "commit.on": False, "hold.on": False, "width.on": False,
                      "core.enc_orbit": True, "core.enc_yield": 3.5, "core.merge_rule": "paper_cooldown",
-                     "core.ke_ratio": True, "ablation.keep_leash": True, "ablation.relax_filter": True,
+                     "core.ke_ratio": True, "core.projection": 0.1, "ablation.keep_leash": True,
+                     "ablation.relax_filter": True,
                      "ablation.a_max_relaxed": 260.0},
     }
     #: Flat names of earlier versions -> their dotted name (accepted by ``--set``, specs and the API):
@@ -290,8 +295,8 @@ class HesParams:
 
     @property
     def leashed(self) -> bool:
-        """c_s advances toward its target at the cruise speed on the ``core.lead`` leash (with the
-        safety stack, or without it when ``ablation.keep_leash``); otherwise c_s is the target itself."""
+        """c_s advances toward its target at the adaptive cruise speed on the ``core.lead`` leash (with
+        the safety stack, or without it when ``ablation.keep_leash``); otherwise c_s is the target itself."""
         return self.adaptive or self.ablation.keep_leash
 
     @property
