@@ -164,7 +164,7 @@ class HesParams:
         "faithful": {"passage.on": False, "guard.on": False, "stall.on": False, "trail.on": False,
                      "commit.on": False, "hold.on": False, "width.on": False,
                      "core.enc_orbit": True, "core.enc_yield": 3.5, "core.merge_rule": "paper_cooldown",
-                     "core.ke_ratio": True, "core.projection": 0.1, "ablation.keep_leash": True,
+                     "core.ke_ratio": True, "core.projection": 0.1, "core.w_pass": 3.0, "ablation.keep_leash": True,
                      "ablation.relax_filter": True,
                      "ablation.a_max_relaxed": 260.0},
     }
