@@ -213,3 +213,12 @@ class AblationParams:
         "False: a_max -> a_max_relaxed (Table 4 \"w/o acc. bound\")")
     a_max_relaxed: float = param(26.0, "m/s^2", "(0, inf)", "ours",
         "the \"very loose\" bound of the ablations: 10 x a_max")
+    keep_leash: bool = param(False, "", None, "ours",
+        "True: the safety stack off keeps the waypoint c_s advancing at the adaptive cruise speed on "
+        "its leash (Section 5.3 \"weakens\" the regulation layers: the waypoint clearance and the "
+        "safety filter go, the local waypoint of eq. (32) and its pace stay); False: c_s is the "
+        "corridor target itself")
+    relax_filter: bool = param(False, "", None, "ours",
+        "True: \"w/o acc. bound\" also lifts the safety filter (speed cap and wall braking barrier, "
+        "which bound the command like eq. (39)), as the safety stack off does; False: eq. (39) "
+        "alone is relaxed")

@@ -35,8 +35,8 @@ SIG_SLOT, SIG_NN, SIG_SL, SIG_CENT = 0, 1, 2, 3
 
 # Indices of the gain vector passed to the kernels (one float64 array keeps the signature short).
 G_KP, G_KV, G_KSEP, G_RSEP, G_KPATH, G_KINTRA, G_DTHR, G_KIR, G_DIR, G_KL, G_KVL, G_D0, G_KCOH, G_DC, \
-    G_KREP, G_RT, G_KB, G_GAMMA, G_KE, G_DSAFE, G_DFLOOR = range(21)
-N_GAINS = 21
+    G_KREP, G_RT, G_KB, G_GAMMA, G_KE, G_DSAFE, G_DFLOOR, G_KE_RATIO = range(22)
+N_GAINS = 22
 
 
 def gain_vector(p) -> np.ndarray:
@@ -47,6 +47,7 @@ def gain_vector(p) -> np.ndarray:
     g[G_KL], g[G_KVL], g[G_D0], g[G_KCOH], g[G_DC] = p.paper.k_l, p.paper.k_vl, p.core.d_0, p.paper.k_coh, p.core.d_c
     g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE] = p.paper.k_rep, p.paper.r_trigger, p.paper.k_b, p.paper.gamma, p.paper.k_e
     g[G_DSAFE], g[G_DFLOOR] = p.paper.d_safe, p.core.d_floor
+    g[G_KE_RATIO] = 1.0 if p.core.ke_ratio else 0.0
     return g
 
 
@@ -226,20 +227,21 @@ def is_local_min(ring, r):
 
 
 @njit(cache=True)
-def repulsion_magnitude(d, k_rep, r_t, k_b, gamma, k_e, d_safe):
+def repulsion_magnitude(d, k_rep, r_t, k_b, gamma, k_e, d_safe, ratio=False):
     """Eq. (36): per-ray repulsive magnitude omega [m/s^2] at range d [m] (d already floored).
 
     ``k_rep max(0, 1/d - 1/R_t) / d^2 * (1 + k_b (max(0, R_t - d) / R_t)^gamma)
-    + 1{d < d_safe} k_e (d_safe - d + 1)^2``.
+    + 1{d < d_safe} k_e (d_safe - d + 1)^2``; with ``ratio`` (``core.ke_ratio``) the last term
+    is the other reading of the garbled text, ``k_e (d_safe / d + 1)^2``.
     """
     w = k_rep * max(0.0, 1.0 / d - 1.0 / r_t) / (d * d) * (1.0 + k_b * (max(0.0, r_t - d) / r_t) ** gamma)
     if d < d_safe:
-        w += k_e * (d_safe - d + 1.0) ** 2
+        w += k_e * (d_safe / d + 1.0) ** 2 if ratio else k_e * (d_safe - d + 1.0) ** 2
     return w
 
 
 @njit(cache=True)
-def lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_floor):
+def lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe, d_floor, ratio=False):
     """Eq. (37): ``f_obs,i = sum_{r in L_i} omega_{i,r} e_away,r``, ``e_away = -(cos, sin) theta_r``,
     over the active local-minimum set L_i of eq. (35) (local minima of the ring closer than R_t).
 
@@ -248,6 +250,7 @@ def lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe
         d_safe: (N,) safety distance of eq. (36) per agent [m]: d_safe everywhere, except for the
             members of a sub-swarm in passage mode inside their throat's tube (ours, see
             ``passage.passage_dsafe``).
+        ratio: the near-obstacle term as ``k_e (d_safe / d + 1)^2`` (``repulsion_magnitude``).
     """
     n, nr = ring.shape
     out = np.zeros((n, 2))
@@ -257,7 +260,7 @@ def lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe
             d = row[r]
             if d >= r_t or not is_local_min(row, r):
                 continue
-            w = repulsion_magnitude(max(d, d_floor), k_rep, r_t, k_b, gamma, k_e, d_safe[i])
+            w = repulsion_magnitude(max(d, d_floor), k_rep, r_t, k_b, gamma, k_e, d_safe[i], ratio)
             out[i, 0] -= w * cos_t[r]
             out[i, 1] -= w * sin_t[r]
     return out
@@ -310,7 +313,7 @@ def force_terms(x, v, group, sl_pos, sl_vel, follower, cent, waypoint, nav, slot
     all_true = np.ones(n, dtype=np.bool_)
     out[6] = spring(x, cent, g[G_KCOH], g[G_DC], all_true)
     out[7] = lidar_repulsion_each(ring, cos_t, sin_t, g[G_KREP], g[G_RT], g[G_KB], g[G_GAMMA], g[G_KE],
-                                  dsafe, g[G_DFLOOR])
+                                  dsafe, g[G_DFLOOR], g[G_KE_RATIO] > 0.5)
     for i in range(n):
         for c in range(2):
             out[0, i, c] *= sig[i, SIG_SLOT]

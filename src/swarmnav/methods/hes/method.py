@@ -30,12 +30,14 @@ from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import control
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePolicy, project
+from swarmnav.methods.hes.encircle import RingYield
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.navigate import navigate
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.part import Part, hook_table
 from swarmnav.methods.hes.passage import PassageMode
 from swarmnav.methods.hes.report import decision_state, reelect, report, sense, split_paths
+from swarmnav.methods.hes.projection import PostProjection
 from swarmnav.methods.hes.routes import RouteHold, SplitCommit
 from swarmnav.methods.hes.safety import ContactGuard, WallBarrier
 from swarmnav.methods.hes.stall import StallPlanner
@@ -54,6 +56,7 @@ def build_parts(p: HesParams) -> list[Part]:
     ============== ====================== ==========================================
     part           switch                 module
     ============== ====================== ==========================================
+    RingYield      ``core.enc_yield`` > 0 encircle.py
     SplitCommit    ``commit.on``          routes.py
     RouteHold      ``hold.on``            routes.py
     TrailFollow    ``trail.on``           trail.py
@@ -61,18 +64,21 @@ def build_parts(p: HesParams) -> list[Part]:
     StallPlanner   ``stall.on``           stall.py
     WallBarrier    ``barrier.on``         safety.py (with the safety stack: ``ablation.safety_stack_off = false``)
     ContactGuard   ``guard.on``           safety.py (with the safety stack)
+    PostProjection ``core.projection`` >0 projection.py
     ============== ====================== ==========================================
     """
     stall = StallPlanner(p, narrow_relief=p.passage.on) if p.stall.on else None
     passage = PassageMode(p, stall) if p.passage.on else None
     parts: list[Part | None] = [
+        RingYield(p) if p.core.enc_yield > 0.0 else None,
         SplitCommit(p) if p.commit.on else None,
         RouteHold(p, passage) if p.hold.on else None,
         TrailFollow(p) if p.trail.on else None,
         passage,
         stall,
-        WallBarrier(p, passage if p.passage.agent_brake > 0.0 else None) if p.adaptive and p.barrier.on else None,
+        WallBarrier(p, passage if p.passage.agent_brake > 0.0 else None) if p.filtered else None,
         ContactGuard(p) if p.adaptive and p.guard.on else None,
+        PostProjection(p) if p.core.projection > 0.0 else None,
     ]
     return [q for q in parts if q is not None]
 
@@ -105,7 +111,7 @@ class Hes:
 
     def part(self, name: str) -> Part | None:
         """The part of ours called ``name`` (``passage``, ``stall``, ``trail``, ``hold``, ``commit``,
-        ``wall``, ``guard``), or None when it is switched off."""
+        ``wall``, ``guard``, ``ring_yield``, ``projection``), or None when it is switched off."""
         return next((q for q in self.parts if q.name == name), None)
 
     # ------------------------------------------------------------------ lifecycle

@@ -75,7 +75,7 @@ def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, 
     the walls the subleader sees; off: c_s is the target itself."""
     p = h.params
     x = step.x
-    if p.adaptive:
+    if p.leashed:
         step_len = cruise(p, rep.clearance) * p.paper.dt
         d = target - sub.waypoint
         dn = math.hypot(d[0], d[1])
@@ -171,8 +171,8 @@ def match(prev: Corridor, cands: list[Corridor]) -> int | None:
 def cruise(p, clearance: float) -> float:
     """Cruise speed v_s of a sub-swarm [m/s]; with the safety stack on, scaled down linearly
     from v_s (clearance >= clr_slow) to v_min_frac v_s (clearance <= d_safe) by the nearest
-    LiDAR return of its members (adaptive cruise, ours)."""
-    if not p.adaptive:
+    LiDAR return of its members (adaptive cruise, ours; it paces the leashed waypoint)."""
+    if not p.leashed:
         return p.core.v_s
     f = _clip((clearance - p.paper.d_safe) / max(p.safety.clr_slow - p.paper.d_safe, 1e-9), 0.0, 1.0)
     return p.core.v_s * (p.safety.v_min_frac + (1.0 - p.safety.v_min_frac) * f)

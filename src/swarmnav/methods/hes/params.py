@@ -85,6 +85,13 @@ class CoreParams:
         "keeps moving, as the paper's path lengths imply); False: fixed slots")
     enc_clear: float = param(2.0, "m", "[0, inf)", "ours",
         "encircle slots keep this clearance from LiDAR returns (> d_safe)")
+    enc_yield: float = param(0.0, "m", "[0, inf)", "ours",
+        "0: off; > 0: an encircling member's slot moves in toward the goal until it lies this far "
+        "from every return of the member's own LiDAR ring, so the turning ring bends around an "
+        "obstacle near the goal (encircle.py). The faithful build's 3.5 m: d_safe plus ~2 m, what a "
+        "member trails outside its slot on the turning ring (v_s^2 / (k_p r_enc) = 2.1 m: the "
+        "centripetal 1.5 m/s^2 from the slot attraction); 3.0 m left default_corridor R_unsafe "
+        "0.197, 4.0 m took sigma_E to 1.22 m")
     enc_samples: int = param(72, "", "[1, 36000]", "ours",
         "candidate angles of the encircle slots on the circle of r_enc (72: every 5 deg)")
     slot_refresh: int = param(10, "steps", "[1, inf)", "ours",
@@ -105,6 +112,15 @@ class CoreParams:
         "subleader) is not pulled in")
     d_c: float = param(6.5, "m", "(0, inf)", "ours",
         "d_c of eq. (29): > r_enc, so the ring is not pulled in; acts on stragglers only")
+    ke_ratio: bool = param(False, "", None, "ours",
+        "the near-obstacle term of eq. (36), garbled in the paper's text: False = k_e (d_safe - d + "
+        "1)^2 (48 m/s^2 at d_safe, 300 at contact); True = k_e (d_safe / d + 1)^2 (192 m/s^2 at "
+        "d_safe, growing as 1/d^2), the reading under which relaxing the bound of eq. (39) "
+        "degrades the flight as Table 4 reports (docs/reproduction.md)")
+    projection: float = param(0.0, "m", "[0, inf)", "ours",
+        "the geometric post-update safety projection of Section 5.3 (no formula given): 0 = off; > "
+        "0: each agent's next step is shortened until it ends this far short of every LiDAR return "
+        "ahead of it, so no agent crosses a wall in one step (projection.py)")
     d_floor: float = param(0.05, "m", "(0, inf)", "ours",
         "distances are floored here before 1/d and 1/d^2 (bounded forces)")
     w_pass: float = param(2.0, "m", "(0, inf)", "ours",
@@ -141,13 +157,16 @@ class HesParams:
 
     #: Named parameter sets (``--set preset=NAME``): ``swarmnav`` is the default build;
     #: ``faithful`` is the paper as written: every extension of ours that changes its decisions or
-    #: its control law switched off, the encircle ring circulating and merges by eq. (16) under the
-    #: split-merge cooldown (docs/methods/hes.md).
+    #: its control law switched off, the encircle ring circulating (and giving way to obstacles near
+    #: the goal) and merges by eq. (16) under the split-merge cooldown (docs/methods/hes.md).
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "swarmnav": {},
         "faithful": {"passage.on": False, "guard.on": False, "stall.on": False, "trail.on": False,
                      "commit.on": False, "hold.on": False, "width.on": False,
-                     "core.enc_orbit": True, "core.merge_rule": "paper_cooldown"},
+                     "core.enc_orbit": True, "core.enc_yield": 3.5, "core.merge_rule": "paper_cooldown",
+                     "core.ke_ratio": True, "core.projection": 0.1, "core.w_pass": 3.0, "ablation.keep_leash": True,
+                     "ablation.relax_filter": True,
+                     "ablation.a_max_relaxed": 260.0},
     }
     #: Flat names of earlier versions -> their dotted name (accepted by ``--set``, specs and the API):
     #: the fields of ``paper``, ``core``, ``safety`` and ``ablation`` kept their names; then the others.
@@ -266,6 +285,19 @@ class HesParams:
         if self.ablation.safety_stack_off or not self.ablation.acceleration_bound:
             return self.ablation.a_max_relaxed
         return self.paper.a_max
+
+    @property
+    def filtered(self) -> bool:
+        """The safety filter (speed cap and wall braking barrier, ``WallBarrier``) acts: with the safety
+        stack and ``barrier.on``, unless ``ablation.relax_filter`` lifts it with the bound of eq. (39)."""
+        relaxed = self.ablation.relax_filter and not self.ablation.acceleration_bound
+        return self.adaptive and self.barrier.on and not relaxed
+
+    @property
+    def leashed(self) -> bool:
+        """c_s advances toward its target at the adaptive cruise speed on the ``core.lead`` leash (with
+        the safety stack, or without it when ``ablation.keep_leash``); otherwise c_s is the target itself."""
+        return self.adaptive or self.ablation.keep_leash
 
     @property
     def adaptive(self) -> bool:
