@@ -160,3 +160,49 @@ def test_3d_map_holds_only_seen_obstacles_and_has_the_2d_classes():
     maps2.observe(0, np.zeros(2))
     assert maps3.grids[1].max() == 0
     np.testing.assert_array_equal(maps3.grids[0][30], maps2.grids[0])  # z = 3.05 m, far from the ends
+
+
+def _path_cost(maps, robot, path):
+    """The search's cost of a cell path: step length [cells] times the class cost of the entered voxel."""
+    cells = np.array([maps.cell(p) for p in path])
+    steps = np.abs(np.diff(cells, axis=0)).sum(axis=1)
+    return float((np.sqrt(steps) * maps.cost[maps.grids[robot][tuple(cells[1:].T)]]).sum())
+
+
+@pytest.mark.parametrize("goal", [(10.0, 0.0, 1.0), (12.0, -3.0, 4.5), (6.0, 4.0, 2.5)])
+def test_3d_field_search_finds_a_path_as_cheap_as_exact_astar(goal):
+    """Oracle: the path down the cost-to-go field costs what A* with an admissible heuristic
+    (weight 1) finds, in the windowed wall with two posts that put the wide band in the way."""
+    obstacles = WALL3 + (Box((2.0, -1.0, 0.0), (2.6, -0.4, 6.0)), Box((7.0, 0.5, 0.0), (7.5, 1.2, 4.0)))
+    start, goal = np.array([0.0, 0.0, 1.0]), np.array(goal)
+    paths = {}
+    for field in (True, False):
+        maps = OccupancyMaps(obstacles, BOUNDS3, 1, 0.1, 0.3, 100.0, margin=0.5, wide=0.9, wide_cost=2.0,
+                             weight_3d=1.0, field_3d=field)
+        maps.observe(0, start)
+        paths[field] = (maps, maps.search(0, start, goal, 10**7))
+    (mf, pf), (ma, pa) = paths[True], paths[False]
+    assert mf.fields_built == 1 and ma.fields_built == 0
+    np.testing.assert_allclose(pf[[0, -1]], [start, goal])
+    assert _path_cost(mf, 0, pf) == pytest.approx(_path_cost(ma, 0, pa), rel=1e-12)
+    cells = np.array([mf.cell(p) for p in pf])
+    assert np.abs(np.diff(cells, axis=0)).max() == 1  # 26-connected steps, no jumps
+
+
+def test_3d_field_is_shared_by_equal_maps_and_rebuilt_when_a_map_grows():
+    obstacles = (Box((4.0, -0.5, 0.0), (5.0, 0.5, 6.0)), Box((11.0, -0.5, 0.0), (12.0, 0.5, 6.0)))
+    maps = OccupancyMaps(obstacles, BOUNDS3, 3, 0.1, 0.3, 6.0, margin=0.5, wide=0.9, wide_cost=2.0,
+                         field_3d=True)
+    goal = np.array([14.0, 0.0, 3.0])
+    for r, y in enumerate((-1.0, 0.0, 1.0)):
+        assert maps.observe(r, np.array([0.0, y, 3.0])) == 1  # the first post only (range 6 m)
+        assert maps.search(r, np.array([0.0, y, 3.0]), goal, 10**6) is not None
+    assert maps.fields_built == 1  # three robots, one map, one goal: one field
+    assert maps.observe(1, np.array([8.0, 0.0, 3.0])) == 1  # robot 1 sees the second post
+    path = maps.search(1, np.array([8.0, 0.0, 3.0]), goal, 10**6)
+    assert maps.fields_built == 2
+    from swarmnav.sensing import segments_blocked
+
+    assert not segments_blocked(Geometry.from_obstacles(list(obstacles), dim=3), path[:-1], path[1:]).any()
+    maps.search(0, np.array([1.0, -1.0, 3.0]), goal, 10**6)  # robot 0's map is unchanged: no new field
+    assert maps.fields_built == 2

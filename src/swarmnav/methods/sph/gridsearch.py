@@ -33,6 +33,9 @@ from swarmnav.world.obstacles import Geometry, Obstacle
 
 _SQRT2 = math.sqrt(2.0)
 
+#: cost-to-go fields kept per OccupancyMaps (3-D field search): a field of a 3-M-voxel world is 24 MB
+_FIELDS_KEPT = 6
+
 #: the 26 neighbour offsets (dz, dy, dx) of a voxel, z outermost
 _STEPS3 = np.array([(dz, dy, dx) for dz in (-1, 0, 1) for dy in (-1, 0, 1) for dx in (-1, 0, 1)
                     if (dz, dy, dx) != (0, 0, 0)], dtype=np.int64)
@@ -49,7 +52,7 @@ class OccupancyMaps:
 
     def __init__(self, obstacles: tuple[Obstacle, ...], bounds, n_robots: int, resolution: float,
                  inflation: float, sensing_range: float, margin: float | None = None, wide: float = 0.0,
-                 wide_cost: float = 0.0, weight_3d: float = 1.001):
+                 wide_cost: float = 0.0, weight_3d: float = 1.001, field_3d: bool = False):
         dim = len(bounds) // 2
         lo_b, hi_b = np.asarray(bounds[:dim], dtype=float), np.asarray(bounds[dim:], dtype=float)
         self.dim = dim
@@ -81,6 +84,9 @@ class OccupancyMaps:
                           np.zeros(n, dtype=np.int32), np.empty(1024), np.empty(1024, dtype=np.int64))
             self._searches = 0
             self.weight_3d = float(weight_3d)
+        self.field_3d = bool(field_3d)
+        self._fields: dict[tuple, np.ndarray] = {}  # cost-to-go fields, newest last
+        self.fields_built = 0
 
     def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
         """Flat indices and clearance classes (see the module docstring) of the cells around
@@ -132,7 +138,8 @@ class OccupancyMaps:
         inflated obstacle is moved to the nearest free cell (as the released planner does).
         8-connected on a planar map, 26-connected on a voxel map."""
         occ = self.grids[robot]
-        if others is not None and len(others) and others_radius > 0 and len(self.levels) > 1:
+        marked = others is not None and len(others) and others_radius > 0 and len(self.levels) > 1
+        if marked:
             occ = occ.copy()  # neighbours: cells within others_radius join the wide (costly) band
             mark = _mark_balls if self.dim == 3 else _mark_discs
             mark(occ, (np.asarray(others) - self.origin) / self.resolution, others_radius / self.resolution)
@@ -144,7 +151,10 @@ class OccupancyMaps:
             s = nearest_free(occ, *self.cell(start), 40, blocked)
             g = nearest_free(occ, *gc, 40, blocked)
             if s[0] >= 0 and g[0] >= 0:
-                idx = self._astar(occ, s, g, max_expand, blocked)
+                if self.dim == 3 and self.field_3d and not marked:
+                    idx = self._descend(robot, occ, s, g, blocked)
+                else:
+                    idx = self._astar(occ, s, g, max_expand, blocked)
                 if len(idx):
                     break
         if len(idx) == 0:
@@ -154,6 +164,20 @@ class OccupancyMaps:
         if g == gc:  # the goal itself is free: end exactly on it
             path[-1] = goal
         return path
+
+    def _descend(self, robot: int, occ, s, g, blocked) -> np.ndarray:
+        """Flat voxel indices of an optimal path from ``s`` to ``g`` down the cost-to-go field of
+        ``robot``'s map (empty: none). The field is built once per (map, goal voxel, tier) and
+        shared by every robot whose map holds the same obstacles."""
+        key = (self.known[robot].tobytes(), g, blocked)
+        field = self._fields.pop(key, None)
+        if field is None:
+            field = _cost_to_go3(occ, g, blocked, self.cost, _STEPS3)
+            self.fields_built += 1
+            while len(self._fields) >= _FIELDS_KEPT:
+                self._fields.pop(next(iter(self._fields)))
+        self._fields[key] = field  # most recently used last
+        return _descend3(occ, field, s, g, blocked, self.cost, _STEPS3)
 
     def _astar(self, occ, s, g, max_expand, blocked) -> np.ndarray:
         """Flat cell indices of the A* path between free cells ``s`` and ``g`` (empty: none)."""
@@ -430,6 +454,101 @@ def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen,
     if not found:
         return np.zeros(0, dtype=np.int64), keys, vals
     return _walk_back(parent, s, goal), keys, vals
+
+
+@njit(cache=True)
+def _passable3(occ, cz, cy, cx, dz, dy, dx, blocked):
+    """Whether the step (dz, dy, dx) from voxel (cz, cy, cx) may be taken: it stays in the grid,
+    enters a voxel below ``blocked`` and grazes none at or above it (no corner cutting: every
+    partial step, a proper subset of the offsets, must be passable). Symmetric: the step back
+    grazes the same voxels."""
+    nz, ny, nx = occ.shape
+    z, y, x = cz + dz, cy + dy, cx + dx
+    if z < 0 or z >= nz or y < 0 or y >= ny or x < 0 or x >= nx or occ[z, y, x] >= blocked:
+        return False
+    axes = abs(dz) + abs(dy) + abs(dx)
+    if axes > 1:
+        for mask in range(1, 7):
+            pz, py, px = dz * (mask >> 2), dy * ((mask >> 1) & 1), dx * (mask & 1)
+            part = abs(pz) + abs(py) + abs(px)
+            if 0 < part < axes and occ[cz + pz, cy + py, cx + px] >= blocked:
+                return False
+    return True
+
+
+@njit(cache=True)
+def _cost_to_go3(occ, g3, blocked, cost, steps):
+    """Cost of the cheapest 26-connected path from every voxel to ``g3`` (inf: unreachable), by
+    Dijkstra backwards from the goal over the voxels with ``occ < blocked``: a step costs its
+    length (1, sqrt 2, sqrt 3) times ``cost[occ]`` of the voxel it enters, no corner cutting;
+    the same costs as the A* (``_astar3``)."""
+    nz, ny, nx = occ.shape
+    plane = ny * nx
+    dist = np.full(nz * plane, np.inf)
+    done = np.zeros(nz * plane, dtype=np.bool_)
+    keys = np.empty(1 << 16)
+    vals = np.empty(1 << 16, dtype=np.int64)
+    goal = (g3[0] * ny + g3[1]) * nx + g3[2]
+    dist[goal] = 0.0
+    keys, vals, size = _heap_push(keys, vals, 0, 0.0, goal)
+    lengths = (0.0, 1.0, 1.4142135623730951, 1.7320508075688772)
+    while size > 0:
+        cur, size = _heap_pop(keys, vals, size)
+        if done[cur]:
+            continue
+        done[cur] = True
+        cz = cur // plane
+        cy = (cur - cz * plane) // nx
+        cx = cur - cz * plane - cy * nx
+        enter = cost[occ[cz, cy, cx]]  # a predecessor pays for entering this voxel
+        for k in range(steps.shape[0]):
+            dz, dy, dx = steps[k, 0], steps[k, 1], steps[k, 2]
+            if not _passable3(occ, cz, cy, cx, dz, dy, dx, blocked):
+                continue
+            nb = ((cz + dz) * ny + cy + dy) * nx + cx + dx
+            if done[nb]:
+                continue
+            nd = dist[cur] + lengths[abs(dz) + abs(dy) + abs(dx)] * enter
+            if nd < dist[nb]:
+                dist[nb] = nd
+                keys, vals, size = _heap_push(keys, vals, size, nd, nb)
+    return dist.reshape(occ.shape)
+
+
+@njit(cache=True)
+def _descend3(occ, field, s3, g3, blocked, cost, steps):
+    """Flat voxel indices of the path from ``s3`` to ``g3`` that takes, from each voxel, the
+    step minimising step cost + cost-to-go (the first such step in ``steps`` order): an optimal
+    path of ``_cost_to_go3``'s costs. Empty if ``s3`` cannot reach the goal."""
+    nz, ny, nx = occ.shape
+    plane = ny * nx
+    if not np.isfinite(field[s3[0], s3[1], s3[2]]):
+        return np.zeros(0, dtype=np.int64)
+    lengths = (0.0, 1.0, 1.4142135623730951, 1.7320508075688772)
+    out = np.empty(256, dtype=np.int64)
+    cz, cy, cx = s3[0], s3[1], s3[2]
+    out[0] = (cz * ny + cy) * nx + cx
+    count = 1
+    while cz != g3[0] or cy != g3[1] or cx != g3[2]:
+        best, bz, by, bx = np.inf, -1, -1, -1
+        for k in range(steps.shape[0]):
+            dz, dy, dx = steps[k, 0], steps[k, 1], steps[k, 2]
+            if not _passable3(occ, cz, cy, cx, dz, dy, dx, blocked):
+                continue
+            z, y, x = cz + dz, cy + dy, cx + dx
+            val = lengths[abs(dz) + abs(dy) + abs(dx)] * cost[occ[z, y, x]] + field[z, y, x]
+            if val < best:
+                best, bz, by, bx = val, z, y, x
+        if bz < 0 or count > nz * plane:  # cannot happen on a finite field; guards a loop
+            return np.zeros(0, dtype=np.int64)
+        cz, cy, cx = bz, by, bx
+        if count == out.shape[0]:
+            grown = np.empty(2 * count, dtype=np.int64)
+            grown[:count] = out
+            out = grown
+        out[count] = (cz * ny + cy) * nx + cx
+        count += 1
+    return out[:count].copy()
 
 
 def resample(path: np.ndarray, spacing: float) -> np.ndarray:

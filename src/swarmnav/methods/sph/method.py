@@ -87,7 +87,7 @@ class Sph:
         self.esdf = Esdf.build(self.geom, scenario.bounds, p.esdf_resolution)
         self.maps = OccupancyMaps(scenario.obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.R,
                                   margin=p.d_thr, wide=p.plan_clearance, wide_cost=p.plan_clearance_cost,
-                                  weight_3d=p.search_weight_3d)
+                                  weight_3d=p.search_weight_3d, field_3d=p.search_3d == "field")
         x = np.asarray(positions, dtype=float)
         self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
         self._replan_every = max(1, int(round(p.T_p / p.dt)))

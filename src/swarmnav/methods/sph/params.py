@@ -108,10 +108,13 @@ class SphParams:
         "path points per local plan (released: first 10); 0 = whole path")
     max_iter: int = param(200, "", "[0, 100000]", "ours", "L-BFGS-B iteration cap (released opt_maxeval)")
     max_expand: int = param(2_000_000, "", "[1, inf)", "ours", "A* expansion cap per search")
+    search_3d: Literal["field", "astar"] = param("field", "", None, "ours",
+        "3-D grid search: an optimal path down the map's cost-to-go field (one Dijkstra from the "
+        "goal per map change, shared by robots with the same map), or weighted A* "
+        "(search_weight_3d) from scratch at every replan; the planar search is always A*")
     search_weight_3d: float = param(2.0, "", "[1, inf)", "ours",
-        "heuristic weight of the 3-D A* (ours; released lambda_heu = 10): paths at most 2x the "
-        "optimal cost (~7 % longer measured), 50x fewer expansions than 1.001 in a 3-D forest "
-        "(the planar search keeps 1.001, a tie-break only)")
+        "search_3d = astar only: heuristic weight of the 3-D A* (released lambda_heu = 10): paths "
+        "at most 2x the optimal cost (the planar search keeps 1.001, a tie-break only)")
     replan_from: Literal["state", "reference"] = param("reference", "", None, "ours",
         "start state of a replan (released)")
     ref_reset: float = param(0.5, "m", "[0, inf)", "ours",
