@@ -189,20 +189,27 @@ def test_3d_field_search_finds_a_path_as_cheap_as_exact_astar(goal):
     assert np.abs(np.diff(cells, axis=0)).max() == 1  # 26-connected steps, no jumps
 
 
-def test_3d_field_is_shared_by_equal_maps_and_rebuilt_when_a_map_grows():
-    obstacles = (Box((4.0, -0.5, 0.0), (5.0, 0.5, 6.0)), Box((11.0, -0.5, 0.0), (12.0, 0.5, 6.0)))
-    maps = OccupancyMaps(obstacles, BOUNDS3, 3, 0.1, 0.3, 6.0, margin=0.5, wide=0.9, wide_cost=2.0,
-                         field_3d=True)
+def test_3d_field_is_shared_by_equal_maps_and_guides_the_search_of_a_grown_map():
+    obstacles = (Box((4.0, -0.5, 0.0), (5.0, 0.5, 6.0)), Box((11.0, -1.5, 0.0), (12.0, 1.5, 6.0)))
+    kw = dict(margin=0.5, wide=0.9, wide_cost=2.0)
+    maps = OccupancyMaps(obstacles, BOUNDS3, 3, 0.1, 0.3, 6.0, field_3d=True, **kw)
     goal = np.array([14.0, 0.0, 3.0])
     for r, y in enumerate((-1.0, 0.0, 1.0)):
         assert maps.observe(r, np.array([0.0, y, 3.0])) == 1  # the first post only (range 6 m)
         assert maps.search(r, np.array([0.0, y, 3.0]), goal, 10**6) is not None
     assert maps.fields_built == 1  # three robots, one map, one goal: one field
-    assert maps.observe(1, np.array([8.0, 0.0, 3.0])) == 1  # robot 1 sees the second post
-    path = maps.search(1, np.array([8.0, 0.0, 3.0]), goal, 10**6)
-    assert maps.fields_built == 2
-    from swarmnav.sensing import segments_blocked
+    start = np.array([8.0, 0.0, 3.0])
+    assert maps.observe(1, start) == 1  # robot 1 sees the second post: its map grew
+    path = maps.search(1, start, goal, 10**6)
+    assert maps.fields_built == 1  # searched with the older field as heuristic, no new field
+    # oracle: as cheap as exact A* on the grown map, and through free space
+    exact = OccupancyMaps(obstacles, BOUNDS3, 1, 0.1, 0.3, 6.0, weight_3d=1.0, **kw)
+    exact.observe(0, np.array([0.0, 0.0, 3.0]))
+    exact.observe(0, start)
+    ref = exact.search(0, start, goal, 10**7)
+    assert _path_cost(maps, 1, path) == pytest.approx(_path_cost(exact, 0, ref), rel=1e-5)
+    from swarmnav.sensing import segments_blocked, signed_distance
 
-    assert not segments_blocked(Geometry.from_obstacles(list(obstacles), dim=3), path[:-1], path[1:]).any()
-    maps.search(0, np.array([1.0, -1.0, 3.0]), goal, 10**6)  # robot 0's map is unchanged: no new field
-    assert maps.fields_built == 2
+    g = Geometry.from_obstacles(list(obstacles), dim=3)
+    assert not segments_blocked(g, path[:-1], path[1:]).any()
+    assert signed_distance(g, path).min() >= 0.5 - 0.09  # the d_thr tier, less half a cell diagonal

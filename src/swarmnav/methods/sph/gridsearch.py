@@ -33,8 +33,11 @@ from swarmnav.world.obstacles import Geometry, Obstacle
 
 _SQRT2 = math.sqrt(2.0)
 
-#: cost-to-go fields kept per OccupancyMaps (3-D field search): a field of a 3-M-voxel world is 24 MB
+#: cost-to-go fields kept per OccupancyMaps (3-D field search): a field of a 4.6-M-voxel world is 37 MB
 _FIELDS_KEPT = 6
+
+#: heuristic weight of the field-guided A*: a tie-break only (a path costs at most 1 + 1e-6 times the optimum)
+_TIE = 1.0 + 1e-6
 
 #: the 26 neighbour offsets (dz, dy, dx) of a voxel, z outermost
 _STEPS3 = np.array([(dz, dy, dx) for dz in (-1, 0, 1) for dy in (-1, 0, 1) for dx in (-1, 0, 1)
@@ -85,7 +88,7 @@ class OccupancyMaps:
             self._searches = 0
             self.weight_3d = float(weight_3d)
         self.field_3d = bool(field_3d)
-        self._fields: dict[tuple, np.ndarray] = {}  # cost-to-go fields, newest last
+        self._fields: dict[tuple, tuple] = {}  # (field, known obstacles) by (map, goal, tier); newest last
         self.fields_built = 0
 
     def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
@@ -166,17 +169,33 @@ class OccupancyMaps:
         return path
 
     def _descend(self, robot: int, occ, s, g, blocked) -> np.ndarray:
-        """Flat voxel indices of an optimal path from ``s`` to ``g`` down the cost-to-go field of
-        ``robot``'s map (empty: none). The field is built once per (map, goal voxel, tier) and
-        shared by every robot whose map holds the same obstacles."""
-        key = (self.known[robot].tobytes(), g, blocked)
-        field = self._fields.pop(key, None)
-        if field is None:
-            field = _cost_to_go3(occ, g, blocked, self.cost, _STEPS3)
-            self.fields_built += 1
-            while len(self._fields) >= _FIELDS_KEPT:
-                self._fields.pop(next(iter(self._fields)))
-        self._fields[key] = field  # most recently used last
+        """Flat voxel indices of an optimal path from ``s`` to ``g`` on ``robot``'s map (empty:
+        none), from cost-to-go fields: down the field of this very map if one is kept; else, where
+        a kept field was built on a map whose obstacles this map holds too, by A* with that field
+        as its heuristic (admissible and consistent when the tier's costs do not fall with the
+        clearance class: a map that gained obstacles only costs more); else a new field."""
+        known = self.known[robot]
+        key = (known.tobytes(), g, blocked)
+        kept = self._fields.pop(key, None)
+        if kept is not None:
+            self._fields[key] = kept  # most recently used last
+            return _descend3(occ, kept[0], s, g, blocked, self.cost, _STEPS3)
+        if np.all(np.diff(self.cost[:blocked]) >= 0):
+            guides = [(int(k.sum()), f) for (_, kg, kb), (f, k) in self._fields.items()
+                      if kg == g and kb == blocked and not np.any(k & ~known)]
+            if guides:
+                self._searches += 1
+                field = max(guides, key=lambda c: c[0])[1]
+                gcost, parent, seen, closed, keys, vals = self._work
+                idx, keys, vals = _astar3h(occ, s, g, blocked, self.cost, _STEPS3, field, self._searches,
+                                           gcost, parent, seen, closed, keys, vals)
+                self._work = (gcost, parent, seen, closed, keys, vals)
+                return idx
+        field = _cost_to_go3(occ, g, blocked, self.cost, _STEPS3)
+        self.fields_built += 1
+        while len(self._fields) >= _FIELDS_KEPT:
+            self._fields.pop(next(iter(self._fields)))
+        self._fields[key] = (field, known.copy())
         return _descend3(occ, field, s, g, blocked, self.cost, _STEPS3)
 
     def _astar(self, occ, s, g, max_expand, blocked) -> np.ndarray:
@@ -513,6 +532,56 @@ def _cost_to_go3(occ, g3, blocked, cost, steps):
                 dist[nb] = nd
                 keys, vals, size = _heap_push(keys, vals, size, nd, nb)
     return dist.reshape(occ.shape)
+
+
+@njit(cache=True)
+def _astar3h(occ, s3, g3, blocked, cost, steps, h, sid, g, parent, seen, closed, keys, vals):
+    """A* as ``_astar3`` (same steps, costs, corner rule and work arrays) with the heuristic read
+    from ``h`` (a cost-to-go field of a map with fewer obstacles; voxels it cannot reach are not
+    entered), weighted by ``_TIE`` = 1 + 1e-6 only to break ties towards larger g (equal-cost paths
+    fill whole slabs of a 26-connected grid, all of which an unweighted search would expand).
+    Returns ``(flat voxel indices start -> goal or empty, keys, vals)``."""
+    nz, ny, nx = occ.shape
+    plane = ny * nx
+    hf = h.ravel()
+    s = (s3[0] * ny + s3[1]) * nx + s3[2]
+    goal = (g3[0] * ny + g3[1]) * nx + g3[2]
+    if not np.isfinite(hf[s]):
+        return np.zeros(0, dtype=np.int64), keys, vals
+    g[s] = 0.0
+    seen[s] = sid
+    parent[s] = -1
+    keys, vals, size = _heap_push(keys, vals, 0, hf[s], s)
+    lengths = (0.0, 1.0, 1.4142135623730951, 1.7320508075688772)
+    found = False
+    while size > 0:
+        cur, size = _heap_pop(keys, vals, size)
+        if closed[cur] == sid:
+            continue
+        if cur == goal:
+            found = True
+            break
+        closed[cur] = sid
+        cz = cur // plane
+        cy = (cur - cz * plane) // nx
+        cx = cur - cz * plane - cy * nx
+        for k in range(steps.shape[0]):
+            dz, dy, dx = steps[k, 0], steps[k, 1], steps[k, 2]
+            if not _passable3(occ, cz, cy, cx, dz, dy, dx, blocked):
+                continue
+            z, y, x = cz + dz, cy + dy, cx + dx
+            nb = (z * ny + y) * nx + x
+            if closed[nb] == sid or not np.isfinite(hf[nb]):
+                continue
+            ng = g[cur] + lengths[abs(dz) + abs(dy) + abs(dx)] * cost[occ[z, y, x]]
+            if seen[nb] != sid or ng < g[nb]:
+                seen[nb] = sid
+                g[nb] = ng
+                parent[nb] = cur
+                keys, vals, size = _heap_push(keys, vals, size, ng + hf[nb] * _TIE, nb)
+    if not found:
+        return np.zeros(0, dtype=np.int64), keys, vals
+    return _walk_back(parent, s, goal), keys, vals
 
 
 @njit(cache=True)

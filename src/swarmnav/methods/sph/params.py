@@ -108,13 +108,13 @@ class SphParams:
         "path points per local plan (released: first 10); 0 = whole path")
     max_iter: int = param(200, "", "[0, 100000]", "ours", "L-BFGS-B iteration cap (released opt_maxeval)")
     max_expand: int = param(2_000_000, "", "[1, inf)", "ours", "A* expansion cap per search")
-    search_3d: Literal["field", "astar"] = param("field", "", None, "ours",
-        "3-D grid search: an optimal path down the map's cost-to-go field (one Dijkstra from the "
-        "goal per map change, shared by robots with the same map), or weighted A* "
-        "(search_weight_3d) from scratch at every replan; the planar search is always A*")
-    search_weight_3d: float = param(2.0, "", "[1, inf)", "ours",
-        "search_3d = astar only: heuristic weight of the 3-D A* (released lambda_heu = 10): paths "
-        "at most 2x the optimal cost (the planar search keeps 1.001, a tie-break only)")
+    search_3d: Literal["astar", "field"] = param("astar", "", None, "ours",
+        "3-D grid search: weighted A* from scratch at every replan (heuristic weight "
+        "search_weight_3d), or an optimal path from the map's cost-to-go field (one backward "
+        "Dijkstra per map, shared by robots with the same map; a grown map is searched by A* with "
+        "an older field as heuristic); the planar search is always A* (weight 1.001)")
+    search_weight_3d: float = param(10.0, "", "[1, inf)", "released astar/lambda_heu",
+        "search_3d = astar only: heuristic weight of the 3-D A*, the released planner's")
     replan_from: Literal["state", "reference"] = param("reference", "", None, "ours",
         "start state of a replan (released)")
     ref_reset: float = param(0.5, "m", "[0, inf)", "ours",
