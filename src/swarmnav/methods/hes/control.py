@@ -108,7 +108,8 @@ def control(h, step: Step) -> np.ndarray:
     x, v = step.x, step.v
     couplings(h, step)
     occlusion(h, step)
-    step.dsafe = np.full(h.n, p.paper.d_safe)
+    step.dsafe = np.empty(h.n)
+    step.dsafe.fill(p.paper.d_safe)
     step.exit_dir = np.zeros((h.n, 2))
     step.exit_free = np.zeros(h.n, dtype=np.bool_)
     for part in h.at["steer"]:

@@ -40,9 +40,12 @@ class Pack:
     positions: np.ndarray  # (m, 2) p_j [m]
     velocities: np.ndarray  # (m, 2) v_j [m/s]
     centroid: np.ndarray  # (2,) pbar_s of eq. (2), computed by the subleader from the rows above
+    sl_row: np.ndarray | None = None  # (2,) p_s, the subleader's row of ``positions`` (found if None)
 
     @property
     def subleader_position(self) -> np.ndarray:
+        if self.sl_row is not None:
+            return self.sl_row
         m = self.members
         i = int(np.searchsorted(m, self.subleader))  # members are ascending (make_pack's callers)
         if i >= len(m) or m[i] != self.subleader:
@@ -67,7 +70,8 @@ class Report:
 
 def make_pack(sid: int, subleader: int, members: np.ndarray, x: np.ndarray, v: np.ndarray) -> Pack:
     pos = x[members]
-    return Pack(sid, subleader, members, pos, v[members], pos.sum(axis=0) / len(pos))  # = pos.mean(axis=0)
+    return Pack(sid, subleader, members, pos, v[members], pos.sum(axis=0) / len(pos),  # = pos.mean(axis=0)
+                x[subleader])
 
 
 # --------------------------------------------------------------------------- split and merge

@@ -140,7 +140,7 @@ class PassageMode(Part):
     def gaps(self, step, sub, gaps):
         """A narrow opening must be a seen passage, not a concave corner (``gap_depth``)."""
         narrow = gaps[:, GAP_W] < self.w_wide
-        if not narrow.any():
+        if not np.count_nonzero(narrow):
             return gaps
         a, h = sub.subleader, self.h
         keep = ~narrow
@@ -270,7 +270,8 @@ class PassageMode(Part):
         streams through; in encircle mode too). Returns (N,) int, the index of the agent's throat
         in its sub-swarm's passages (-1: not queued), and (N, 2) targets [m]."""
         p = self.p
-        q_idx = np.full(self.n, -1, dtype=np.int64)
+        q_idx = np.empty(self.n, dtype=np.int64)
+        q_idx.fill(-1)
         q_tgt = np.zeros((self.n, 2))
         if not any(self.mem[s].passages for s in subs):
             return q_idx, q_tgt
@@ -327,7 +328,7 @@ class PassageMode(Part):
         return out
 
     def push_back(self, step):
-        return bool((step.dsafe < self.p.paper.d_safe).any())
+        return bool(np.count_nonzero(step.dsafe < self.p.paper.d_safe))
 
     def edit_terms(self, step, t):
         """For a queued member inside a throat's tube and lined up with the gap, the LiDAR

@@ -40,7 +40,7 @@ class WallBarrier(Part):
 
     def brake(self, step, a):
         chained = self.queue.chained_agents(step) if self.queue is not None else None
-        if chained is None or not chained.any():
+        if chained is None or not np.count_nonzero(chained):
             return self.wall(step, a)
         a = self.wall(step, self.queue.queue_barrier(step, a, chained))
         return self.wall(step, self.queue.queue_barrier(step, a, chained))

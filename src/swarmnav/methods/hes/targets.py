@@ -27,7 +27,7 @@ def references(h, step: Step) -> None:
     slot = np.empty_like(x)
     speed = np.empty(h.n)
     queued = step.own >= 0
-    any_queued = bool(queued.any())
+    any_queued = bool(np.count_nonzero(queued))
     if any_queued:
         slot[queued] = step.own_target[queued]
         speed[queued] = p.core.v_s
