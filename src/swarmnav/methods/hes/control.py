@@ -31,7 +31,7 @@ def couplings(h, step: Step) -> None:
     sub_wp = np.array([sub.waypoint for sub in subs])
     sub_nav = np.array([sub.mode == NAVIGATE for sub in subs])
     rows = step.rows = neighbour_rows(x, h.pair_radius)
-    if step.own.max() >= 0:  # agents routed on their own
+    if step.n_own:  # agents routed on their own
         sl_idx, wp, nav = sub_sl[col], sub_wp[col], sub_nav[col]
         follower = sl_idx != h.arange
         queued = step.own >= 0

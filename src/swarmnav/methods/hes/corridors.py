@@ -171,7 +171,7 @@ def free_points(ring, px, py, cos_t, sin_t, pts, clear, max_range):
     return out
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: a step builds several, and a frozen init costs twice as much
 class Corridor:
     """A candidate corridor toward the goal, in world coordinates.
 
@@ -256,8 +256,7 @@ def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pas
                         math.cos(math.radians(toward_deg)), ring, float(sensor[0]), float(sensor[1]), cos_t, sin_t,
                         float(origin[0]), float(origin[1]), rho_vis, max_range, check, float(approach),
                         float(approach_w), float(through))
-    out = [Corridor(mid=r[0:2], normal=r[2:4], width=w, target=r[5:7], cost=c)
-           for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
+    out = [Corridor(r[0:2], r[2:4], w, r[5:7], c) for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
     out.sort(key=lambda c: c.cost)
     return out
 

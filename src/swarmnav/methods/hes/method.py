@@ -236,6 +236,7 @@ class Hes:
         """Agents routed on their own (hook ``targets``); none in the paper's method."""
         step.own = np.empty(self.n, dtype=np.int64)
         step.own.fill(-1)  # (np.full costs several times this on a small array)
+        step.n_own = 0
         if final:
             step.own_target = np.zeros((self.n, 2))
             step.routed = np.zeros(self.n, dtype=np.bool_)

@@ -27,9 +27,10 @@ def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
     p = h.params
     x = step.x
     cent = rep.pack.centroid
-    head = rep.pack.members[step.own[rep.pack.members] < 0]
-    if 0 < len(head) < len(rep.pack.members):  # members routed on their own: c_s leads the others
-        cent = x[head].mean(axis=0)
+    if step.n_own:
+        head = rep.pack.members[step.own[rep.pack.members] < 0]
+        if 0 < len(head) < len(rep.pack.members):  # members routed on their own: c_s leads the others
+            cent = x[head].mean(axis=0)
     sl = x[sub.subleader]
     gx, gy = h.goal
     delta = target_proximity(math.hypot(cent[0] - gx, cent[1] - gy), math.hypot(sl[0] - gx, sl[1] - gy))

@@ -256,6 +256,7 @@ class PassageMode(Part):
     def targets(self, step, subs, labels, final):
         self.q_idx, q_tgt = self.queue(step.x, labels, subs)
         step.own = self.q_idx
+        step.n_own = int(np.count_nonzero(self.q_idx >= 0))
         if final:
             self.q_tgt = q_tgt
             step.own_target = q_tgt

@@ -26,9 +26,9 @@ def references(h, step: Step) -> None:
     x, k = step.x, step.k
     slot = np.empty_like(x)
     speed = np.empty(h.n)
-    queued = step.own >= 0
-    any_queued = bool(np.count_nonzero(queued))
+    any_queued = step.n_own > 0
     if any_queued:
+        queued = step.own >= 0
         slot[queued] = step.own_target[queued]
         speed[queued] = p.core.v_s
     part = h.partition()
