@@ -155,13 +155,21 @@ def free_points(ring, px, py, cos_t, sin_t, pts, clear, max_range):
     """(M,) bool: no LiDAR return of this ring lies within ``clear`` [m] of ``pts[m]``."""
     n = ring.shape[0]
     out = np.ones(pts.shape[0], dtype=np.bool_)
+    if pts.shape[0] == 0:
+        return out
     c2 = clear * clear
+    # the points' bounding box grown by ``clear`` (and a micrometre): a return outside it is
+    # farther than ``clear`` from every point, and is skipped without the per-point test
+    lo_x, hi_x = pts[:, 0].min() - clear - 1e-6, pts[:, 0].max() + clear + 1e-6
+    lo_y, hi_y = pts[:, 1].min() - clear - 1e-6, pts[:, 1].max() + clear + 1e-6
     for r in range(n):
         d = ring[r]
         if d >= max_range:
             continue
         qx = px + d * cos_t[r]
         qy = py + d * sin_t[r]
+        if qx < lo_x or qx > hi_x or qy < lo_y or qy > hi_y:
+            continue
         for k in range(pts.shape[0]):
             if out[k]:
                 dx = pts[k, 0] - qx

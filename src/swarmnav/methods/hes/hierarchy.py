@@ -30,7 +30,7 @@ def centroids(x: np.ndarray, labels: np.ndarray, ids: list[int]) -> np.ndarray:
     return np.array([x[labels == s].mean(axis=0) for s in ids]).reshape(-1, 2)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: built for every sub-swarm every step (a frozen init costs twice as much)
 class Pack:
     """The subleader report packet P_s(k) of eq. (3): ``{(j, p_j, v_j) | j in S_s(k)}``."""
 
@@ -53,7 +53,7 @@ class Pack:
         return self.positions[i]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen, as Pack
 class Report:
     """What a subleader sends the leader each step: its Pack and what its LiDAR ring shows.
 

@@ -39,8 +39,9 @@ def reelect(h, step: Step) -> None:
     cents, far, nearest = strayed(x, part.col, sl, h.params.core.stray)
     if not h.geom.is_empty:
         far |= h.obstacles.blocked_into(x[sl], cents, np.empty(len(ids), dtype=np.bool_))
-    for j in np.flatnonzero(far).tolist():
-        h.subs[ids[j]].subleader = int(nearest[j])
+    for j, f in enumerate(far.tolist()):
+        if f:
+            h.subs[ids[j]].subleader = int(nearest[j])
     for q in h.at["elect"]:
         q.elect(step, part.col)
 
