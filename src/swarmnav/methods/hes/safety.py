@@ -36,7 +36,7 @@ class WallBarrier(Part):
     def wall(self, step, a: np.ndarray) -> np.ndarray:
         p, h = self.p, self.h
         return safety_filter(a, step.v, step.ring, h.cos, h.sin, p.paper.dt, p.safety.v_cap_frac * p.core.v_s, p.barrier.a_brake,
-                             p.barrier.margin, p.paper.lidar_range, p.barrier.passes)
+                             p.barrier.margin, p.paper.lidar_range, p.barrier.passes, step.ring_min)
 
     def brake(self, step, a):
         chained = self.queue.chained_agents(step) if self.queue is not None else None
