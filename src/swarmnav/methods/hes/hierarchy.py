@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.corridors import Corridor
 
@@ -69,9 +70,32 @@ class Report:
 
 
 def make_pack(sid: int, subleader: int, members: np.ndarray, x: np.ndarray, v: np.ndarray) -> Pack:
-    pos = x[members]
-    return Pack(sid, subleader, members, pos, v[members], pos.sum(axis=0) / len(pos),  # = pos.mean(axis=0)
-                x[subleader])
+    """P_s(k) of sub-swarm ``sid``: its members' rows of ``x`` and ``v`` and their centroid."""
+    pos, vel, cen, sl_row = _pack_rows(x, v, members, subleader)
+    return Pack(sid, subleader, members, pos, vel, cen, sl_row)
+
+
+@njit(cache=True)
+def _pack_rows(x, v, members, subleader):
+    """``x[members]``, ``v[members]``, their centroid (summed in row order and divided by the count,
+    as ``pos.sum(axis=0) / len(pos)``: the same bits) and ``x[subleader]``, in one pass."""
+    m = members.shape[0]
+    pos = np.empty((m, 2))
+    vel = np.empty((m, 2))
+    for k in range(m):
+        j = members[k]
+        pos[k, 0], pos[k, 1] = x[j, 0], x[j, 1]
+        vel[k, 0], vel[k, 1] = v[j, 0], v[j, 1]
+    cen = np.zeros(2)
+    if m > 0:
+        cen[0], cen[1] = pos[0, 0], pos[0, 1]
+    for k in range(1, m):
+        cen[0] += pos[k, 0]
+        cen[1] += pos[k, 1]
+    cen /= m
+    sl_row = np.empty(2)
+    sl_row[0], sl_row[1] = x[subleader, 0], x[subleader, 1]
+    return pos, vel, cen, sl_row
 
 
 # --------------------------------------------------------------------------- split and merge

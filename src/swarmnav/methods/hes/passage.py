@@ -254,6 +254,11 @@ class PassageMode(Part):
 
     # ------------------------------------------------------------ targets
     def targets(self, step, subs, labels, final):
+        if not any(self.mem[s].passages for s in subs):  # the common case: no throat remembered,
+            self.q_idx = step.own  # nobody queued (the core's own = -1, own_target = 0, routed = False)
+            if final:
+                self.q_tgt = step.own_target
+            return
         self.q_idx, q_tgt = self.queue(step.x, labels, subs)
         step.own = self.q_idx
         step.n_own = int(np.count_nonzero(self.q_idx >= 0))
