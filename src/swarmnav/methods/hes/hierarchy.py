@@ -8,6 +8,7 @@ its own sub-swarm's label (:func:`check_partition` asserts both).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -183,12 +184,9 @@ def reassign(x: np.ndarray, labels: np.ndarray, ids: list[int], sl_pos: np.ndarr
     """
     if len(ids) < 2 or n_move_max <= 0:
         return labels, np.zeros(0, dtype=np.int64)
-    phi = w * np.linalg.norm(x[:, None, :] - sl_pos[None], axis=2) + \
-        w_c * np.linalg.norm(x[:, None, :] - waypoints[None], axis=2)  # (N, S)
     col = np.searchsorted(np.asarray(ids), labels)
-    cur = phi[np.arange(len(x)), col]
-    best = np.argmin(phi, axis=1)
-    gain = cur - phi[np.arange(len(x)), best]
+    best, gain = _best_moves(x, col, np.ascontiguousarray(sl_pos, dtype=np.float64),
+                             np.ascontiguousarray(waypoints, dtype=np.float64), w, w_c)
     ok = (gain >= delta_min) & ~protected & (k - last_move >= cooldown_steps)
     cand = np.flatnonzero(ok)
     if len(cand) == 0:
@@ -197,3 +195,27 @@ def reassign(x: np.ndarray, labels: np.ndarray, ids: list[int], sl_pos: np.ndarr
     out = labels.copy()
     out[cand] = np.asarray(ids)[best[cand]]
     return out, np.sort(cand)
+
+
+@njit(cache=True)
+def _best_moves(x, col, sl_pos, waypoints, w, w_c):
+    """For each agent, the cheapest sub-swarm ``best`` (N,) under eq. (41)'s cost and the gain
+    ``phi_cur - phi_best`` (N,) of moving there (``col``: its current column), with the same
+    operations as the (N, S) numpy form: ``w |p - p_s| + w_c |p - c_s|``, first minimum."""
+    n, S = x.shape[0], sl_pos.shape[0]
+    best = np.empty(n, dtype=np.int64)
+    gain = np.empty(n)
+    for i in range(n):
+        cur = 0.0
+        b, pb = 0, np.inf
+        for s in range(S):
+            dx, dy = x[i, 0] - sl_pos[s, 0], x[i, 1] - sl_pos[s, 1]
+            ex, ey = x[i, 0] - waypoints[s, 0], x[i, 1] - waypoints[s, 1]
+            phi = w * math.sqrt(dx * dx + dy * dy) + w_c * math.sqrt(ex * ex + ey * ey)
+            if s == col[i]:
+                cur = phi
+            if phi < pb or s == 0:
+                b, pb = s, phi
+        best[i] = b
+        gain[i] = cur - pb
+    return best, gain
