@@ -143,6 +143,7 @@ class Hes:
         self.parts = build_parts(p)
         self.at = hook_table(self.parts)
         self._part_key = None
+        self._roles_key: tuple | None = None  # the leader and subleaders the cached roles were built for
         self.needs_blocked = any(q.needs_blocked for q in self.parts)  # a part reads Step.blocked
         # the report's approach to narrow throats (hook attribute ``approach``; the last part that sets it)
         self.approach = next(((q.approach, q.approach_w) for q in reversed(self.parts) if q.approach > 0.0),
@@ -207,10 +208,13 @@ class Hes:
     def roles(self) -> np.ndarray:
         """(N,) uint8 role of each agent in the hierarchy of eq. (1): 2 the leader, 1 a
         subleader, 0 a follower (recorded by the run for the replay viewer)."""
-        r = np.zeros(self.n, dtype=np.uint8)
-        r[[sub.subleader for sub in self.subs.values()]] = 1
-        r[self.leader] = 2
-        return r
+        key = (self.leader, *[sub.subleader for sub in self.subs.values()])
+        if key != self._roles_key:  # rebuilt only when a subleader or the leader changes
+            r = np.zeros(self.n, dtype=np.uint8)
+            r[list(key[1:])] = 1
+            r[self.leader] = 2
+            self._roles_key, self._roles = key, r
+        return self._roles.copy()
 
     def _decide(self, step: Step) -> list[dict]:
         """Stages 2-3: the reports, z(k), the source's proposal through Pi_feas (eq. 22), executed."""
