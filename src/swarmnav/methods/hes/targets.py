@@ -44,7 +44,8 @@ def references(h, step: Step) -> None:
             speed[members] = p.core.v_s
             continue
         tmpl = template(p, m, sub)
-        if k - sub.slot_step >= p.core.slot_refresh or not np.array_equal(sub.slot_members, members):
+        if k - sub.slot_step >= p.core.slot_refresh or not (
+                sub.slot_members is members or np.array_equal(sub.slot_members, members)):
             sub.slot_members = members
             sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl, p.core.assign_exact)
             sub.slot_step = k
