@@ -75,7 +75,7 @@ def occlusion(h, step: Step) -> None:
     one (computed also with sigma_occ = 1 when a part reads them)."""
     p = h.params
     x, n = step.x, h.n
-    if h.geom.is_empty or (p.sigma == 1.0 and not h.needs_blocked):
+    if h.no_obstacles or (p.sigma == 1.0 and not h.needs_blocked):
         step.blocked = np.zeros((n, 4), dtype=np.bool_)
         step.sig = np.ones((n, 4))
         return

@@ -122,6 +122,7 @@ class Hes:
         self.goal = scenario.goal_array.astype(float)
         self.geom = scenario.geometry
         self.obstacles = PreparedGeometry(self.geom)  # the per-step LiDAR and line-of-sight queries
+        self.no_obstacles = self.geom.is_empty
         n = len(positions)
         self.n = n
         self.arange = np.arange(n)  # agent indices (compared with per-agent indices every step)

@@ -22,7 +22,7 @@ from swarmnav.methods.hes.step import Step, in_view
 def sense(h, x: np.ndarray) -> np.ndarray:
     """Every agent's LiDAR ring (N, R) [m] (= ``swarmnav.sensing.lidar_ring``)."""
     p = h.params
-    if h.geom.is_empty:
+    if h.no_obstacles:
         return np.full((len(x), p.paper.n_rays), p.paper.lidar_range)
     return h.obstacles.lidar_into(x, h.cos, h.sin, p.paper.lidar_range, np.empty((len(x), p.paper.n_rays)))
 
@@ -37,7 +37,7 @@ def reelect(h, step: Step) -> None:
     ids = part.ids
     sl = np.array([h.subs[s].subleader for s in ids])
     cents, far, nearest = strayed(x, part.col, sl, h.params.core.stray)
-    if not h.geom.is_empty:
+    if not h.no_obstacles:
         far |= h.obstacles.blocked_into(x[sl], cents, np.empty(len(ids), dtype=np.bool_))
     for j, f in enumerate(far.tolist()):
         if f:
