@@ -73,6 +73,11 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
     m = 0
     if na == 0:
         return out[:0]
+    hx = np.empty(n)  # every ray's return [m] (read only where it hits), computed once
+    hy = np.empty(n)
+    for r in range(n):
+        hx[r] = px + ring[r] * cos_t[r]
+        hy[r] = py + ring[r] * sin_t[r]
     for i in range(na):
         a = anchors[i]
         b = anchors[(i + 1) % na]
@@ -97,15 +102,15 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
             da = ring[ra]
             if da >= max_range:
                 continue
-            qx = px + da * cos_t[ra]
-            qy = py + da * sin_t[ra]
+            qx = hx[ra]
+            qy = hy[ra]
             for t in range(pk + 1, span + 1):
                 rb = _wrap(a + t, n)
                 db = ring[rb]
                 if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
                     continue
-                ux = px + db * cos_t[rb] - qx
-                uy = py + db * sin_t[rb] - qy
+                ux = hx[rb] - qx
+                uy = hy[rb] - qy
                 w2 = ux * ux + uy * uy
                 if w2 < wbest:
                     wbest = w2
