@@ -226,6 +226,23 @@ def test_safety_filter_meets_every_ray_bound_between_obstacles():
         assert np.all(closing[ring < 20.0] <= bound[ring < 20.0] + 1e-9)
         assert np.all(np.linalg.norm(w, axis=1) <= 1.3 + 1e-9)
 
+
+def test_safety_filter_with_the_nearest_returns_is_the_same_bit_for_bit():
+    """Given each ring's nearest return, agents too slow for any ray to bind skip the sweeps: the
+    command must not change by a bit, near walls (bounds binding) or far from them."""
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        ring = np.full((6, R), 20.0)
+        for row in ring:
+            c, w = rng.integers(0, R), rng.integers(5, 60)
+            idx = (c + np.arange(-w, w + 1)) % R
+            row[idx] = rng.uniform(0.3, 8.0) + 0.3 * np.abs(np.arange(-w, w + 1)) / w
+        v = rng.normal(0.0, 1.0, (6, 2))
+        a = rng.normal(0.0, 5.0, (6, 2))
+        plain = B.safety_filter(a, v, ring, COS, SIN, 0.1, 1.3, 1.5, 0.5, 20.0)
+        fast = B.safety_filter(a, v, ring, COS, SIN, 0.1, 1.3, 1.5, 0.5, 20.0, 3, ring.min(axis=1))
+        assert plain.tobytes() == fast.tobytes()
+
 def _follow(lead_brake_step, v0=3.0, gap0=4.0, steps=200):
     """1-D car following under eq. (39): the follower commands +a_max toward the leader every
     step (the worst attraction), the leader cruises at 2 m/s and brakes at a_max from

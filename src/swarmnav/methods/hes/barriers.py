@@ -18,7 +18,7 @@ from numba import njit
 from swarmnav.methods.hes.neighbours import all_rows
 
 @njit(cache=True)
-def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_range, passes=3):
+def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_range, passes=3, ring_min=None):
     """Adaptive motion regulation (ours; the safety stack's layers around eq. (38), Section 5.3).
 
     Projects each agent's commanded next velocity ``w = v + a dt`` onto
@@ -34,7 +34,9 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
        (c_r >= 0): the barrier always holds,
 
     and returns the acceleration ``(w - v) / dt`` that realises it. Saturation (eq. 39)
-    is applied afterwards by the caller.
+    is applied afterwards by the caller. ``ring_min`` (N,), each ring's nearest return [m], if
+    given, lets an agent slower than the bound of its nearest return skip the sweeps (no ray can
+    bind it: the result is the same).
     """
     n = ring.shape[0]
     out = np.empty((n, 2))
@@ -45,6 +47,13 @@ def safety_filter(a, v, ring, cos_t, sin_t, dt, v_cap, a_brake, margin, max_rang
         if s > v_cap:
             wx *= v_cap / s
             wy *= v_cap / s
+        if ring_min is not None:
+            # every bound c_r is at least the nearest return's; a closing speed w . u_r is at most
+            # |w| (1e-9 m/s covers the rounding): no ray can bind, nothing moves
+            if math.sqrt(wx * wx + wy * wy) + 1e-9 < math.sqrt(2.0 * a_brake * max(ring_min[i] - margin, 0.0)):
+                out[i, 0] = (wx - v[i, 0]) / dt
+                out[i, 1] = (wy - v[i, 1]) / dt
+                continue
         moved = True
         for _ in range(passes):  # usually one sweep: nothing to remove, nothing moved
             wx, wy, moved, _s = _wall_sweep(wx, wy, ring[i], cos_t, sin_t, a_brake, margin, max_range, True)

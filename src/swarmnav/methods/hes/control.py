@@ -31,7 +31,7 @@ def couplings(h, step: Step) -> None:
     sub_wp = np.array([sub.waypoint for sub in subs])
     sub_nav = np.array([sub.mode == NAVIGATE for sub in subs])
     rows = step.rows = neighbour_rows(x, h.pair_radius)
-    if step.own.max() >= 0:  # agents routed on their own
+    if step.n_own:  # agents routed on their own
         sl_idx, wp, nav = sub_sl[col], sub_wp[col], sub_nav[col]
         follower = sl_idx != h.arange
         queued = step.own >= 0
@@ -75,7 +75,7 @@ def occlusion(h, step: Step) -> None:
     one (computed also with sigma_occ = 1 when a part reads them)."""
     p = h.params
     x, n = step.x, h.n
-    if h.geom.is_empty or (p.sigma == 1.0 and not h.needs_blocked):
+    if h.no_obstacles or (p.sigma == 1.0 and not h.needs_blocked):
         step.blocked = np.zeros((n, 4), dtype=np.bool_)
         step.sig = np.ones((n, 4))
         return
@@ -108,7 +108,8 @@ def control(h, step: Step) -> np.ndarray:
     x, v = step.x, step.v
     couplings(h, step)
     occlusion(h, step)
-    step.dsafe = np.full(h.n, p.paper.d_safe)
+    step.dsafe = np.empty(h.n)
+    step.dsafe.fill(p.paper.d_safe)
     step.exit_dir = np.zeros((h.n, 2))
     step.exit_free = np.zeros(h.n, dtype=np.bool_)
     for part in h.at["steer"]:

@@ -73,6 +73,11 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
     m = 0
     if na == 0:
         return out[:0]
+    hx = np.empty(n)  # every ray's return [m] (read only where it hits), computed once
+    hy = np.empty(n)
+    for r in range(n):
+        hx[r] = px + ring[r] * cos_t[r]
+        hy[r] = py + ring[r] * sin_t[r]
     for i in range(na):
         a = anchors[i]
         b = anchors[(i + 1) % na]
@@ -97,15 +102,15 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
             da = ring[ra]
             if da >= max_range:
                 continue
-            qx = px + da * cos_t[ra]
-            qy = py + da * sin_t[ra]
+            qx = hx[ra]
+            qy = hy[ra]
             for t in range(pk + 1, span + 1):
                 rb = _wrap(a + t, n)
                 db = ring[rb]
                 if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
                     continue
-                ux = px + db * cos_t[rb] - qx
-                uy = py + db * sin_t[rb] - qy
+                ux = hx[rb] - qx
+                uy = hy[rb] - qy
                 w2 = ux * ux + uy * uy
                 if w2 < wbest:
                     wbest = w2
@@ -155,13 +160,21 @@ def free_points(ring, px, py, cos_t, sin_t, pts, clear, max_range):
     """(M,) bool: no LiDAR return of this ring lies within ``clear`` [m] of ``pts[m]``."""
     n = ring.shape[0]
     out = np.ones(pts.shape[0], dtype=np.bool_)
+    if pts.shape[0] == 0:
+        return out
     c2 = clear * clear
+    # the points' bounding box grown by ``clear`` (and a micrometre): a return outside it is
+    # farther than ``clear`` from every point, and is skipped without the per-point test
+    lo_x, hi_x = pts[:, 0].min() - clear - 1e-6, pts[:, 0].max() + clear + 1e-6
+    lo_y, hi_y = pts[:, 1].min() - clear - 1e-6, pts[:, 1].max() + clear + 1e-6
     for r in range(n):
         d = ring[r]
         if d >= max_range:
             continue
         qx = px + d * cos_t[r]
         qy = py + d * sin_t[r]
+        if qx < lo_x or qx > hi_x or qy < lo_y or qy > hi_y:
+            continue
         for k in range(pts.shape[0]):
             if out[k]:
                 dx = pts[k, 0] - qx
@@ -171,7 +184,7 @@ def free_points(ring, px, py, cos_t, sin_t, pts, clear, max_range):
     return out
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: a step builds several, and a frozen init costs twice as much
 class Corridor:
     """A candidate corridor toward the goal, in world coordinates.
 
@@ -256,8 +269,7 @@ def corridors_toward(gaps: np.ndarray, p: np.ndarray, goal: np.ndarray, *, w_pas
                         math.cos(math.radians(toward_deg)), ring, float(sensor[0]), float(sensor[1]), cos_t, sin_t,
                         float(origin[0]), float(origin[1]), rho_vis, max_range, check, float(approach),
                         float(approach_w), float(through))
-    out = [Corridor(mid=r[0:2], normal=r[2:4], width=w, target=r[5:7], cost=c)
-           for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
+    out = [Corridor(r[0:2], r[2:4], w, r[5:7], c) for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
     out.sort(key=lambda c: c.cost)
     return out
 

@@ -70,7 +70,7 @@ class RingYield(Part):
 
     def steer(self, step):
         active = ~step.nav & (step.own < 0)  # encircling members the core routes
-        if active.any():
+        if np.count_nonzero(active):
             h, p = self.h, self.p
             yield_slots(step.x, step.slot, step.ring, h.cos, h.sin, h.goal, active, p.core.enc_yield,
                         p.paper.lidar_range, YIELD_STEP)

@@ -8,9 +8,11 @@ its own sub-swarm's label (:func:`check_partition` asserts both).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.corridors import Corridor
 
@@ -30,7 +32,7 @@ def centroids(x: np.ndarray, labels: np.ndarray, ids: list[int]) -> np.ndarray:
     return np.array([x[labels == s].mean(axis=0) for s in ids]).reshape(-1, 2)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: built for every sub-swarm every step (a frozen init costs twice as much)
 class Pack:
     """The subleader report packet P_s(k) of eq. (3): ``{(j, p_j, v_j) | j in S_s(k)}``."""
 
@@ -40,9 +42,12 @@ class Pack:
     positions: np.ndarray  # (m, 2) p_j [m]
     velocities: np.ndarray  # (m, 2) v_j [m/s]
     centroid: np.ndarray  # (2,) pbar_s of eq. (2), computed by the subleader from the rows above
+    sl_row: np.ndarray | None = None  # (2,) p_s, the subleader's row of ``positions`` (found if None)
 
     @property
     def subleader_position(self) -> np.ndarray:
+        if self.sl_row is not None:
+            return self.sl_row
         m = self.members
         i = int(np.searchsorted(m, self.subleader))  # members are ascending (make_pack's callers)
         if i >= len(m) or m[i] != self.subleader:
@@ -50,7 +55,7 @@ class Pack:
         return self.positions[i]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen, as Pack
 class Report:
     """What a subleader sends the leader each step: its Pack and what its LiDAR ring shows.
 
@@ -66,8 +71,32 @@ class Report:
 
 
 def make_pack(sid: int, subleader: int, members: np.ndarray, x: np.ndarray, v: np.ndarray) -> Pack:
-    pos = x[members]
-    return Pack(sid, subleader, members, pos, v[members], pos.sum(axis=0) / len(pos))  # = pos.mean(axis=0)
+    """P_s(k) of sub-swarm ``sid``: its members' rows of ``x`` and ``v`` and their centroid."""
+    pos, vel, cen, sl_row = _pack_rows(x, v, members, subleader)
+    return Pack(sid, subleader, members, pos, vel, cen, sl_row)
+
+
+@njit(cache=True)
+def _pack_rows(x, v, members, subleader):
+    """``x[members]``, ``v[members]``, their centroid (summed in row order and divided by the count,
+    as ``pos.sum(axis=0) / len(pos)``: the same bits) and ``x[subleader]``, in one pass."""
+    m = members.shape[0]
+    pos = np.empty((m, 2))
+    vel = np.empty((m, 2))
+    for k in range(m):
+        j = members[k]
+        pos[k, 0], pos[k, 1] = x[j, 0], x[j, 1]
+        vel[k, 0], vel[k, 1] = v[j, 0], v[j, 1]
+    cen = np.zeros(2)
+    if m > 0:
+        cen[0], cen[1] = pos[0, 0], pos[0, 1]
+    for k in range(1, m):
+        cen[0] += pos[k, 0]
+        cen[1] += pos[k, 1]
+    cen /= m
+    sl_row = np.empty(2)
+    sl_row[0], sl_row[1] = x[subleader, 0], x[subleader, 1]
+    return pos, vel, cen, sl_row
 
 
 # --------------------------------------------------------------------------- split and merge
@@ -155,12 +184,9 @@ def reassign(x: np.ndarray, labels: np.ndarray, ids: list[int], sl_pos: np.ndarr
     """
     if len(ids) < 2 or n_move_max <= 0:
         return labels, np.zeros(0, dtype=np.int64)
-    phi = w * np.linalg.norm(x[:, None, :] - sl_pos[None], axis=2) + \
-        w_c * np.linalg.norm(x[:, None, :] - waypoints[None], axis=2)  # (N, S)
     col = np.searchsorted(np.asarray(ids), labels)
-    cur = phi[np.arange(len(x)), col]
-    best = np.argmin(phi, axis=1)
-    gain = cur - phi[np.arange(len(x)), best]
+    best, gain = _best_moves(x, col, np.ascontiguousarray(sl_pos, dtype=np.float64),
+                             np.ascontiguousarray(waypoints, dtype=np.float64), w, w_c)
     ok = (gain >= delta_min) & ~protected & (k - last_move >= cooldown_steps)
     cand = np.flatnonzero(ok)
     if len(cand) == 0:
@@ -169,3 +195,27 @@ def reassign(x: np.ndarray, labels: np.ndarray, ids: list[int], sl_pos: np.ndarr
     out = labels.copy()
     out[cand] = np.asarray(ids)[best[cand]]
     return out, np.sort(cand)
+
+
+@njit(cache=True)
+def _best_moves(x, col, sl_pos, waypoints, w, w_c):
+    """For each agent, the cheapest sub-swarm ``best`` (N,) under eq. (41)'s cost and the gain
+    ``phi_cur - phi_best`` (N,) of moving there (``col``: its current column), with the same
+    operations as the (N, S) numpy form: ``w |p - p_s| + w_c |p - c_s|``, first minimum."""
+    n, S = x.shape[0], sl_pos.shape[0]
+    best = np.empty(n, dtype=np.int64)
+    gain = np.empty(n)
+    for i in range(n):
+        cur = 0.0
+        b, pb = 0, np.inf
+        for s in range(S):
+            dx, dy = x[i, 0] - sl_pos[s, 0], x[i, 1] - sl_pos[s, 1]
+            ex, ey = x[i, 0] - waypoints[s, 0], x[i, 1] - waypoints[s, 1]
+            phi = w * math.sqrt(dx * dx + dy * dy) + w_c * math.sqrt(ex * ex + ey * ey)
+            if s == col[i]:
+                cur = phi
+            if phi < pb or s == 0:
+                b, pb = s, phi
+        best[i] = b
+        gain[i] = cur - pb
+    return best, gain

@@ -122,6 +122,7 @@ class Hes:
         self.goal = scenario.goal_array.astype(float)
         self.geom = scenario.geometry
         self.obstacles = PreparedGeometry(self.geom)  # the per-step LiDAR and line-of-sight queries
+        self.no_obstacles = self.geom.is_empty
         n = len(positions)
         self.n = n
         self.arange = np.arange(n)  # agent indices (compared with per-agent indices every step)
@@ -143,6 +144,7 @@ class Hes:
         self.parts = build_parts(p)
         self.at = hook_table(self.parts)
         self._part_key = None
+        self._roles_key: tuple | None = None  # the leader and subleaders the cached roles were built for
         self.needs_blocked = any(q.needs_blocked for q in self.parts)  # a part reads Step.blocked
         # the report's approach to narrow throats (hook attribute ``approach``; the last part that sets it)
         self.approach = next(((q.approach, q.approach_w) for q in reversed(self.parts) if q.approach > 0.0),
@@ -207,10 +209,13 @@ class Hes:
     def roles(self) -> np.ndarray:
         """(N,) uint8 role of each agent in the hierarchy of eq. (1): 2 the leader, 1 a
         subleader, 0 a follower (recorded by the run for the replay viewer)."""
-        r = np.zeros(self.n, dtype=np.uint8)
-        r[[sub.subleader for sub in self.subs.values()]] = 1
-        r[self.leader] = 2
-        return r
+        key = (self.leader, *[sub.subleader for sub in self.subs.values()])
+        if key != self._roles_key:  # rebuilt only when a subleader or the leader changes
+            r = np.zeros(self.n, dtype=np.uint8)
+            r[list(key[1:])] = 1
+            r[self.leader] = 2
+            self._roles_key, self._roles = key, r
+        return self._roles.copy()
 
     def _decide(self, step: Step) -> list[dict]:
         """Stages 2-3: the reports, z(k), the source's proposal through Pi_feas (eq. 22), executed."""
@@ -234,7 +239,9 @@ class Hes:
 
     def _route_agents(self, step: Step, final: bool) -> None:
         """Agents routed on their own (hook ``targets``); none in the paper's method."""
-        step.own = np.full(self.n, -1, dtype=np.int64)
+        step.own = np.empty(self.n, dtype=np.int64)
+        step.own.fill(-1)  # (np.full costs several times this on a small array)
+        step.n_own = 0
         if final:
             step.own_target = np.zeros((self.n, 2))
             step.routed = np.zeros(self.n, dtype=np.bool_)

@@ -27,9 +27,10 @@ def navigate(h, step: Step, sub: SubSwarm, rep: Report) -> None:
     p = h.params
     x = step.x
     cent = rep.pack.centroid
-    head = rep.pack.members[step.own[rep.pack.members] < 0]
-    if 0 < len(head) < len(rep.pack.members):  # members routed on their own: c_s leads the others
-        cent = x[head].mean(axis=0)
+    if step.n_own:
+        head = rep.pack.members[step.own[rep.pack.members] < 0]
+        if 0 < len(head) < len(rep.pack.members):  # members routed on their own: c_s leads the others
+            cent = x[head].mean(axis=0)
     sl = x[sub.subleader]
     gx, gy = h.goal
     delta = target_proximity(math.hypot(cent[0] - gx, cent[1] - gy), math.hypot(sl[0] - gx, sl[1] - gy))
@@ -75,29 +76,40 @@ def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, 
     the walls the subleader sees; off: c_s is the target itself."""
     p = h.params
     x = step.x
+    # two-vectors as Python floats: the same IEEE operations as numpy's, without its per-call cost
+    tx, ty = float(target[0]), float(target[1])
     if p.leashed:
         step_len = cruise(p, rep.clearance) * p.paper.dt
-        d = target - sub.waypoint
-        dn = math.hypot(d[0], d[1])
-        sub.waypoint = target.copy() if dn <= step_len else sub.waypoint + d * (step_len / dn)
-        off = sub.waypoint - cent
-        on = math.hypot(off[0], off[1])
+        wx, wy = sub.waypoint.tolist()
+        dx, dy = tx - wx, ty - wy
+        dn = math.hypot(dx, dy)
+        if dn <= step_len:
+            wx, wy = tx, ty
+        else:
+            f = step_len / dn
+            wx, wy = wx + dx * f, wy + dy * f
+        cx, cy = float(cent[0]), float(cent[1])
+        ox, oy = wx - cx, wy - cy
+        on = math.hypot(ox, oy)
         if on > p.core.lead:
-            sub.waypoint = cent + off * (p.core.lead / on)
+            f = p.core.lead / on
+            wx, wy = cx + ox * f, cy + oy * f
     else:
-        sub.waypoint = np.asarray(target, dtype=float).copy()
+        wx, wy = tx, ty
     w = route.width if route is not None else math.inf
     if p.adaptive:
         a = sub.subleader
         clear = min(p.safety.wp_clear, 0.5 * w)
-        sub.waypoint = np.array(push_clear(sub.waypoint[0], sub.waypoint[1], step.ring[a], x[a, 0], x[a, 1],
-                                           h.cos, h.sin, clear, p.paper.lidar_range, 3))
+        wx, wy = push_clear(wx, wy, step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, clear, p.paper.lidar_range, 3)
+    sub.waypoint = np.array([wx, wy])
     # formation axis along the motion of c_s; squeeze across a corridor narrower than the formation
-    hd = target - sub.waypoint
-    hn = math.hypot(hd[0], hd[1])
+    dx, dy = tx - wx, ty - wy
+    hn = math.hypot(dx, dy)
     if hn > 0.5:
-        hd = 0.8 * sub.heading + 0.2 * hd / hn
-        sub.heading = hd / max(math.hypot(hd[0], hd[1]), 1e-9)
+        hx, hy = sub.heading.tolist()
+        hx, hy = 0.8 * hx + 0.2 * dx / hn, 0.8 * hy + 0.2 * dy / hn
+        hm = max(math.hypot(hx, hy), 1e-9)
+        sub.heading = np.array([hx / hm, hy / hm])
     m = len(rep.pack.members)
     w_iso = hex_width(m) * p.core.spacing + p.core.spacing if m > 1 else p.core.spacing
     lam = _clip((w - 2 * p.core.lane_margin) / w_iso, 1 / math.sqrt(p.core.aspect_max), 1.0) if math.isfinite(w) else 1.0
@@ -129,7 +141,7 @@ def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
         return prev
     m = len(rep.pack.members)
     cost = [c.cost + (width_penalty(c.width, m, p.width.penalty_width) if p.width.on else 0.0) for c in cands]
-    best = int(np.argmin(cost))
+    best = min(range(len(cost)), key=cost.__getitem__)  # the first cheapest, as np.argmin
     if prev is None:
         return cands[best]
     same = match(prev, cands)

@@ -110,6 +110,8 @@ class PassageMode(Part):
         self.q_idx = np.full(self.n, -1, dtype=np.int64)  # the last queue (see queue)
         self.q_tgt = np.zeros((self.n, 2))
         self.last_dsafe = None  # the safety distances of the last step [m]
+        self.lowered = True  # some of them may be below d_safe (known exactly once push_back has run)
+        self.n_queued = 0  # members queued in q_idx
 
     def passages(self, sid: int) -> list[Passage]:
         """The throats remembered for sub-swarm ``sid``, oldest first."""
@@ -140,7 +142,7 @@ class PassageMode(Part):
     def gaps(self, step, sub, gaps):
         """A narrow opening must be a seen passage, not a concave corner (``gap_depth``)."""
         narrow = gaps[:, GAP_W] < self.w_wide
-        if not narrow.any():
+        if not np.count_nonzero(narrow):
             return gaps
         a, h = sub.subleader, self.h
         keep = ~narrow
@@ -159,8 +161,8 @@ class PassageMode(Part):
 
     def cruise_mask(self, members):
         """Members inside a passage's tube (or queued for one) do not slow the sub-swarm's cruise."""
-        if self.last_dsafe is None:
-            return None
+        if self.last_dsafe is None or not (self.lowered or self.n_queued):
+            return None  # every member counts
         return (self.last_dsafe[members] >= self.p.paper.d_safe) & (self.q_idx[members] < 0)
 
     # ------------------------------------------------------------ structure
@@ -254,8 +256,15 @@ class PassageMode(Part):
 
     # ------------------------------------------------------------ targets
     def targets(self, step, subs, labels, final):
+        if not any(self.mem[s].passages for s in subs):  # the common case: no throat remembered,
+            self.q_idx = step.own  # nobody queued (the core's own = -1, own_target = 0, routed = False)
+            self.n_queued = 0
+            if final:
+                self.q_tgt = step.own_target
+            return
         self.q_idx, q_tgt = self.queue(step.x, labels, subs)
         step.own = self.q_idx
+        step.n_own = self.n_queued = int(np.count_nonzero(self.q_idx >= 0))
         if final:
             self.q_tgt = q_tgt
             step.own_target = q_tgt
@@ -270,7 +279,8 @@ class PassageMode(Part):
         streams through; in encircle mode too). Returns (N,) int, the index of the agent's throat
         in its sub-swarm's passages (-1: not queued), and (N, 2) targets [m]."""
         p = self.p
-        q_idx = np.full(self.n, -1, dtype=np.int64)
+        q_idx = np.empty(self.n, dtype=np.int64)
+        q_idx.fill(-1)
         q_tgt = np.zeros((self.n, 2))
         if not any(self.mem[s].passages for s in subs):
             return q_idx, q_tgt
@@ -303,6 +313,7 @@ class PassageMode(Part):
     def steer(self, step):
         step.dsafe = self.safe_distance(step.x, self.h.labels, step.dsafe, step.exit_dir)
         self.last_dsafe = step.dsafe
+        self.lowered = True  # until push_back has seen the step's final safety distances
 
     def safe_distance(self, x: np.ndarray, labels: np.ndarray, out: np.ndarray, exit_dir: np.ndarray) -> np.ndarray:
         """Safety distance of eq. (36) per agent [m], in place on ``out``: lowered for the members of
@@ -327,7 +338,8 @@ class PassageMode(Part):
         return out
 
     def push_back(self, step):
-        return bool((step.dsafe < self.p.paper.d_safe).any())
+        self.lowered = bool(np.count_nonzero(step.dsafe < self.p.paper.d_safe))
+        return self.lowered
 
     def edit_terms(self, step, t):
         """For a queued member inside a throat's tube and lined up with the gap, the LiDAR

@@ -22,7 +22,7 @@ from swarmnav.methods.hes.step import Step, in_view
 def sense(h, x: np.ndarray) -> np.ndarray:
     """Every agent's LiDAR ring (N, R) [m] (= ``swarmnav.sensing.lidar_ring``)."""
     p = h.params
-    if h.geom.is_empty:
+    if h.no_obstacles:
         return np.full((len(x), p.paper.n_rays), p.paper.lidar_range)
     return h.obstacles.lidar_into(x, h.cos, h.sin, p.paper.lidar_range, np.empty((len(x), p.paper.n_rays)))
 
@@ -36,26 +36,36 @@ def reelect(h, step: Step) -> None:
     part = h.partition()
     ids = part.ids
     sl = np.array([h.subs[s].subleader for s in ids])
-    cents, far = strayed(x, part.col, sl, h.params.core.stray)
-    if not h.geom.is_empty:
+    cents, far, nearest = strayed(x, part.col, sl, h.params.core.stray)
+    if not h.no_obstacles:
         far |= h.obstacles.blocked_into(x[sl], cents, np.empty(len(ids), dtype=np.bool_))
-    if far.any():
-        for j in np.flatnonzero(far):
-            members = part.members[j]
-            h.subs[ids[j]].subleader = int(members[np.argmin(np.sum((x[members] - cents[j]) ** 2, axis=1))])
+    for j, f in enumerate(far.tolist()):
+        if f:
+            h.subs[ids[j]].subleader = int(nearest[j])
     for q in h.at["elect"]:
         q.elect(step, part.col)
 
 
 @njit(cache=True)
 def strayed(x, col, sl, stray):
-    """The sub-swarms' centroids (S, 2) [m] and whether each subleader ``sl`` (S,) is farther
-    than ``stray`` [m] from its sub-swarm's centroid."""
-    cents = F.group_centroids(x, col, sl.shape[0])
-    far = np.empty(sl.shape[0], dtype=np.bool_)
-    for j in range(sl.shape[0]):
+    """The sub-swarms' centroids (S, 2) [m], whether each subleader ``sl`` (S,) is farther than
+    ``stray`` [m] from its sub-swarm's centroid, and each sub-swarm's member nearest its centroid
+    (the lowest index among equals)."""
+    S = sl.shape[0]
+    cents = F.group_centroids(x, col, S)
+    far = np.empty(S, dtype=np.bool_)
+    for j in range(S):
         far[j] = math.hypot(x[sl[j], 0] - cents[j, 0], x[sl[j], 1] - cents[j, 1]) > stray
-    return cents, far
+    nearest = np.full(S, -1, dtype=np.int64)
+    best = np.full(S, np.inf)
+    for i in range(x.shape[0]):
+        j = col[i]
+        dx = x[i, 0] - cents[j, 0]
+        dy = x[i, 1] - cents[j, 1]
+        d2 = dx * dx + dy * dy
+        if d2 < best[j] or nearest[j] < 0:
+            best[j], nearest[j] = d2, i
+    return cents, far, nearest
 
 
 def report(h, step: Step, s: int) -> Report:
@@ -82,8 +92,8 @@ def report(h, step: Step, s: int) -> Report:
     for q in h.at["cruise_mask"]:
         free = q.cruise_mask(members)
         if free is not None:
-            clr = clr[free] if free.any() else clr
-    return Report(pack, tuple(cors), float(clr.min()))
+            clr = clr[free] if np.count_nonzero(free) else clr
+    return Report(pack, tuple(cors), min(clr.tolist()))
 
 
 def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float, rho_vis: float,
@@ -125,8 +135,11 @@ def decision_state(h, step: Step) -> DecisionState:
     for a in range(S):  # eq. (14)
         for b in range(a + 1, S):
             d_swarm_min = min(d_swarm_min, math.hypot(cents[a][0] - cents[b][0], cents[a][1] - cents[b][1]))
-    n_all = sum(len(reports[s].pack.members) for s in ids)
-    gbx, gby = (sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all).tolist()  # global centroid, eq. (2)
+    if S == 1:  # the global centroid of eq. (2) is the one sub-swarm's
+        gbx, gby = cents[0]
+    else:
+        n_all = sum(len(reports[s].pack.members) for s in ids)
+        gbx, gby = (sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all).tolist()
     can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbx - gx, gby - gy), p.paper.r_merge)
     can_merge = merge_feasible(S, n_near, d_swarm_min, p.paper.d_merge)
     return DecisionState(

@@ -90,9 +90,8 @@ class RouteHold(Part):
         before = int(np.count_nonzero((along <= 0.0) & band))  # still in front of it
         a, cent = sub.subleader, rep.pack.centroid
         sl = step.x[a]
-        seen = segment_clear(step.ring[a], sl[0], sl[1], h.cos, h.sin, cent[0], cent[1], prev.mid[0],
-                             prev.mid[1], p.core.rho_vis, p.paper.lidar_range)
-        if through > 0 and before > 0 and seen:
+        if through > 0 and before > 0 and segment_clear(step.ring[a], sl[0], sl[1], h.cos, h.sin, cent[0], cent[1],
+                                                        prev.mid[0], prev.mid[1], p.core.rho_vis, p.paper.lidar_range):
             start = self.since.setdefault(sub.sid, step.k)
             return (step.k - start) * p.paper.dt <= p.hold.time
         self.since.pop(sub.sid, None)

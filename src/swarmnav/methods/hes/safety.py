@@ -36,11 +36,11 @@ class WallBarrier(Part):
     def wall(self, step, a: np.ndarray) -> np.ndarray:
         p, h = self.p, self.h
         return safety_filter(a, step.v, step.ring, h.cos, h.sin, p.paper.dt, p.safety.v_cap_frac * p.core.v_s, p.barrier.a_brake,
-                             p.barrier.margin, p.paper.lidar_range, p.barrier.passes)
+                             p.barrier.margin, p.paper.lidar_range, p.barrier.passes, step.ring_min)
 
     def brake(self, step, a):
         chained = self.queue.chained_agents(step) if self.queue is not None else None
-        if chained is None or not chained.any():
+        if chained is None or not np.count_nonzero(chained):
             return self.wall(step, a)
         a = self.wall(step, self.queue.queue_barrier(step, a, chained))
         return self.wall(step, self.queue.queue_barrier(step, a, chained))

@@ -101,7 +101,7 @@ class StallPlanner(Part):
         p, mem, k = self.p, self.mem[sub.sid], step.k
         mem.prog_step = None  # the head's progress is counted in navigate mode only
         d = rep.pack.positions - self.h.goal
-        dmax = float(np.hypot(d[:, 0], d[:, 1]).max())
+        dmax = max(np.hypot(d[:, 0], d[:, 1]).tolist())
         if mem.tail_step is None or dmax <= p.paper.r_out or dmax < mem.tail_d - p.stall.progress:
             mem.tail_d, mem.tail_step = dmax, k
         if not mem.planned and (k - mem.tail_step) * p.paper.dt >= p.stall.time:
@@ -120,7 +120,7 @@ class StallPlanner(Part):
         p, mem, k = self.p, self.mem[sub.sid], step.k
         mem.tail_step = None  # the tail's progress is counted in encircle mode only
         d = rep.pack.positions - self.h.goal
-        dmin = float(np.hypot(d[:, 0], d[:, 1]).min())
+        dmin = min(np.hypot(d[:, 0], d[:, 1]).tolist())
         if mem.prog_step is None or dmin < mem.prog_d - p.stall.progress:
             mem.prog_d, mem.prog_step = min(dmin, mem.prog_d), k
         if not mem.planned:
@@ -192,11 +192,13 @@ class StallPlanner(Part):
         through the discs between; in a forest the members that had not followed the head
         through the first gap stayed in pockets (density 0.25, seed 2)."""
         p, h, x = self.p, self.h, step.x
+        if self.ctg_step == NEVER or not any(mem.planned for mem in self.mem.values()):
+            return  # the common case: the planner is not engaged
         act = np.zeros(h.n, dtype=np.bool_)
         for s, mem in self.mem.items():
-            if mem.planned and self.ctg_step > NEVER:
+            if mem.planned:
                 act |= h.labels == s
-        if not act.any():
+        if not np.count_nonzero(act):
             return
         idx = np.flatnonzero(act)
         pt, half = lookahead(self.ctg, self.clr, np.ascontiguousarray(x[idx]), self.map0[0], self.map0[1],

@@ -67,7 +67,7 @@ class Step:
     Perception: ``k``, ``x``, ``v`` (positions [m], velocities [m/s]), ``ring`` (N, R) fused
     LiDAR ranges [m] (eq. 8-9), ``ring_min`` (N,) each ring's nearest return [m]. Report and decision: ``reports`` {sid: Report}, ``z`` (eq. 18).
     Targets: ``own`` (N,) int, >= 0 for an agent a part routes on its own (passage mode's
-    queues: the index of its throat), with ``own_target`` (N, 2) its point [m] and ``routed``
+    queues: the index of its throat; ``n_own`` how many), with ``own_target`` (N, 2) its point [m] and ``routed``
     (N,) bool the agents a part routes (trail following leaves them alone); ``slot`` (N, 2) p*_i
     and ``speed`` (N,) v_s of eq. (23). Control (eq. 38): ``rows`` the agents' neighbour rows
     within the pair terms' reach (``neighbours.neighbour_rows``), ``col`` column of each agent's
@@ -89,6 +89,7 @@ class Step:
     own: np.ndarray | None = None
     own_target: np.ndarray | None = None
     routed: np.ndarray | None = None
+    n_own: int = 0  # agents with own >= 0 (set with ``own`` by the part that routes them)
     slot: np.ndarray | None = None
     speed: np.ndarray | None = None
     rows: tuple | None = None

@@ -26,11 +26,11 @@ def references(h, step: Step) -> None:
     x, k = step.x, step.k
     slot = np.empty_like(x)
     speed = np.empty(h.n)
-    queued = step.own >= 0
-    any_queued = bool(queued.any())
+    speed.fill(p.core.v_s)  # every agent: its sub-swarm's cruise speed (queued ones too)
+    any_queued = step.n_own > 0
     if any_queued:
+        queued = step.own >= 0
         slot[queued] = step.own_target[queued]
-        speed[queued] = p.core.v_s
     part = h.partition()
     for s, sub in h.subs.items():
         members = part.members[part.index[s]]
@@ -40,17 +40,26 @@ def references(h, step: Step) -> None:
         if m == 0:
             continue
         if sub.mode == ENCIRCLE:
-            slot[members] = h.goal + ring_offsets(h, step, sub, members)
-            speed[members] = p.core.v_s
+            place(slot, members, h.goal, ring_offsets(h, step, sub, members), None)
             continue
         tmpl = template(p, m, sub)
-        if k - sub.slot_step >= p.core.slot_refresh or not np.array_equal(sub.slot_members, members):
+        if k - sub.slot_step >= p.core.slot_refresh or not (
+                sub.slot_members is members or np.array_equal(sub.slot_members, members)):
             sub.slot_members = members
             sub.slot_index = assign_slots(x[members], sub.waypoint + tmpl, p.core.assign_exact)
             sub.slot_step = k
-        slot[members] = sub.waypoint + tmpl[sub.slot_index]
-        speed[members] = p.core.v_s
+        place(slot, members, sub.waypoint, tmpl, sub.slot_index)
     step.slot, step.speed = slot, speed
+
+
+@njit(cache=True)
+def place(slot, members, base, offsets, index):
+    """``slot[members] = base + offsets[index]`` (``offsets`` in member order if ``index`` is None),
+    in one pass."""
+    for i in range(members.shape[0]):
+        o = i if index is None else index[i]
+        slot[members[i], 0] = base[0] + offsets[o, 0]
+        slot[members[i], 1] = base[1] + offsets[o, 1]
 
 
 def ring_offsets(h, step: Step, sub: SubSwarm, members: np.ndarray) -> np.ndarray:

@@ -60,7 +60,7 @@ class TrailFollow(Part):
         p, h = self.p, self.h
         b = step.blocked
         cut = b[:, SIG_SLOT] & b[:, SIG_SL] & b[:, SIG_CENT]
-        if not cut.any():  # the common case: nobody is cut off
+        if not np.count_nonzero(cut):  # the common case: nobody is cut off
             self.cut_steps[:] = 0
             self.last_cut = cut
             return
