@@ -213,3 +213,25 @@ def test_3d_field_is_shared_by_equal_maps_and_guides_the_search_of_a_grown_map()
     g = Geometry.from_obstacles(list(obstacles), dim=3)
     assert not segments_blocked(g, path[:-1], path[1:]).any()
     assert signed_distance(g, path).min() >= 0.5 - 0.09  # the d_thr tier, less half a cell diagonal
+
+
+def test_3d_search_falls_back_to_the_body_clearance_through_a_window_too_narrow_for_d_thr():
+    """A 0.9 m window: no voxel in it keeps d_thr = 0.5 m from the frame, so the first tier's free
+    space is split in two and the search falls back to the 0.3 m body clearance, through it."""
+    wall = (Box((4.0, -5.0, 0.0), (5.0, 5.0, 2.0)), Box((4.0, -5.0, 2.9), (5.0, 5.0, 6.0)),
+            Box((4.0, -5.0, 2.0), (5.0, -0.45, 2.9)), Box((4.0, 0.45, 2.0), (5.0, 5.0, 2.9)))
+    maps = OccupancyMaps(wall, BOUNDS3, 1, 0.1, 0.3, 100.0, margin=0.5, wide=0.9, wide_cost=2.0, weight_3d=10.0)
+    start, goal = np.array([0.0, 0.0, 1.0]), np.array([10.0, 0.0, 1.0])
+    maps.observe(0, start)
+    path = maps.search(0, start, goal, 10**7)
+    from swarmnav.sensing import segments_blocked, signed_distance
+
+    g = Geometry.from_obstacles(list(wall), dim=3)
+    assert not segments_blocked(g, path[:-1], path[1:]).any()
+    at_wall = path[(path[:, 0] > 3.9) & (path[:, 0] < 5.1)]
+    assert np.abs(at_wall[:, 1]).max() < 0.45 and 2.0 < at_wall[:, 2].min() and at_wall[:, 2].max() < 2.9
+    assert 0.3 - 0.09 <= signed_distance(g, path).min() < 0.5  # the body clearance, not d_thr
+    closed = OccupancyMaps(wall[:2] + (Box((4.0, -5.0, 2.0), (5.0, 5.0, 2.9)),), BOUNDS3, 1, 0.1, 0.3, 100.0,
+                           margin=0.5, wide=0.9, wide_cost=2.0, weight_3d=10.0)
+    closed.observe(0, start)
+    assert closed.search(0, start, goal, 10**7) is None  # no window: no path in either tier

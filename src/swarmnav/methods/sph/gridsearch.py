@@ -27,6 +27,7 @@ import math
 
 import numpy as np
 from numba import njit
+from scipy import ndimage
 
 from swarmnav.sensing import signed_distance
 from swarmnav.world.obstacles import Geometry, Obstacle
@@ -90,6 +91,7 @@ class OccupancyMaps:
         self.field_3d = bool(field_3d)
         self._fields: dict[tuple, tuple] = {}  # (field, known obstacles) by (map, goal, tier); newest last
         self.fields_built = 0
+        self._components: dict[tuple, np.ndarray] = {}  # passable components by (map, tier); newest last
 
     def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
         """Flat indices and clearance classes (see the module docstring) of the cells around
@@ -156,6 +158,8 @@ class OccupancyMaps:
             if s[0] >= 0 and g[0] >= 0:
                 if self.dim == 3 and self.field_3d and not marked:
                     idx = self._descend(robot, occ, s, g, blocked)
+                elif self.dim == 3 and not marked and not self._connected(robot, occ, s, g, blocked):
+                    idx = np.zeros(0, dtype=np.int64)  # what A* finds after expanding s's whole component
                 else:
                     idx = self._astar(occ, s, g, max_expand, blocked)
                 if len(idx):
@@ -167,6 +171,22 @@ class OccupancyMaps:
         if g == gc:  # the goal itself is free: end exactly on it
             path[-1] = goal
         return path
+
+    def _connected(self, robot: int, occ, s, g, blocked) -> bool:
+        """Whether voxels ``s`` and ``g`` lie in one connected component of ``robot``'s passable
+        voxels (``occ < blocked``). A diagonal step needs every voxel it grazes passable, so
+        26-connected paths connect exactly the face-connected (6-connected) components, labelled
+        once per map and tier by scipy.ndimage. A search between components expands the start's
+        whole component (or its expansion cap) and fails; knowing that beforehand gives the same
+        result for a lookup."""
+        key = (self.known[robot].tobytes(), blocked)
+        labels = self._components.pop(key, None)
+        if labels is None:
+            labels, _ = ndimage.label(occ < blocked, structure=ndimage.generate_binary_structure(3, 1))
+            while len(self._components) >= _FIELDS_KEPT:
+                self._components.pop(next(iter(self._components)))
+        self._components[key] = labels
+        return bool(labels[s] == labels[g] != 0)
 
     def _descend(self, robot: int, occ, s, g, blocked) -> np.ndarray:
         """Flat voxel indices of an optimal path from ``s`` to ``g`` on ``robot``'s map (empty:
