@@ -461,20 +461,10 @@ def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen,
         cx = cur - cz * plane - cy * nx
         for k in range(steps.shape[0]):
             dz, dy, dx = steps[k, 0], steps[k, 1], steps[k, 2]
-            z, y, x = cz + dz, cy + dy, cx + dx
-            if z < 0 or z >= nz or y < 0 or y >= ny or x < 0 or x >= nx or occ[z, y, x] >= blocked:
+            if not _passable3(occ, cz, cy, cx, dz, dy, dx, blocked):
                 continue
+            z, y, x = cz + dz, cy + dy, cx + dx
             axes = abs(dz) + abs(dy) + abs(dx)
-            if axes > 1:  # every partial step (a proper subset of the offsets) must be passable
-                grazed = False
-                for mask in range(1, 7):
-                    pz, py, px = dz * (mask >> 2), dy * ((mask >> 1) & 1), dx * (mask & 1)
-                    part = abs(pz) + abs(py) + abs(px)
-                    if 0 < part < axes and occ[cz + pz, cy + py, cx + px] >= blocked:
-                        grazed = True
-                        break
-                if grazed:
-                    continue
             nb = (z * ny + y) * nx + x
             if closed[nb] == sid:
                 continue
