@@ -12,7 +12,8 @@ SPH's default ``dt = 0.01`` is the paper's >= 100 Hz swarm controller; ``--set d
 released code's 50 Hz (docs/methods/sph.md, Control rate).
 Columns as Table II (mean +- population std over the finished trials; Rate = success rate),
 plus the worst inter-robot and robot-obstacle distances over all trials, and why trials failed:
-``contact`` = trials with two robots closer than 0.4 m or a robot closer than 0.2 m to an
+``wait %`` = robot-steps with a slowed reference clock (``sph_waiting_fraction``). Reads the
+store's ``results.sqlite``, so an interrupted sweep tabulates its finished runs. ``contact`` = trials with two robots closer than 0.4 m or a robot closer than 0.2 m to an
 obstacle (the 0.2 m body radius), ``late`` = trials without contact where some robot was not
 within 3 m of the goal at the end. ``Rate r=0.125`` is the success rate under the released code's
 body (its particles are drawn as 0.25 m spheres, its map inflates obstacles by 0.099 m): every
@@ -22,7 +23,8 @@ robot within 3 m of the goal at the end, no two robots closer than 0.25 m and no
 
 from __future__ import annotations
 
-import csv
+import json
+import sqlite3
 import sys
 import tomllib
 from importlib import resources
@@ -44,16 +46,30 @@ def _fmt_ref(v) -> str:
     return f"{v[0]:g}+-{v[1]:g}" if isinstance(v, list) else f"{v:g}"
 
 
-def table(out_dir: Path) -> None:
-    rows = [r for r in csv.DictReader(open(out_dir / "runs.csv")) if r["status"] == "done"]
-    for r in rows:  # stores written before the key was renamed (docs/metrics.md) call it success_rate
-        if not r.get("sph_success") and r.get("success_rate"):
+def _rows(out_dir: Path) -> list[dict]:
+    """Every finished run of the store (``results.sqlite``: also the runs of an interrupted sweep),
+    as its metrics plus ``scenario`` and ``method``."""
+    db = out_dir / "results.sqlite"
+    if not db.exists():
+        raise SystemExit(f"sph_table2: no results.sqlite in {out_dir}")
+    rows = []
+    for scenario, method, metrics in sqlite3.connect(db).execute(
+            "select scenario, method, metrics from runs where status = 'done' order by seed"):
+        r = json.loads(metrics)
+        if "sph_success" not in r and "success_rate" in r:  # stores from before the key's rename
             r["sph_success"] = r["success_rate"]
+        r.update(scenario=scenario, method=method)
+        rows.append(r)
+    return rows
+
+
+def table(out_dir: Path) -> None:
+    rows = _rows(out_dir)
     paper = _paper()
     dens = sorted({float(r["scenario"].split("density=")[1].split(",")[0]) for r in rows})
     method = rows[0]["method"] if rows else "?"
     print(f"\n{out_dir} ({method})")
-    print(f"{'d_obs':>6} {'runs':>4} " + " ".join(f"{h:>18}" for _, h, _ in COLS) + f" {'min r-r':>8} {'min r-o':>8} {'contact':>7} {'late':>5} {'Rate r=0.125':>12}")
+    print(f"{'d_obs':>6} {'runs':>4} " + " ".join(f"{h:>18}" for _, h, _ in COLS) + f" {'min r-r':>8} {'min r-o':>8} {'contact':>7} {'late':>5} {'Rate r=0.125':>12} {'wait %':>6}")
     for d in dens:
         mine = [r for r in rows if f"density={d:g}," in r["scenario"]]
         cells = []
@@ -66,8 +82,10 @@ def table(out_dir: Path) -> None:
         late = sum(1 for r, h in zip(mine, hit) if not h and float(r["sph_success"]) < 1.0)
         small = [float(r["sph_arrived_fraction"]) >= 1.0 and float(r["min_inter_robot_distance"]) >= 0.25
                  and float(r["min_robot_obstacle_distance"]) >= 0.125 for r in mine]
+        wait = [float(r["sph_waiting_fraction"]) for r in mine if "sph_waiting_fraction" in r]
         print(f"{d:>6g} {len(mine):>4} " + " ".join(f"{c:>18}" for c in cells)
-              + f" {rr:>8.3f} {ro:>8.3f} {sum(hit):>7} {late:>5} {100 * np.mean(small):>12.0f}")
+              + f" {rr:>8.3f} {ro:>8.3f} {sum(hit):>7} {late:>5} {100 * np.mean(small):>12.0f}"
+              + f" {100 * np.mean(wait) if wait else float('nan'):>6.0f}")
         if d in paper["d_obs"]:
             k = paper["d_obs"].index(d)
             ref = [_fmt_ref(paper[p][k]) for _, _, p in COLS]
