@@ -114,20 +114,44 @@ def control(h, step: Step) -> np.ndarray:
     step.exit_free = np.zeros(h.n, dtype=np.bool_)
     for part in h.at["steer"]:
         part.steer(step)
-    vslot = F.slot_velocity(x, step.slot, step.speed, p.core.eps_v)
-    args = (x, v, h.labels, x[step.sl_idx], v[step.sl_idx], step.follower, step.cent, step.wp, step.nav,
-            step.slot, vslot, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe, *step.rows)
+    args = (x, v, h.labels, step.sl_idx, step.follower, step.cent, step.wp, step.nav, step.slot, step.speed,
+            p.core.eps_v, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe, *step.rows)
     edit = [part for part in h.at["push_back"] if part.push_back(step)]
     if edit:
-        t = F.force_terms(*args)
+        t = eq38_terms(*args)
         for part in edit:
             part.edit_terms(step, t)
         a = t.sum(axis=0)
     else:
-        a = F.synthesize(*args)
+        a = eq38(*args)
     for part in h.at["brake"]:
         a = part.brake(step, a)
     a = F.saturate(a, p.a_bound)
     for part in h.at["guard"]:
         a = part.guard(step, a)
     return a
+
+
+@njit(cache=True)
+def eq38_terms(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring, cos_t, sin_t,
+               g, dsafe, ptr, idx):
+    """The eight terms of eq. (38) (``forces.force_terms``), the reference velocity of eq. (23)
+    and the subleaders' rows gathered in the same call."""
+    vslot = F.slot_velocity(x, slot, speed, eps_v)
+    n = x.shape[0]
+    sl_pos = np.empty((n, 2))
+    sl_vel = np.empty((n, 2))
+    for i in range(n):
+        s = sl_idx[i]
+        sl_pos[i, 0], sl_pos[i, 1] = x[s, 0], x[s, 1]
+        sl_vel[i, 0], sl_vel[i, 1] = v[s, 0], v[s, 1]
+    return F.force_terms(x, v, labels, sl_pos, sl_vel, follower, cent, wp, nav, slot, vslot, nn, sig, ring,
+                         cos_t, sin_t, g, dsafe, ptr, idx)
+
+
+@njit(cache=True)
+def eq38(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring, cos_t, sin_t,
+         g, dsafe, ptr, idx):
+    """Eq. (38), the sum of :func:`eq38_terms` (as ``forces.synthesize``), (N, 2) [m/s^2]."""
+    return eq38_terms(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring,
+                      cos_t, sin_t, g, dsafe, ptr, idx).sum(axis=0)

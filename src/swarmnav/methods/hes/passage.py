@@ -299,6 +299,13 @@ class PassageMode(Part):
                 q_tgt[pend] = c.mid + p.core.through * c.normal
         return q_idx, q_tgt
 
+    def any_passages(self) -> bool:
+        """Some sub-swarm remembers a passage (else no agent is chained)."""
+        for m in self.mem.values():
+            if m.passages:
+                return True
+        return False
+
     def chained_agents(self, step) -> np.ndarray:
         """(N,) bool: the agent's sub-swarm remembers a passage (it is in a chain of throats)."""
         if not any(m.passages for m in self.mem.values()):

@@ -1,0 +1,51 @@
+"""The control stage's compiled passes against the plain forms they replace, on random cases:
+the same bits (the control stage of a run may not change when it is fused)."""
+
+import numpy as np
+
+from swarmnav.methods.hes import control as C
+from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.neighbours import neighbour_rows
+from swarmnav.methods.hes.params import HesParams
+
+P = HesParams()
+G = F.gain_vector(P)
+R = 360
+TH = 2 * np.pi * np.arange(R) / R
+COS, SIN = np.cos(TH), np.sin(TH)
+
+
+def random_case(rng, n):
+    """A random swarm of n agents in up to three sub-swarms, with rings that see a few walls."""
+    x = rng.uniform(-6, 6, (n, 2))
+    v = rng.normal(size=(n, 2))
+    labels = rng.integers(0, 3, n)
+    sl = np.array([np.flatnonzero(labels == g)[0] for g in labels])
+    cent = np.array([x[labels == g].mean(axis=0) for g in labels])
+    ring = np.full((n, R), P.paper.lidar_range)
+    for i in range(n):
+        for _ in range(int(rng.integers(0, 4))):
+            r0 = int(rng.integers(0, R))
+            ring[i, r0:r0 + 40] = rng.uniform(0.3, 15.0) + rng.uniform(0, 1, len(ring[i, r0:r0 + 40]))
+    return dict(x=x, v=v, labels=labels, sl=sl, follower=sl != np.arange(n), cent=cent, wp=cent + rng.normal(size=(n, 2)),
+                nav=rng.random(n) < 0.7, slot=x + rng.normal(size=(n, 2)), speed=rng.uniform(0.5, 3.0, n),
+                nn=F.nearest_in_group(x, labels), sig=np.where(rng.random((n, 4)) < 0.2, 0.2, 1.0), ring=ring,
+                dsafe=rng.uniform(0.5, P.paper.d_safe, n))
+
+
+def test_eq38_is_synthesize_of_the_gathered_rows_bit_for_bit():
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        n = int(rng.integers(1, 30))
+        c = random_case(rng, n)
+        x, v = c["x"], c["v"]
+        rows = neighbour_rows(x, max(P.core.r_sep, P.core.d_ir))
+        vslot = F.slot_velocity(x, c["slot"], c["speed"], P.core.eps_v)
+        ref_t = F.force_terms(x, v, c["labels"], x[c["sl"]], v[c["sl"]], c["follower"], c["cent"], c["wp"], c["nav"],
+                              c["slot"], vslot, c["nn"], c["sig"], c["ring"], COS, SIN, G, c["dsafe"], *rows)
+        args = (x, v, c["labels"], c["sl"], c["follower"], c["cent"], c["wp"], c["nav"], c["slot"], c["speed"],
+                P.core.eps_v, c["nn"], c["sig"], c["ring"], COS, SIN, G, c["dsafe"], *rows)
+        assert np.array_equal(C.eq38_terms(*args), ref_t)
+        ref = F.synthesize(x, v, c["labels"], x[c["sl"]], v[c["sl"]], c["follower"], c["cent"], c["wp"], c["nav"],
+                           c["slot"], vslot, c["nn"], c["sig"], c["ring"], COS, SIN, G, c["dsafe"], *rows)
+        assert np.array_equal(C.eq38(*args), ref)
