@@ -49,3 +49,39 @@ def test_eq38_is_synthesize_of_the_gathered_rows_bit_for_bit():
         ref = F.synthesize(x, v, c["labels"], x[c["sl"]], v[c["sl"]], c["follower"], c["cent"], c["wp"], c["nav"],
                            c["slot"], vslot, c["nn"], c["sig"], c["ring"], COS, SIN, G, c["dsafe"], *rows)
         assert np.array_equal(C.eq38(*args), ref)
+
+
+def test_couple_occlude_is_couple_then_the_segments_tested_bit_for_bit():
+    from swarmnav.sensing import PreparedGeometry, segments_blocked
+    from swarmnav.world.catalog import load_scenario
+
+    geom = load_scenario("default_corridor").geometry
+    prep = PreparedGeometry(geom)
+    lo, hi = np.asarray(geom.bbox_lo).min(axis=0), np.asarray(geom.bbox_hi).max(axis=0)
+    rng = np.random.default_rng(5)
+    for trial in range(200):
+        n = int(rng.integers(1, 30))
+        x = rng.uniform(lo, hi, (n, 2))
+        labels = rng.integers(0, 3, n)
+        ids = np.unique(labels)
+        col = np.searchsorted(ids, labels)
+        sub_sl = np.array([np.flatnonzero(labels == s)[0] for s in ids])
+        sub_wp = rng.uniform(lo, hi, (len(ids), 2))
+        sub_nav = rng.random(len(ids)) < 0.5
+        rows = neighbour_rows(x, 3.0)
+        slot = x + rng.normal(0, 4, (n, 2))
+        check = trial % 4 != 0
+        got = C.couple_occlude_kernel(x, labels, col, sub_sl, sub_wp, sub_nav, *rows, slot, 0.2, check,
+                                      *prep.planar_arrays)
+        ref = C.couple(x, labels, col, sub_sl, sub_wp, sub_nav, *rows)
+        for a, b in zip(got[:6], ref):
+            assert np.array_equal(a, b)
+        sl_idx, nn, cent = ref[0], ref[5], ref[4]
+        if check:
+            near = np.where(nn >= 0, nn, np.arange(n))
+            ends = np.concatenate([slot, x[near], x[sl_idx], cent])
+            blocked = segments_blocked(geom, np.tile(x, (4, 1)), ends).reshape(4, n).T
+        else:
+            blocked = np.zeros((n, 4), dtype=bool)
+        assert np.array_equal(got[6], blocked)
+        assert np.array_equal(got[7], np.where(blocked, 0.2, 1.0))
