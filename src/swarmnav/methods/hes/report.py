@@ -17,6 +17,7 @@ from swarmnav.methods.hes.corridors import Corridor, corridors_toward, detect_ga
 from swarmnav.methods.hes.decision import DecisionState, merge_feasible, split_feasible
 from swarmnav.methods.hes.hierarchy import Report, make_pack
 from swarmnav.methods.hes.step import Step, in_view
+from swarmnav.sensing import segments_blocked_kernel
 
 
 def sense(h, x: np.ndarray) -> np.ndarray:
@@ -36,9 +37,7 @@ def reelect(h, step: Step) -> None:
     part = h.partition()
     ids = part.ids
     sl = np.array([h.subs[s].subleader for s in ids])
-    cents, far, nearest = strayed(x, part.col, sl, h.params.core.stray)
-    if not h.no_obstacles:
-        far |= h.obstacles.blocked_into(x[sl], cents, np.empty(len(ids), dtype=np.bool_))
+    far, nearest = strayed(x, part.col, sl, h.params.core.stray, not h.no_obstacles, *h.obstacles.planar_arrays)
     for j, f in enumerate(far.tolist()):
         if f:
             h.subs[ids[j]].subleader = int(nearest[j])
@@ -47,15 +46,23 @@ def reelect(h, step: Step) -> None:
 
 
 @njit(cache=True)
-def strayed(x, col, sl, stray):
-    """The sub-swarms' centroids (S, 2) [m], whether each subleader ``sl`` (S,) is farther than
-    ``stray`` [m] from its sub-swarm's centroid, and each sub-swarm's member nearest its centroid
-    (the lowest index among equals)."""
+def strayed(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
+    """Whether each subleader ``sl`` (S,) has strayed -- farther than ``stray`` [m] from its
+    sub-swarm's centroid or (``check``) cut off from it by an obstacle (the geometry's planar
+    arrays) -- and each sub-swarm's member nearest its centroid (the lowest index among equals)."""
     S = sl.shape[0]
     cents = F.group_centroids(x, col, S)
     far = np.empty(S, dtype=np.bool_)
     for j in range(S):
         far[j] = math.hypot(x[sl[j], 0] - cents[j, 0], x[sl[j], 1] - cents[j, 1]) > stray
+    if check:
+        ends = np.empty((S, 2))
+        for j in range(S):
+            ends[j, 0], ends[j, 1] = x[sl[j], 0], x[sl[j], 1]
+        cut = np.empty(S, dtype=np.bool_)
+        segments_blocked_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, ends, cents, cut)
+        for j in range(S):
+            far[j] = far[j] or cut[j]
     nearest = np.full(S, -1, dtype=np.int64)
     best = np.full(S, np.inf)
     for i in range(x.shape[0]):
@@ -65,7 +72,7 @@ def strayed(x, col, sl, stray):
         d2 = dx * dx + dy * dy
         if d2 < best[j] or nearest[j] < 0:
             best[j], nearest[j] = d2, i
-    return cents, far, nearest
+    return far, nearest
 
 
 def report(h, step: Step, s: int) -> Report:
