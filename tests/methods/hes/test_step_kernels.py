@@ -53,3 +53,51 @@ def test_n_cut_off_counts_slot_subleader_and_centroid_all_blocked():
     for _ in range(200):
         b = rng.random((int(rng.integers(0, 30)), 4)) < 0.6
         assert n_cut_off(b) == np.count_nonzero(b[:, 0] & b[:, 2] & b[:, 3])
+
+
+def test_report_rows_are_the_report_stages_one_by_one():
+    """Pack rows, openings (narrow ones kept only if seen through), the corridor filter and the
+    members' nearest return, against make_pack, detect_gaps, seen_passages and corridors_toward."""
+    from swarmnav.methods.hes.corridors import GAP_W, corridors_toward, detect_gaps, seen_passages
+    from swarmnav.methods.hes.hierarchy import make_pack
+    from swarmnav.methods.hes.report import report_rows
+    from swarmnav.methods.hes.step import row_min
+    from swarmnav.sensing import lidar_ring, ray_table
+
+    cos_t, sin_t = ray_table(360)
+    rng = np.random.default_rng(8)
+    for name in ("narrow_alternating_gates", "dense_cross_blocks", "default_corridor"):
+        geom = load_scenario(name).geometry
+        lo, hi = np.asarray(geom.bbox_lo).min(axis=0), np.asarray(geom.bbox_hi).max(axis=0)
+        for trial in range(60):
+            n = int(rng.integers(2, 25))
+            x = rng.uniform(lo, hi, (n, 2))
+            v = rng.normal(size=(n, 2))
+            ring = lidar_ring(geom, x, 360, 20.0)
+            ring_min = row_min(ring)
+            members = np.sort(rng.choice(n, int(rng.integers(1, n + 1)), replace=False))
+            a = int(rng.choice(members))
+            goal = rng.uniform(lo, hi)
+            seen_w, depth = (3.6, 0.6) if trial % 2 else (0.0, 0.0)
+            approach, approach_w = (2.0, 3.6) if trial % 3 else (0.0, np.inf)
+            got = report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, 20.0, 1.0, seen_w, depth,
+                              goal[0], goal[1], 1.2, math.cos(math.radians(75.0)), 0.4, 20.0, True,
+                              approach, approach_w, 1.5)
+            pack = make_pack(0, a, members, x, v)
+            for g, r in zip(got[:4], (pack.positions, pack.velocities, pack.centroid, pack.sl_row)):
+                assert np.array_equal(g, r)
+            gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], cos_t, sin_t, 20.0, 1.0)
+            if seen_w > 0:
+                narrow = gaps[:, GAP_W] < seen_w
+                keep = ~narrow
+                keep[narrow] = seen_passages(gaps[narrow], ring[a], x[a, 0], x[a, 1], cos_t, sin_t, depth, 20.0)
+                gaps = gaps[keep]
+            cors = corridors_toward(gaps, x[a], goal, w_pass=1.2, toward_deg=75.0, through=1.5, ring=ring[a],
+                                    sensor=x[a], origin=pack.centroid, rho_vis=0.4, max_range=20.0,
+                                    rays=(cos_t, sin_t), approach=approach, approach_w=approach_w)
+            rows = got[4][np.argsort(got[4][:, 7], kind="stable")]
+            assert len(rows) == len(cors)
+            for r, c in zip(rows, cors):
+                assert np.array_equal(r[0:2], c.mid) and np.array_equal(r[2:4], c.normal)
+                assert r[4] == c.width and np.array_equal(r[5:7], c.target) and r[7] == c.cost
+            assert got[5] == min(ring_min[members].tolist())

@@ -37,7 +37,7 @@ import numpy as np
 
 from swarmnav.methods.hes.barriers import agent_barrier, brake_radius
 from swarmnav.methods.hes.neighbours import neighbour_rows
-from swarmnav.methods.hes.corridors import GAP_W, Corridor, seen_passages, segment_clear
+from swarmnav.methods.hes.corridors import Corridor, segment_clear
 from swarmnav.methods.hes.part import Part
 
 
@@ -102,6 +102,8 @@ class PassageMode(Part):
         self.w_wide = 2.0 * (p.paper.d_safe + p.passage.margin)
         self.w_passage = 2.0 * p.paper.d_safe + max(p.passage.band, 2.0 * p.passage.margin)
         self.approach, self.approach_w = p.passage.length, self.w_wide
+        # a narrow opening must be a seen passage, not a concave corner (``gap_depth``)
+        self.seen_w, self.seen_depth = self.w_wide, p.passage.gap_depth
 
     def reset(self, hes, positions):
         self.h = hes
@@ -138,17 +140,6 @@ class PassageMode(Part):
             if len(head):
                 hc = x[head].mean(axis=0)
                 sub.subleader = int(head[np.argmin(np.sum((x[head] - hc) ** 2, axis=1))])
-
-    def gaps(self, step, sub, gaps):
-        """A narrow opening must be a seen passage, not a concave corner (``gap_depth``)."""
-        narrow = gaps[:, GAP_W] < self.w_wide
-        if not np.count_nonzero(narrow):
-            return gaps
-        a, h = sub.subleader, self.h
-        keep = ~narrow
-        keep[narrow] = seen_passages(gaps[narrow], step.ring[a], step.x[a, 0], step.x[a, 1], h.cos, h.sin,
-                                     self.p.passage.gap_depth, self.p.paper.lidar_range)
-        return gaps[keep]
 
     def corridors(self, step, sub, cors):
         """A corridor behind a passage the subleader has crossed (a bay seen back through the gap)
