@@ -101,3 +101,32 @@ def test_report_rows_are_the_report_stages_one_by_one():
                 assert np.array_equal(r[0:2], c.mid) and np.array_equal(r[2:4], c.normal)
                 assert r[4] == c.width and np.array_equal(r[5:7], c.target) and r[7] == c.cost
             assert got[5] == min(ring_min[members].tolist())
+
+
+def test_goal_range_is_the_nearest_and_farthest_hypot():
+    from swarmnav.methods.hes.stall import goal_range
+
+    rng = np.random.default_rng(9)
+    for _ in range(500):
+        pos = rng.normal(0, 20, (int(rng.integers(1, 30)), 2))
+        goal = rng.normal(0, 20, 2)
+        d = pos - goal
+        dist = np.hypot(d[:, 0], d[:, 1]).tolist()
+        assert goal_range(pos, goal) == (min(dist), max(dist))
+
+
+def test_gap_sides_counts_the_members_in_line_with_the_gap_on_each_side():
+    """Against the matrix form (which may round differently: the counts agree off the boundaries)."""
+    from swarmnav.methods.hes.routes import gap_sides
+
+    rng = np.random.default_rng(10)
+    for _ in range(2000):
+        pos = rng.normal(0, 10, (int(rng.integers(1, 25)), 2))
+        mid = rng.normal(0, 10, 2)
+        a = rng.uniform(0, 2 * np.pi)
+        nrm = np.array([np.cos(a), np.sin(a)])
+        band = float(rng.uniform(2.0, 6.0))
+        rel = pos - mid
+        along, across = rel @ nrm, np.abs(rel @ np.array([-nrm[1], nrm[0]]))
+        inb = across < band
+        assert gap_sides(pos, mid, nrm, band) == (np.count_nonzero((along > 0) & inb), np.count_nonzero((along <= 0) & inb))
