@@ -130,3 +130,14 @@ def test_gap_sides_counts_the_members_in_line_with_the_gap_on_each_side():
         along, across = rel @ nrm, np.abs(rel @ np.array([-nrm[1], nrm[0]]))
         inb = across < band
         assert gap_sides(pos, mid, nrm, band) == (np.count_nonzero((along > 0) & inb), np.count_nonzero((along <= 0) & inb))
+
+
+def test_row_min_is_numpys_min_along_rows():
+    from swarmnav.methods.hes.step import row_min
+
+    rng = np.random.default_rng(12)
+    for _ in range(500):
+        a = rng.uniform(0.0, 20.0, (int(rng.integers(1, 30)), int(rng.integers(1, 400))))
+        if rng.random() < 0.5:
+            a = np.round(a, 1)  # ties
+        assert np.array_equal(row_min(a), a.min(axis=1))

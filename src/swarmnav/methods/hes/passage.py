@@ -34,6 +34,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.barriers import agent_barrier, brake_radius
 from swarmnav.methods.hes.neighbours import neighbour_rows
@@ -129,6 +130,8 @@ class PassageMode(Part):
     def elect(self, step, col):
         """A subleader queued behind a throat cannot see the head's next corridor: the role goes
         to the head member nearest the head's centroid."""
+        if not self.n_queued:  # nobody queued at the last step: no subleader to replace
+            return
         x = step.x
         part = self.h.partition()
         for j, s in enumerate(part.ids):
@@ -336,7 +339,7 @@ class PassageMode(Part):
         return out
 
     def push_back(self, step):
-        self.lowered = bool(np.count_nonzero(step.dsafe < self.p.paper.d_safe))
+        self.lowered = n_below(step.dsafe, self.p.paper.d_safe) > 0
         return self.lowered
 
     def edit_terms(self, step, t):
@@ -355,3 +358,13 @@ class PassageMode(Part):
         p = self.p
         ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.paper.dt, p.passage.agent_brake, p.passage.agent_margin))
         return agent_barrier(a, step.x, step.v, active, p.paper.dt, p.passage.agent_brake, p.passage.agent_margin, p.a_bound, ptr, idx)
+
+
+@njit(cache=True)
+def n_below(a, bound):
+    """How many entries of ``a`` are below ``bound``."""
+    k = 0
+    for i in range(a.shape[0]):
+        if a[i] < bound:
+            k += 1
+    return k
