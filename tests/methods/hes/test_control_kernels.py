@@ -85,3 +85,39 @@ def test_couple_occlude_is_couple_then_the_segments_tested_bit_for_bit():
             blocked = np.zeros((n, 4), dtype=bool)
         assert np.array_equal(got[6], blocked)
         assert np.array_equal(got[7], np.where(blocked, 0.2, 1.0))
+
+
+def _rings_with_plateaus(rng, n):
+    """Random rings with walls, flat runs, ties and rays at R_L."""
+    ring = np.full((n, R), P.paper.lidar_range)
+    for i in range(n):
+        for _ in range(int(rng.integers(0, 6))):
+            r0, ln = int(rng.integers(0, R)), int(rng.integers(1, 80))
+            seg = np.round(rng.uniform(0.2, 19.0) + np.abs(np.linspace(-1, 1, ln)) * rng.uniform(0, 3), 1)
+            idx = (r0 + np.arange(ln)) % R
+            ring[i, idx] = np.minimum(ring[i, idx], seg)
+    return ring
+
+
+def test_lidar_repulsion_and_ring_anchors_test_every_ray_as_the_plain_loop():
+    """The candidate pre-pass changes nothing: the same minima, summed in ray order (bit for bit)."""
+    from swarmnav.methods.hes.corridors import ring_anchors
+
+    rng = np.random.default_rng(13)
+    for _ in range(100):
+        n = int(rng.integers(1, 12))
+        ring = _rings_with_plateaus(rng, n)
+        dsafe = rng.uniform(0.5, 1.5, n)
+        args = (P.paper.k_rep, P.paper.r_trigger, P.paper.k_b, P.paper.gamma, P.paper.k_e)
+        ref = np.zeros((n, 2))
+        for i in range(n):
+            for r in range(R):
+                d = ring[i, r]
+                if d < P.paper.r_trigger and F.is_local_min(ring[i], r):
+                    w = F.repulsion_magnitude(max(d, P.core.d_floor), *args, dsafe[i], False)
+                    ref[i, 0] -= w * COS[r]
+                    ref[i, 1] -= w * SIN[r]
+            anchors = [r for r in range(R) if ring[i, r] < P.paper.lidar_range and F.is_local_min(ring[i], r)]
+            assert ring_anchors(ring[i], P.paper.lidar_range).tolist() == anchors
+        got = F.lidar_repulsion_each(ring, COS, SIN, *args, dsafe, P.core.d_floor, False)
+        assert np.array_equal(got, ref)
