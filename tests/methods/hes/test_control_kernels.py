@@ -1,6 +1,8 @@
 """The control stage's compiled passes against the plain forms they replace, on random cases:
 the same bits (the control stage of a run may not change when it is fused)."""
 
+import math
+
 import numpy as np
 
 from swarmnav.methods.hes import control as C
@@ -121,3 +123,60 @@ def test_lidar_repulsion_and_ring_anchors_test_every_ray_as_the_plain_loop():
             assert ring_anchors(ring[i], P.paper.lidar_range).tolist() == anchors
         got = F.lidar_repulsion_each(ring, COS, SIN, *args, dsafe, P.core.d_floor, False)
         assert np.array_equal(got, ref)
+
+
+def _guard_reference(a, x, v, dt, a_brake, margin, a_max, passes=4):
+    """agent_guard's contact guard written out over every pair (no distance skip), plain Python."""
+    n = len(x)
+    w = v + dt * a
+    for i in range(n):
+        for _ in range(passes):
+            moved = False
+            for j in range(n):
+                if j == i:
+                    continue
+                ux, uy = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1]
+                d = math.sqrt(ux * ux + uy * uy)
+                if d <= 0.0:
+                    continue
+                ux, uy = ux / d, uy / d
+                c = w[i, 0] * ux + w[i, 1] * uy
+                if c <= 0.0:
+                    continue
+                sj = v[j, 0] * ux + v[j, 1] * uy
+                c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
+                if c > c_max + 1e-12:
+                    w[i, 0] -= (c - c_max) * ux
+                    w[i, 1] -= (c - c_max) * uy
+                    moved = True
+            if not moved:
+                break
+    out = np.empty((n, 2))
+    for i in range(n):
+        bx, by = (w[i, 0] - v[i, 0]) / dt - a[i, 0], (w[i, 1] - v[i, 1]) / dt - a[i, 1]
+        ax, ay = a[i]
+        if bx == 0.0 and by == 0.0:
+            out[i] = a[i]
+        elif (ax + bx) ** 2 + (ay + by) ** 2 <= a_max * a_max:
+            out[i] = ax + bx, ay + by
+        elif bx * bx + by * by >= a_max * a_max:
+            s = a_max / math.sqrt(bx * bx + by * by)
+            out[i] = s * bx, s * by
+        else:
+            aa, ab, bb = ax * ax + ay * ay, ax * bx + ay * by, bx * bx + by * by
+            lam = min(max((-ab + math.sqrt(max(ab * ab - aa * (bb - a_max * a_max), 0.0))) / aa, 0.0), 1.0)
+            out[i] = bx + lam * ax, by + lam * ay
+    return out
+
+
+def test_contact_guard_skips_only_neighbours_it_cannot_bind():
+    from swarmnav.methods.hes.barriers import agent_guard
+
+    rng = np.random.default_rng(14)
+    for trial in range(300):
+        n = int(rng.integers(1, 30))
+        x = rng.uniform(0, float(rng.choice([3.0, 10.0, 40.0])), (n, 2))
+        v = rng.normal(0, float(rng.choice([0.3, 1.5, 4.0])), (n, 2))
+        a = F.saturate(rng.normal(0, 3, (n, 2)), 2.6)
+        got = agent_guard(a, x, v, 0.1, 1.5, 0.6, 2.6, 4)
+        assert np.array_equal(got, _guard_reference(a, x, v, 0.1, 1.5, 0.6, 2.6))
