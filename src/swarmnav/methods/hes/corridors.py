@@ -56,6 +56,28 @@ def ring_anchors(ring, max_range):
     return out[:m]
 
 
+BLOCK = 8  # rays per block of detect_gaps' closest-pair search
+
+
+@njit(cache=True)
+def _side_boxes(ring, hx, hy, a, t0, t1, n, max_range, box):
+    """The rays ``a + t0 .. a + t1`` (mod n) in blocks of BLOCK: ``box[k]`` the x and y range
+    (min x, max x, min y, max y) of block k's returns (empty: +inf / -inf); returns the count."""
+    nb = (t1 - t0 + BLOCK) // BLOCK
+    for k in range(nb):
+        box[k, 0] = box[k, 2] = np.inf
+        box[k, 1] = box[k, 3] = -np.inf
+        for t in range(t0 + k * BLOCK, min(t0 + (k + 1) * BLOCK, t1 + 1)):
+            r = _wrap(a + t, n)
+            if ring[r] >= max_range:
+                continue
+            box[k, 0] = min(box[k, 0], hx[r])
+            box[k, 1] = max(box[k, 1], hx[r])
+            box[k, 2] = min(box[k, 2], hy[r])
+            box[k, 3] = max(box[k, 3], hy[r])
+    return nb
+
+
 @njit(cache=True)
 def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
     """All openings of one ring (see module docstring).
@@ -75,6 +97,7 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
     m = 0
     if na == 0:
         return out[:0]
+    box = np.empty(((n + BLOCK - 1) // BLOCK, 4))
     hx = np.empty(n)  # every ray's return [m] (read only where it hits), computed once
     hy = np.empty(n)
     for r in range(n):
@@ -97,6 +120,8 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
                 pk = s
         if best - min(ring[a], ring[b]) < h_open:
             continue
+        # the b side's returns in blocks of BLOCK rays, each with the bounding box of its hits
+        nb = _side_boxes(ring, hx, hy, a, pk + 1, span, n, max_range, box)
         wbest = np.inf
         ax = ay = bx = by = 0.0
         for s in range(0, pk):
@@ -106,18 +131,26 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
                 continue
             qx = hx[ra]
             qy = hy[ra]
-            for t in range(pk + 1, span + 1):
-                rb = _wrap(a + t, n)
-                db = ring[rb]
-                if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
+            for k in range(nb):
+                # every pair of this block is at least as far as its box (rounding is monotone):
+                # one that cannot beat wbest is skipped, the scan order is kept
+                ex = max(box[k, 0] - qx, 0.0, qx - box[k, 1])
+                ey = max(box[k, 2] - qy, 0.0, qy - box[k, 3])
+                if ex * ex + ey * ey >= wbest:
                     continue
-                ux = hx[rb] - qx
-                uy = hy[rb] - qy
-                w2 = ux * ux + uy * uy
-                if w2 < wbest:
-                    wbest = w2
-                    ax, ay = qx, qy
-                    bx, by = qx + ux, qy + uy
+                t1 = min(pk + 1 + (k + 1) * BLOCK, span + 1)
+                for t in range(pk + 1 + k * BLOCK, t1):
+                    rb = _wrap(a + t, n)
+                    db = ring[rb]
+                    if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
+                        continue
+                    ux = hx[rb] - qx
+                    uy = hy[rb] - qy
+                    w2 = ux * ux + uy * uy
+                    if w2 < wbest:
+                        wbest = w2
+                        ax, ay = qx, qy
+                        bx, by = qx + ux, qy + uy
         if not np.isfinite(wbest) or wbest <= 0.0:
             continue
         w = math.sqrt(wbest)

@@ -194,12 +194,10 @@ def decision_state(h, step: Step) -> DecisionState:
     for a in range(S):  # eq. (14)
         for b in range(a + 1, S):
             d_swarm_min = min(d_swarm_min, math.hypot(cents[a][0] - cents[b][0], cents[a][1] - cents[b][1]))
-    if S == 1:  # the global centroid of eq. (2) is the one sub-swarm's
-        gbx, gby = cents[0]
-    else:
-        n_all = sum(len(reports[s].pack.members) for s in ids)
-        gbx, gby = (sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all).tolist()
-    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbx - gx, gby - gy), p.paper.r_merge)
+    # eq. (13) reads the global centroid's distance to the goal only when S = 1, where the global
+    # centroid of eq. (2) is the one sub-swarm's (split_feasible is False for S > 1 whatever it is)
+    d_all = math.hypot(cents[0][0] - gx, cents[0][1] - gy) if S == 1 else math.inf
+    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, d_all, p.paper.r_merge)
     can_merge = merge_feasible(S, n_near, d_swarm_min, p.paper.d_merge)
     return DecisionState(
         k=int(k), dt=p.paper.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,
