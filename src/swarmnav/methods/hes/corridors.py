@@ -79,6 +79,46 @@ def _side_boxes(ring, hx, hy, a, t0, t1, n, max_range, box):
 
 
 @njit(cache=True)
+def _closest_across(ring, hx, hy, a, pk, span, n, max_range, box):
+    """The closest pair of returns across the peak of the sector of ``span`` rays from anchor ``a``
+    (side a: rays a .. a + pk - 1, side b: a + pk + 1 .. a + span; returns at ``hx, hy``), the
+    first in scan order (side a outer, both ascending): ``(w^2, q_a x, y, q_b x, y)``, w^2 = inf if
+    none. ``box``: workspace of (n + BLOCK - 1) // BLOCK rows."""
+    # the b side's returns in blocks of BLOCK rays, each with the bounding box of its hits
+    nb = _side_boxes(ring, hx, hy, a, pk + 1, span, n, max_range, box)
+    wbest = np.inf
+    ax = ay = bx = by = 0.0
+    for s in range(0, pk):
+        ra = _wrap(a + s, n)
+        da = ring[ra]
+        if da >= max_range:
+            continue
+        qx = hx[ra]
+        qy = hy[ra]
+        for k in range(nb):
+            # every pair of this block is at least as far as its box (rounding is monotone):
+            # one that cannot beat wbest is skipped, the scan order is kept
+            ex = max(box[k, 0] - qx, 0.0, qx - box[k, 1])
+            ey = max(box[k, 2] - qy, 0.0, qy - box[k, 3])
+            if ex * ex + ey * ey >= wbest:
+                continue
+            t1 = min(pk + 1 + (k + 1) * BLOCK, span + 1)
+            for t in range(pk + 1 + k * BLOCK, t1):
+                rb = _wrap(a + t, n)
+                db = ring[rb]
+                if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
+                    continue
+                ux = hx[rb] - qx
+                uy = hy[rb] - qy
+                w2 = ux * ux + uy * uy
+                if w2 < wbest:
+                    wbest = w2
+                    ax, ay = qx, qy
+                    bx, by = qx + ux, qy + uy
+    return wbest, ax, ay, bx, by
+
+
+@njit(cache=True)
 def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
     """All openings of one ring (see module docstring).
 
@@ -120,37 +160,7 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
                 pk = s
         if best - min(ring[a], ring[b]) < h_open:
             continue
-        # the b side's returns in blocks of BLOCK rays, each with the bounding box of its hits
-        nb = _side_boxes(ring, hx, hy, a, pk + 1, span, n, max_range, box)
-        wbest = np.inf
-        ax = ay = bx = by = 0.0
-        for s in range(0, pk):
-            ra = _wrap(a + s, n)
-            da = ring[ra]
-            if da >= max_range:
-                continue
-            qx = hx[ra]
-            qy = hy[ra]
-            for k in range(nb):
-                # every pair of this block is at least as far as its box (rounding is monotone):
-                # one that cannot beat wbest is skipped, the scan order is kept
-                ex = max(box[k, 0] - qx, 0.0, qx - box[k, 1])
-                ey = max(box[k, 2] - qy, 0.0, qy - box[k, 3])
-                if ex * ex + ey * ey >= wbest:
-                    continue
-                t1 = min(pk + 1 + (k + 1) * BLOCK, span + 1)
-                for t in range(pk + 1 + k * BLOCK, t1):
-                    rb = _wrap(a + t, n)
-                    db = ring[rb]
-                    if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
-                        continue
-                    ux = hx[rb] - qx
-                    uy = hy[rb] - qy
-                    w2 = ux * ux + uy * uy
-                    if w2 < wbest:
-                        wbest = w2
-                        ax, ay = qx, qy
-                        bx, by = qx + ux, qy + uy
+        wbest, ax, ay, bx, by = _closest_across(ring, hx, hy, a, pk, span, n, max_range, box)
         if not np.isfinite(wbest) or wbest <= 0.0:
             continue
         w = math.sqrt(wbest)
