@@ -205,10 +205,13 @@ class PassageMode(Part):
         within ``passage_queue``: they keep their queue), with the agents that have crossed each."""
         p, mem = self.p, self.mem[sid]
         w_wide = self.w_passage
+        narrow = route is not None and not route.direct and route.width < w_wide
+        if not narrow and not mem.passages:  # the common case: nothing to remember, nothing kept
+            mem.narrow_steps = 0
+            return
         members = self.h.labels == sid
         keep = [q for q in mem.passages if (k - q.step) * p.paper.dt <= p.passage.memory or bool(np.any(
             members & ~q.crossed & (np.hypot(*(x - q.throat.mid).T) <= p.passage.queue)))]
-        narrow = route is not None and not route.direct and route.width < w_wide
         same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
         planned = self.stall is not None and self.stall.engaged(sid)
         # a narrow throat on the stall planner's path is its committed choice: confirmed at once
