@@ -4,6 +4,7 @@ All functions take flat arrays (a ``Geometry`` and (N, d) positions, ``d = geom.
 return arrays; the ESDF is a grid of the same signed distance with an interpolating query.
 """
 
+from swarmnav.sensing._kernels import segments_blocked_kernel
 from swarmnav.sensing.esdf import Esdf, esdf3d_query_kernel, esdf_query_kernel
 from swarmnav.sensing.geometry import nearest_obstacle, points_inside, segments_blocked, signed_distance
 from swarmnav.sensing.lidar import lidar_ring, ray_table
@@ -25,5 +26,6 @@ __all__ = [
     "range_scan",
     "ray_table",
     "segments_blocked",
+    "segments_blocked_kernel",
     "signed_distance",
 ]

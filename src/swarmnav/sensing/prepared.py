@@ -42,6 +42,15 @@ class PreparedGeometry:
     def is_empty(self) -> bool:
         return self.geom.is_empty
 
+    @property
+    def planar_arrays(self) -> tuple[np.ndarray, ...]:
+        """The seven arrays a planar geometry is passed to the compiled queries as (the leading
+        arguments of :func:`swarmnav.sensing.segments_blocked_kernel`), for a caller's own
+        compiled pass; read only."""
+        if self._arrays is None:
+            raise ValueError("planar_arrays: this is a 3-D geometry")
+        return self._arrays
+
     def lidar_into(self, positions: np.ndarray, cos_t: np.ndarray, sin_t: np.ndarray, max_range: float,
                    out: np.ndarray) -> np.ndarray:
         """``out`` (N, R) float64 <- the LiDAR ranges [m] of rays (cos_t, sin_t) from every agent,

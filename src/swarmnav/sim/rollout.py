@@ -6,6 +6,7 @@ import time
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from swarmnav._version import __version__
 from swarmnav.errors import ConfigError, DivergedError, ScenarioError
@@ -89,7 +90,8 @@ def run(
         clear = lambda x: np.full(len(x), np.inf)  # noqa: E731
     else:  # the geometry converted once: the same kernel as signed_distance, without per-step packing
         prepared = PreparedGeometry(geom)
-        clear = lambda x: prepared.distance_into(np.ascontiguousarray(x, dtype=np.float64), np.empty(len(x)))  # noqa: E731
+        clear = lambda x, out=None: prepared.distance_into(  # noqa: E731
+            np.ascontiguousarray(x, dtype=np.float64), np.empty(len(x)) if out is None else out)
     lift = vlift = _identity
     if plane_z is not None:  # the slice's (N, 2) state at altitude plane_z, no vertical velocity
         lift = lambda x, z=plane_z: np.column_stack([x, np.full(len(x), z)])  # noqa: E731
@@ -104,23 +106,29 @@ def run(
     for k in range(steps):
         cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
-        if not (np.isfinite(pos).all() and np.isfinite(vel).all()):
+        if not _all_finite(pos, vel):
             raise DivergedError(f"{m.name} diverged at step {k + 1} (t = {(k + 1) * dt:g} s): non-finite "
                                 f"positions or velocities; check the parameters ({_changed(m.params)})")
         if period is not None:  # the world is a torus whatever the method's dynamics
             pos = lo + np.mod(pos - lo, period)
         P[k + 1], V[k + 1] = lift(pos), vlift(vel)
-        C[k + 1] = clear(P[k + 1])
+        if no_obstacles:
+            C[k + 1] = clear(P[k + 1])
+        else:  # written in place (a row of C is a contiguous float64 buffer): the same values
+            clear(P[k + 1], C[k + 1])
         labels = info.get("labels")
         lab[k + 1] = lab[k] if labels is None else labels
-        if info.get("roles") is not None:
+        r = info.get("roles")
+        if r is not None:
             if roles is None:
                 roles = np.zeros((steps + 1, N), dtype=np.uint8)
-            roles[k + 1] = info["roles"]
+            roles[k + 1] = r
         elif roles is not None:
             roles[k + 1] = roles[k]
-        for ev in info.get("events", ()):
-            events.append({"step": k, **ev})
+        evs = info.get("events")
+        if evs:
+            for ev in evs:
+                events.append({"step": k, **ev})
         if bar is not None and (k % 10 == 9 or k == steps - 1):
             bar(k + 1)
         if info.get("done"):  # the method's task is complete: record this state and stop
@@ -166,6 +174,24 @@ def run(
     if callable(artifacts):
         result.artifacts = dict(artifacts())
     return result
+
+
+def _all_finite(pos: np.ndarray, vel: np.ndarray) -> bool:
+    """Every position and velocity is finite (compiled for the usual float64 arrays)."""
+    if type(pos) is np.ndarray and type(vel) is np.ndarray and pos.dtype == vel.dtype == np.float64:
+        return _finite_kernel(pos.reshape(-1), vel.reshape(-1))
+    return bool(np.isfinite(pos).all() and np.isfinite(vel).all())
+
+
+@njit(cache=True)
+def _finite_kernel(a, b):
+    for i in range(a.shape[0]):
+        if not np.isfinite(a[i]):
+            return False
+    for i in range(b.shape[0]):
+        if not np.isfinite(b[i]):
+            return False
+    return True
 
 
 def _changed(params: Any) -> str:

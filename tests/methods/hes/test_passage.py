@@ -12,6 +12,7 @@ from swarmnav.methods.hes.control import control
 from swarmnav.methods.hes.report import sense
 from swarmnav.methods.hes.step import Step
 from swarmnav.methods.hes.targets import references
+from swarmnav.methods.hes import control as hes_control
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.corridors import detect_gaps, seen_passages
 from swarmnav.methods.hes.params import HesParams
@@ -235,13 +236,13 @@ def test_the_last_member_of_a_queue_is_not_held_at_the_mouth(monkeypatch):
     v = np.zeros_like(x)
     assert m.part("passage").queue(x, m.labels, m.subs)[0][1] == 0  # queued for gate 1
     seen = {}
-    terms = F.force_terms
+    terms = hes_control.eq38_terms
 
     def spy(*args):
         seen["t"] = terms(*args).copy()
         return terms(*args)
 
-    monkeypatch.setattr(F, "force_terms", spy)
+    monkeypatch.setattr(hes_control, "eq38_terms", spy)
     step = Step(0, x, v, sense(m, x))  # stages 4-5 of the step, with the sub-swarm kept in encircle mode
     m.part("passage").targets(step, m.subs, m.labels, final=True)
     assert step.own[1] == 0

@@ -95,7 +95,7 @@ def _wall_sweep(wx, wy, row, cos_t, sin_t, a_brake, margin, max_range, project):
 
 
 @njit(cache=True)
-def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol, ptr, idx):
+def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol, ptr, idx, reach2=np.inf):
     """One pass of agent i's braking bounds, in place on its next velocity ``w[i]``: for every
     other agent j at distance d (``u = (p_j - p_i) / d``, ``s_j = v_j . u``) an excess of
     ``w_i . u`` over ``c_max`` (+ ``tol``) is removed along u. i only brakes: a neighbour closing
@@ -104,7 +104,8 @@ def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol, ptr, idx)
     ``a_lead > 0``: the car-following bound of :func:`agent_barrier`,
     ``c_max = sqrt(2 a_brake (max(d - margin, 0) + max(s_j, 0)^2 / (2 a_lead)))``;
     ``a_lead <= 0``: the two-sided bound of :func:`agent_guard`,
-    ``c_max = sqrt(max(2 a_brake (d - margin) + s_j |s_j|, 0))``.
+    ``c_max = sqrt(max(2 a_brake (d - margin) + s_j |s_j|, 0))``. Neighbours farther than
+    ``sqrt(reach2)`` [m] are skipped (a radius beyond which no bound can bind, :func:`_reach2`).
     """
     moved = False
     for t in range(ptr[i], ptr[i + 1]):
@@ -113,6 +114,8 @@ def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol, ptr, idx)
             continue
         ux = x[j, 0] - x[i, 0]
         uy = x[j, 1] - x[i, 1]
+        if ux * ux + uy * uy > reach2:
+            continue
         d = math.sqrt(ux * ux + uy * uy)
         if d <= 0.0:
             continue
@@ -177,6 +180,16 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead, ptr=None, idx=No
 
 
 @njit(cache=True)
+def _reach2(w2, v2, a_brake, margin):
+    """Squared distance [m^2] beyond which the two-sided bound of :func:`agent_guard` cannot bind
+    an agent whose next velocity has squared norm ``w2`` (its projections never lengthen it) among
+    neighbours of squared speed at most ``v2``: there ``c_max >= sqrt(2 a_brake (d - margin) - v2)``
+    exceeds ``sqrt(w2) >= w . u``; 1 m of slack (as :func:`brake_radius`)."""
+    r = margin + (w2 + v2) / (2.0 * a_brake) + 1.0
+    return r * r
+
+
+@njit(cache=True)
 def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4, ptr=None, idx=None):
     """Contact guard between agents (ours): a braking bound with priority over the clip of eq. (39).
 
@@ -206,9 +219,13 @@ def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4, ptr=None, idx=Non
     if ptr is None or idx is None:
         ptr, idx = all_rows(n)
     w = v + dt * a
+    v2 = 0.0
+    for j in range(n):
+        v2 = max(v2, v[j, 0] * v[j, 0] + v[j, 1] * v[j, 1])
     for i in range(n):
+        reach2 = _reach2(w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1], v2, a_brake, margin)
         for _ in range(passes):
-            if not _brake_toward_neighbours(w, x, v, i, a_brake, margin, 0.0, 1e-12, ptr, idx):
+            if not _brake_toward_neighbours(w, x, v, i, a_brake, margin, 0.0, 1e-12, ptr, idx, reach2):
                 break
     out = np.empty((n, 2))
     for i in range(n):

@@ -16,6 +16,15 @@ from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.decision import NAVIGATE
 from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.step import Step
+from swarmnav.sensing import segments_blocked_kernel
+
+
+def _sub_rows(h):
+    """The partition and its sub-swarms' subleaders, c_s and navigate flags, in column order."""
+    part = h.partition()
+    subs = [h.subs[s] for s in part.ids]
+    return (part, np.array([sub.subleader for sub in subs]), np.array([sub.waypoint for sub in subs]),
+            np.array([sub.mode == NAVIGATE for sub in subs]))
 
 
 def couplings(h, step: Step) -> None:
@@ -24,12 +33,8 @@ def couplings(h, step: Step) -> None:
     An agent routed on its own (``Step.own``) forms a cohesion group with the others routed to
     the same point, heads for that point (its c_s) and is not coupled to a subleader."""
     x = step.x
-    part = h.partition()
+    part, sub_sl, sub_wp, sub_nav = _sub_rows(h)
     col = part.col
-    subs = [h.subs[s] for s in part.ids]
-    sub_sl = np.array([sub.subleader for sub in subs])
-    sub_wp = np.array([sub.waypoint for sub in subs])
-    sub_nav = np.array([sub.mode == NAVIGATE for sub in subs])
     rows = step.rows = neighbour_rows(x, h.pair_radius)
     if step.n_own:  # agents routed on their own
         sl_idx, wp, nav = sub_sl[col], sub_wp[col], sub_nav[col]
@@ -69,6 +74,41 @@ def couple(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx):
     return sl_idx, wp, nav, follower, cent, F.nearest_in_group(x, labels, ptr, idx)
 
 
+def couple_occlude(h, step: Step) -> None:
+    """:func:`couplings` and :func:`occlusion` in one compiled pass when no agent is routed on
+    its own (the same values)."""
+    p = h.params
+    part, sub_sl, sub_wp, sub_nav = _sub_rows(h)
+    rows = step.rows = neighbour_rows(step.x, h.pair_radius)
+    check = not (h.no_obstacles or (p.sigma == 1.0 and not h.needs_blocked))
+    step.col = part.col
+    (step.sl_idx, step.wp, step.nav, step.follower, step.cent, step.nn, step.blocked,
+     step.sig) = couple_occlude_kernel(step.x, h.labels, part.col, sub_sl, sub_wp, sub_nav, *rows, step.slot,
+                                       p.sigma, check, *h.obstacles.planar_arrays)
+
+
+@njit(cache=True)
+def couple_occlude_kernel(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx, slot, sigma, check, seg_a, seg_b,
+                          poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
+    """:func:`couple`, then (``check``) the segments of eq. (30) tested against the obstacles: the
+    couplings, ``blocked`` (N, 4) and ``sig`` (N, 4); without ``check`` nothing is blocked."""
+    sl_idx, wp, nav, follower, cent, nn = couple(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx)
+    n = x.shape[0]
+    blocked = np.zeros((n, 4), dtype=np.bool_)
+    sig = np.ones((n, 4))
+    if check:
+        P, Q = np.empty((4 * n, 2)), np.empty((4 * n, 2))
+        occlusion_segments(x, slot, nn, sl_idx, cent, P, Q)
+        flat = np.empty(4 * n, dtype=np.bool_)
+        segments_blocked_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, P, Q, flat)
+        for c in range(4):
+            for i in range(n):
+                if flat[c * n + i]:
+                    blocked[i, c] = True
+                    sig[i, c] = sigma
+    return sl_idx, wp, nav, follower, cent, nn, blocked, sig
+
+
 def occlusion(h, step: Step) -> None:
     """Eq. (30): ``step.sig`` (N, 4), sigma_occ where the segment to the slot / nearest neighbour /
     subleader / centroid meets an obstacle, 1 otherwise; ``step.blocked`` the segments that meet
@@ -106,28 +146,55 @@ def control(h, step: Step) -> np.ndarray:
     """The commanded acceleration (N, 2) [m/s^2] of eq. (38)-(39) with the parts' hooks."""
     p = h.params
     x, v = step.x, step.v
-    couplings(h, step)
-    occlusion(h, step)
+    if step.n_own or h.obstacles.geom.dim != 2:
+        couplings(h, step)
+        occlusion(h, step)
+    else:
+        couple_occlude(h, step)
     step.dsafe = np.empty(h.n)
     step.dsafe.fill(p.paper.d_safe)
     step.exit_dir = np.zeros((h.n, 2))
     step.exit_free = np.zeros(h.n, dtype=np.bool_)
     for part in h.at["steer"]:
         part.steer(step)
-    vslot = F.slot_velocity(x, step.slot, step.speed, p.core.eps_v)
-    args = (x, v, h.labels, x[step.sl_idx], v[step.sl_idx], step.follower, step.cent, step.wp, step.nav,
-            step.slot, vslot, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe, *step.rows)
+    args = (x, v, h.labels, step.sl_idx, step.follower, step.cent, step.wp, step.nav, step.slot, step.speed,
+            p.core.eps_v, step.nn, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe, *step.rows)
     edit = [part for part in h.at["push_back"] if part.push_back(step)]
     if edit:
-        t = F.force_terms(*args)
+        t = eq38_terms(*args)
         for part in edit:
             part.edit_terms(step, t)
         a = t.sum(axis=0)
     else:
-        a = F.synthesize(*args)
+        a = eq38(*args)
     for part in h.at["brake"]:
         a = part.brake(step, a)
     a = F.saturate(a, p.a_bound)
     for part in h.at["guard"]:
         a = part.guard(step, a)
     return a
+
+
+@njit(cache=True)
+def eq38_terms(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring, cos_t, sin_t,
+               g, dsafe, ptr, idx):
+    """The eight terms of eq. (38) (``forces.force_terms``), the reference velocity of eq. (23)
+    and the subleaders' rows gathered in the same call."""
+    vslot = F.slot_velocity(x, slot, speed, eps_v)
+    n = x.shape[0]
+    sl_pos = np.empty((n, 2))
+    sl_vel = np.empty((n, 2))
+    for i in range(n):
+        s = sl_idx[i]
+        sl_pos[i, 0], sl_pos[i, 1] = x[s, 0], x[s, 1]
+        sl_vel[i, 0], sl_vel[i, 1] = v[s, 0], v[s, 1]
+    return F.force_terms(x, v, labels, sl_pos, sl_vel, follower, cent, wp, nav, slot, vslot, nn, sig, ring,
+                         cos_t, sin_t, g, dsafe, ptr, idx)
+
+
+@njit(cache=True)
+def eq38(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring, cos_t, sin_t,
+         g, dsafe, ptr, idx):
+    """Eq. (38), the sum of :func:`eq38_terms` (as ``forces.synthesize``), (N, 2) [m/s^2]."""
+    return eq38_terms(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring,
+                      cos_t, sin_t, g, dsafe, ptr, idx).sum(axis=0)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from swarmnav.methods.hes.forces import is_local_min
+from swarmnav.methods.hes.forces import is_local_min, minimum_candidates
 
 # Columns of the detect_gaps output rows.
 GAP_QA_X, GAP_QA_Y, GAP_QB_X, GAP_QB_Y, GAP_W, GAP_NX, GAP_NY, GAP_PEAK = range(8)
@@ -46,12 +46,76 @@ def ring_anchors(ring, max_range):
     test (flat runs included) as the active set of the LiDAR repulsion, eq. (35)."""
     n = ring.shape[0]
     out = np.empty(n, dtype=np.int64)
+    cand = np.empty(n, dtype=np.bool_)
+    minimum_candidates(ring, max_range, cand)
     m = 0
     for r in range(n):
-        if ring[r] < max_range and is_local_min(ring, r):
+        if cand[r] and ring[r] < max_range and is_local_min(ring, r):
             out[m] = r
             m += 1
     return out[:m]
+
+
+BLOCK = 8  # rays per block of detect_gaps' closest-pair search
+
+
+@njit(cache=True)
+def _side_boxes(ring, hx, hy, a, t0, t1, n, max_range, box):
+    """The rays ``a + t0 .. a + t1`` (mod n) in blocks of BLOCK: ``box[k]`` the x and y range
+    (min x, max x, min y, max y) of block k's returns (empty: +inf / -inf); returns the count."""
+    nb = (t1 - t0 + BLOCK) // BLOCK
+    for k in range(nb):
+        box[k, 0] = box[k, 2] = np.inf
+        box[k, 1] = box[k, 3] = -np.inf
+        for t in range(t0 + k * BLOCK, min(t0 + (k + 1) * BLOCK, t1 + 1)):
+            r = _wrap(a + t, n)
+            if ring[r] >= max_range:
+                continue
+            box[k, 0] = min(box[k, 0], hx[r])
+            box[k, 1] = max(box[k, 1], hx[r])
+            box[k, 2] = min(box[k, 2], hy[r])
+            box[k, 3] = max(box[k, 3], hy[r])
+    return nb
+
+
+@njit(cache=True)
+def _closest_across(ring, hx, hy, a, pk, span, n, max_range, box):
+    """The closest pair of returns across the peak of the sector of ``span`` rays from anchor ``a``
+    (side a: rays a .. a + pk - 1, side b: a + pk + 1 .. a + span; returns at ``hx, hy``), the
+    first in scan order (side a outer, both ascending): ``(w^2, q_a x, y, q_b x, y)``, w^2 = inf if
+    none. ``box``: workspace of (n + BLOCK - 1) // BLOCK rows."""
+    # the b side's returns in blocks of BLOCK rays, each with the bounding box of its hits
+    nb = _side_boxes(ring, hx, hy, a, pk + 1, span, n, max_range, box)
+    wbest = np.inf
+    ax = ay = bx = by = 0.0
+    for s in range(0, pk):
+        ra = _wrap(a + s, n)
+        da = ring[ra]
+        if da >= max_range:
+            continue
+        qx = hx[ra]
+        qy = hy[ra]
+        for k in range(nb):
+            # every pair of this block is at least as far as its box (rounding is monotone):
+            # one that cannot beat wbest is skipped, the scan order is kept
+            ex = max(box[k, 0] - qx, 0.0, qx - box[k, 1])
+            ey = max(box[k, 2] - qy, 0.0, qy - box[k, 3])
+            if ex * ex + ey * ey >= wbest:
+                continue
+            t1 = min(pk + 1 + (k + 1) * BLOCK, span + 1)
+            for t in range(pk + 1 + k * BLOCK, t1):
+                rb = _wrap(a + t, n)
+                db = ring[rb]
+                if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
+                    continue
+                ux = hx[rb] - qx
+                uy = hy[rb] - qy
+                w2 = ux * ux + uy * uy
+                if w2 < wbest:
+                    wbest = w2
+                    ax, ay = qx, qy
+                    bx, by = qx + ux, qy + uy
+    return wbest, ax, ay, bx, by
 
 
 @njit(cache=True)
@@ -73,6 +137,7 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
     m = 0
     if na == 0:
         return out[:0]
+    box = np.empty(((n + BLOCK - 1) // BLOCK, 4))
     hx = np.empty(n)  # every ray's return [m] (read only where it hits), computed once
     hy = np.empty(n)
     for r in range(n):
@@ -95,27 +160,7 @@ def detect_gaps(ring, px, py, cos_t, sin_t, max_range, h_open):
                 pk = s
         if best - min(ring[a], ring[b]) < h_open:
             continue
-        wbest = np.inf
-        ax = ay = bx = by = 0.0
-        for s in range(0, pk):
-            ra = _wrap(a + s, n)
-            da = ring[ra]
-            if da >= max_range:
-                continue
-            qx = hx[ra]
-            qy = hy[ra]
-            for t in range(pk + 1, span + 1):
-                rb = _wrap(a + t, n)
-                db = ring[rb]
-                if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
-                    continue
-                ux = hx[rb] - qx
-                uy = hy[rb] - qy
-                w2 = ux * ux + uy * uy
-                if w2 < wbest:
-                    wbest = w2
-                    ax, ay = qx, qy
-                    bx, by = qx + ux, qy + uy
+        wbest, ax, ay, bx, by = _closest_across(ring, hx, hy, a, pk, span, n, max_range, box)
         if not np.isfinite(wbest) or wbest <= 0.0:
             continue
         w = math.sqrt(wbest)

@@ -227,6 +227,20 @@ def is_local_min(ring, r):
 
 
 @njit(cache=True)
+def minimum_candidates(ring, below, out):
+    """``out[r]`` (R,) bool: ray r may be a local minimum of :func:`is_local_min` closer than
+    ``below`` -- ``d_r < below``, ``d_r < d_{r-1}`` and ``d_r <= d_{r+1}``, which every such
+    minimum meets (the two end rays are always candidates). A branch-free pass over the ring, so
+    that the exact test runs on the few candidates only."""
+    n = ring.shape[0]
+    for r in range(1, n - 1):
+        d = ring[r]
+        out[r] = (d < below) & (d < ring[r - 1]) & (d <= ring[r + 1])
+    out[0] = True
+    out[n - 1] = True
+
+
+@njit(cache=True)
 def repulsion_magnitude(d, k_rep, r_t, k_b, gamma, k_e, d_safe, ratio=False):
     """Eq. (36): per-ray repulsive magnitude omega [m/s^2] at range d [m] (d already floored).
 
@@ -254,9 +268,13 @@ def lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe
     """
     n, nr = ring.shape
     out = np.zeros((n, 2))
+    cand = np.empty(nr, dtype=np.bool_)
     for i in range(n):
         row = ring[i]
+        minimum_candidates(row, r_t, cand)
         for r in range(nr):
+            if not cand[r]:
+                continue
             d = row[r]
             if d >= r_t or not is_local_min(row, r):
                 continue

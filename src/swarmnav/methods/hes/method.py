@@ -36,7 +36,7 @@ from swarmnav.methods.hes.navigate import navigate
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.part import Part, hook_table
 from swarmnav.methods.hes.passage import PassageMode
-from swarmnav.methods.hes.report import decision_state, reelect, report, sense, split_paths
+from swarmnav.methods.hes.report import decision_state, reelect, report, report_constants, sense, split_paths
 from swarmnav.methods.hes.projection import PostProjection
 from swarmnav.methods.hes.routes import RouteHold, SplitCommit
 from swarmnav.methods.hes.safety import ContactGuard, WallBarrier
@@ -151,6 +151,7 @@ class Hes:
                              (0.0, math.inf))
         for q in self.parts:
             q.reset(self, positions)
+        self.report_gaps, self.report_consts = report_constants(self)
 
     def summary(self) -> dict[str, float]:
         out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}

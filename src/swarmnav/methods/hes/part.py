@@ -12,6 +12,8 @@ stage / hook                 what a part may do there
 1 perceive  ``observe``      read the step's rings (a map of returns, a trail of positions)
             ``elect``        change a subleader after the core's re-election
 2 report    ``gaps``         drop openings of the subleader's ring before the corridor filter
+            ``seen_w``,      (attributes, m) an opening narrower than ``seen_w`` is kept only if
+            ``seen_depth``   the ring sees ``seen_depth`` on through it (``corridors.seen_passages``)
             ``approach``     (attribute, m) reach narrow throats through their mouth
             ``corridors``    drop reported corridors
             ``cruise_mask``  members whose clearance does not slow the cruise
@@ -44,6 +46,8 @@ class Part:
     name = "part"
     approach = 0.0  # [m] report: reach throats narrower than the part's width through a mouth this deep
     approach_w = float("inf")  # [m] ... narrower than this
+    seen_w = 0.0  # [m] report: openings narrower than this must be seen passages (0: none) ...
+    seen_depth = 0.0  # [m] ... the ring seeing this far on through them
     needs_blocked = False  # control: the part reads Step.blocked (segments computed even with sigma = 1)
 
     def reset(self, hes, positions: np.ndarray) -> None:

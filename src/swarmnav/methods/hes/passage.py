@@ -34,10 +34,11 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.barriers import agent_barrier, brake_radius
 from swarmnav.methods.hes.neighbours import neighbour_rows
-from swarmnav.methods.hes.corridors import GAP_W, Corridor, seen_passages, segment_clear
+from swarmnav.methods.hes.corridors import Corridor, segment_clear
 from swarmnav.methods.hes.part import Part
 
 
@@ -102,6 +103,8 @@ class PassageMode(Part):
         self.w_wide = 2.0 * (p.paper.d_safe + p.passage.margin)
         self.w_passage = 2.0 * p.paper.d_safe + max(p.passage.band, 2.0 * p.passage.margin)
         self.approach, self.approach_w = p.passage.length, self.w_wide
+        # a narrow opening must be a seen passage, not a concave corner (``gap_depth``)
+        self.seen_w, self.seen_depth = self.w_wide, p.passage.gap_depth
 
     def reset(self, hes, positions):
         self.h = hes
@@ -127,6 +130,8 @@ class PassageMode(Part):
     def elect(self, step, col):
         """A subleader queued behind a throat cannot see the head's next corridor: the role goes
         to the head member nearest the head's centroid."""
+        if not self.n_queued:  # nobody queued at the last step: no subleader to replace
+            return
         x = step.x
         part = self.h.partition()
         for j, s in enumerate(part.ids):
@@ -138,17 +143,6 @@ class PassageMode(Part):
             if len(head):
                 hc = x[head].mean(axis=0)
                 sub.subleader = int(head[np.argmin(np.sum((x[head] - hc) ** 2, axis=1))])
-
-    def gaps(self, step, sub, gaps):
-        """A narrow opening must be a seen passage, not a concave corner (``gap_depth``)."""
-        narrow = gaps[:, GAP_W] < self.w_wide
-        if not np.count_nonzero(narrow):
-            return gaps
-        a, h = sub.subleader, self.h
-        keep = ~narrow
-        keep[narrow] = seen_passages(gaps[narrow], step.ring[a], step.x[a, 0], step.x[a, 1], h.cos, h.sin,
-                                     self.p.passage.gap_depth, self.p.paper.lidar_range)
-        return gaps[keep]
 
     def corridors(self, step, sub, cors):
         """A corridor behind a passage the subleader has crossed (a bay seen back through the gap)
@@ -211,10 +205,13 @@ class PassageMode(Part):
         within ``passage_queue``: they keep their queue), with the agents that have crossed each."""
         p, mem = self.p, self.mem[sid]
         w_wide = self.w_passage
+        narrow = route is not None and not route.direct and route.width < w_wide
+        if not narrow and not mem.passages:  # the common case: nothing to remember, nothing kept
+            mem.narrow_steps = 0
+            return
         members = self.h.labels == sid
         keep = [q for q in mem.passages if (k - q.step) * p.paper.dt <= p.passage.memory or bool(np.any(
             members & ~q.crossed & (np.hypot(*(x - q.throat.mid).T) <= p.passage.queue)))]
-        narrow = route is not None and not route.direct and route.width < w_wide
         same = [q for q in keep if narrow and math.hypot(*(q.throat.mid - route.mid)) <= 0.5 * route.width]
         planned = self.stall is not None and self.stall.engaged(sid)
         # a narrow throat on the stall planner's path is its committed choice: confirmed at once
@@ -299,6 +296,13 @@ class PassageMode(Part):
                 q_tgt[pend] = c.mid + p.core.through * c.normal
         return q_idx, q_tgt
 
+    def any_passages(self) -> bool:
+        """Some sub-swarm remembers a passage (else no agent is chained)."""
+        for m in self.mem.values():
+            if m.passages:
+                return True
+        return False
+
     def chained_agents(self, step) -> np.ndarray:
         """(N,) bool: the agent's sub-swarm remembers a passage (it is in a chain of throats)."""
         if not any(m.passages for m in self.mem.values()):
@@ -338,7 +342,7 @@ class PassageMode(Part):
         return out
 
     def push_back(self, step):
-        self.lowered = bool(np.count_nonzero(step.dsafe < self.p.paper.d_safe))
+        self.lowered = n_below(step.dsafe, self.p.paper.d_safe) > 0
         return self.lowered
 
     def edit_terms(self, step, t):
@@ -357,3 +361,13 @@ class PassageMode(Part):
         p = self.p
         ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.paper.dt, p.passage.agent_brake, p.passage.agent_margin))
         return agent_barrier(a, step.x, step.v, active, p.paper.dt, p.passage.agent_brake, p.passage.agent_margin, p.a_bound, ptr, idx)
+
+
+@njit(cache=True)
+def n_below(a, bound):
+    """How many entries of ``a`` are below ``bound``."""
+    k = 0
+    for i in range(a.shape[0]):
+        if a[i] < bound:
+            k += 1
+    return k

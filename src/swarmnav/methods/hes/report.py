@@ -13,10 +13,11 @@ import numpy as np
 from numba import njit
 
 from swarmnav.methods.hes import forces as F
-from swarmnav.methods.hes.corridors import Corridor, corridors_toward, detect_gaps
+from swarmnav.methods.hes.corridors import GAP_W, Corridor, _filter_gaps, detect_gaps, seen_passages
 from swarmnav.methods.hes.decision import DecisionState, merge_feasible, split_feasible
-from swarmnav.methods.hes.hierarchy import Report, make_pack
+from swarmnav.methods.hes.hierarchy import Pack, Report, _pack_rows, make_pack
 from swarmnav.methods.hes.step import Step, in_view
+from swarmnav.sensing import segments_blocked_kernel
 
 
 def sense(h, x: np.ndarray) -> np.ndarray:
@@ -36,9 +37,7 @@ def reelect(h, step: Step) -> None:
     part = h.partition()
     ids = part.ids
     sl = np.array([h.subs[s].subleader for s in ids])
-    cents, far, nearest = strayed(x, part.col, sl, h.params.core.stray)
-    if not h.no_obstacles:
-        far |= h.obstacles.blocked_into(x[sl], cents, np.empty(len(ids), dtype=np.bool_))
+    far, nearest = strayed(x, part.col, sl, h.params.core.stray, not h.no_obstacles, *h.obstacles.planar_arrays)
     for j, f in enumerate(far.tolist()):
         if f:
             h.subs[ids[j]].subleader = int(nearest[j])
@@ -47,15 +46,23 @@ def reelect(h, step: Step) -> None:
 
 
 @njit(cache=True)
-def strayed(x, col, sl, stray):
-    """The sub-swarms' centroids (S, 2) [m], whether each subleader ``sl`` (S,) is farther than
-    ``stray`` [m] from its sub-swarm's centroid, and each sub-swarm's member nearest its centroid
-    (the lowest index among equals)."""
+def strayed(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
+    """Whether each subleader ``sl`` (S,) has strayed -- farther than ``stray`` [m] from its
+    sub-swarm's centroid or (``check``) cut off from it by an obstacle (the geometry's planar
+    arrays) -- and each sub-swarm's member nearest its centroid (the lowest index among equals)."""
     S = sl.shape[0]
     cents = F.group_centroids(x, col, S)
     far = np.empty(S, dtype=np.bool_)
     for j in range(S):
         far[j] = math.hypot(x[sl[j], 0] - cents[j, 0], x[sl[j], 1] - cents[j, 1]) > stray
+    if check:
+        ends = np.empty((S, 2))
+        for j in range(S):
+            ends[j, 0], ends[j, 1] = x[sl[j], 0], x[sl[j], 1]
+        cut = np.empty(S, dtype=np.bool_)
+        segments_blocked_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, ends, cents, cut)
+        for j in range(S):
+            far[j] = far[j] or cut[j]
     nearest = np.full(S, -1, dtype=np.int64)
     best = np.full(S, np.inf)
     for i in range(x.shape[0]):
@@ -65,35 +72,87 @@ def strayed(x, col, sl, stray):
         d2 = dx * dx + dy * dy
         if d2 < best[j] or nearest[j] < 0:
             best[j], nearest[j] = d2, i
-    return cents, far, nearest
+    return far, nearest
 
 
 def report(h, step: Step, s: int) -> Report:
     """Subleader s's report: its Pack and the corridors toward the goal its ring shows (those
     whose throat is reachable straight from the centroid), and its members' nearest return."""
     p = h.params
-    x, ring = step.x, step.ring
+    x = step.x
     sub = h.subs[s]
     part = h.partition()
     members = part.members[part.index[s]]
-    pack = make_pack(s, sub.subleader, members, x, step.v)
     a = sub.subleader
-    ra, sa = ring[a], x[a]
-    gaps = detect_gaps(ra, sa[0], sa[1], h.cos, h.sin, p.paper.lidar_range, p.core.h_open)
-    for q in h.at["gaps"]:
-        gaps = q.gaps(step, sub, gaps)
-    approach, approach_w = h.approach
-    cors = corridors_toward(gaps, sa, h.goal, w_pass=p.core.w_pass, toward_deg=p.core.toward_deg, through=p.core.through,
-                            ring=ra, sensor=sa, origin=pack.centroid, rho_vis=p.core.rho_vis,
-                            max_range=p.paper.lidar_range, rays=(h.cos, h.sin), approach=approach, approach_w=approach_w)
+    if h.at["gaps"]:  # a part edits the openings: the stages one by one
+        pack = make_pack(s, a, members, x, step.v)
+        gaps = detect_gaps(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, p.paper.lidar_range, p.core.h_open)
+        for q in h.at["gaps"]:
+            gaps = q.gaps(step, sub, gaps)
+        rows = _filter_gaps(gaps, x[a, 0], x[a, 1], *h.report_consts[:4], step.ring[a], x[a, 0], x[a, 1], h.cos,
+                            h.sin, pack.centroid[0], pack.centroid[1], *h.report_consts[4:])
+        clear = float(step.ring_min[members].min())
+    else:
+        pos, vel, cen, sl_row, rows, clear = report_rows(x, step.v, members, a, step.ring, step.ring_min, h.cos, h.sin,
+                                                         *h.report_gaps, *h.report_consts)
+        pack = Pack(s, a, members, pos, vel, cen, sl_row)
+    cors = [Corridor(r[0:2], r[2:4], w, r[5:7], c) for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
+    cors.sort(key=lambda c: c.cost)
     for q in h.at["corridors"]:
         cors = q.corridors(step, sub, cors)
-    clr = step.ring_min[members]
-    for q in h.at["cruise_mask"]:
-        free = q.cruise_mask(members)
-        if free is not None:
-            clr = clr[free] if np.count_nonzero(free) else clr
-    return Report(pack, tuple(cors), min(clr.tolist()))
+    if h.at["cruise_mask"]:
+        clr = step.ring_min[members]
+        for q in h.at["cruise_mask"]:
+            free = q.cruise_mask(members)
+            if free is not None:
+                clr = clr[free] if np.count_nonzero(free) else clr
+        clear = min(clr.tolist())
+    return Report(pack, tuple(cors), clear)
+
+
+def report_constants(h) -> tuple[tuple, tuple]:
+    """The report's scalars, read once per run: gap detection's (R_L, h_open, and a part's
+    ``seen_w``, ``seen_depth``) and the corridor filter's (goal, w_pass, cos of toward_deg, rho_vis,
+    R_L, the approach to narrow throats, through), as :func:`report_rows` takes them."""
+    p = h.params
+    seen = next(((q.seen_w, q.seen_depth) for q in reversed(h.parts) if q.seen_w > 0.0), (0.0, 0.0))
+    approach, approach_w = h.approach
+    return ((p.paper.lidar_range, p.core.h_open, *seen),
+            (float(h.goal[0]), float(h.goal[1]), p.core.w_pass, math.cos(math.radians(p.core.toward_deg)),
+             p.core.rho_vis, p.paper.lidar_range, True, float(approach), float(approach_w), float(p.core.through)))
+
+
+@njit(cache=True)
+def report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, max_range, h_open, seen_w, seen_depth,
+                gx, gy, w_pass, cos_toward, rho_vis, max_range2, check, approach, approach_w, through):
+    """One report's arrays in one pass: the Pack's rows (``hierarchy._pack_rows``), the openings of
+    subleader ``a``'s ring (:func:`detect_gaps`; one narrower than ``seen_w`` kept only if
+    ``seen_passages`` at ``seen_depth``), the candidate corridors among them (rows of
+    ``corridors._filter_gaps``) and the members' nearest return [m]."""
+    pos, vel, cen, sl_row = _pack_rows(x, v, members, a)
+    sx, sy = x[a, 0], x[a, 1]
+    gaps = detect_gaps(ring[a], sx, sy, cos_t, sin_t, max_range, h_open)
+    if seen_w > 0.0:
+        keep = np.ones(gaps.shape[0], dtype=np.bool_)
+        seen = seen_passages(gaps, ring[a], sx, sy, cos_t, sin_t, seen_depth, max_range)
+        k = 0
+        for j in range(gaps.shape[0]):
+            keep[j] = gaps[j, GAP_W] >= seen_w or seen[j]
+            k += keep[j]
+        if k < gaps.shape[0]:
+            kept = np.empty((k, gaps.shape[1]))
+            k = 0
+            for j in range(gaps.shape[0]):
+                if keep[j]:
+                    kept[k] = gaps[j]
+                    k += 1
+            gaps = kept
+    rows = _filter_gaps(gaps, sx, sy, gx, gy, w_pass, cos_toward, ring[a], sx, sy, cos_t, sin_t, cen[0], cen[1],
+                        rho_vis, max_range2, check, approach, approach_w, through)
+    clear = np.inf
+    for j in members:
+        clear = min(clear, ring_min[j])
+    return pos, vel, cen, sl_row, rows, clear
 
 
 def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float, rho_vis: float,
@@ -135,12 +194,10 @@ def decision_state(h, step: Step) -> DecisionState:
     for a in range(S):  # eq. (14)
         for b in range(a + 1, S):
             d_swarm_min = min(d_swarm_min, math.hypot(cents[a][0] - cents[b][0], cents[a][1] - cents[b][1]))
-    if S == 1:  # the global centroid of eq. (2) is the one sub-swarm's
-        gbx, gby = cents[0]
-    else:
-        n_all = sum(len(reports[s].pack.members) for s in ids)
-        gbx, gby = (sum(reports[s].pack.positions.sum(axis=0) for s in ids) / n_all).tolist()
-    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, math.hypot(gbx - gx, gby - gy), p.paper.r_merge)
+    # eq. (13) reads the global centroid's distance to the goal only when S = 1, where the global
+    # centroid of eq. (2) is the one sub-swarm's (split_feasible is False for S > 1 whatever it is)
+    d_all = math.hypot(cents[0][0] - gx, cents[0][1] - gy) if S == 1 else math.inf
+    can_split = split_feasible(S, n_c, k, h.k_last, h.cd_steps, d_all, p.paper.r_merge)
     can_merge = merge_feasible(S, n_near, d_swarm_min, p.paper.d_merge)
     return DecisionState(
         k=int(k), dt=p.paper.dt, S=S, n_c=int(n_c), w_max=float(max(widths)) if widths else 0.0,

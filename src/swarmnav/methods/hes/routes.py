@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.corridors import segment_clear
 from swarmnav.methods.hes.part import Part
@@ -82,12 +83,9 @@ class RouteHold(Part):
         p, h = self.p, self.h
         if prev is None or prev.direct or (self.passage is not None and self.passage.engaged(sub.sid)):
             return False
-        rel = rep.pack.positions - prev.mid
-        along = rel @ prev.normal
-        across = np.abs(rel @ np.array([-prev.normal[1], prev.normal[0]]))
-        band = across < 0.5 * prev.width + 2.0  # in line with the gap
-        through = int(np.count_nonzero((along > 0.0) & band))  # passed the gap
-        before = int(np.count_nonzero((along <= 0.0) & band))  # still in front of it
+        # members in line with the gap (within w/2 + 2 m of its centre line) that have passed it
+        # and that are still in front of it
+        through, before = gap_sides(rep.pack.positions, prev.mid, prev.normal, 0.5 * prev.width + 2.0)
         a, cent = sub.subleader, rep.pack.centroid
         sl = step.x[a]
         if through > 0 and before > 0 and segment_clear(step.ring[a], sl[0], sl[1], h.cos, h.sin, cent[0], cent[1],
@@ -96,3 +94,19 @@ class RouteHold(Part):
             return (step.k - start) * p.paper.dt <= p.hold.time
         self.since.pop(sub.sid, None)
         return False
+
+
+@njit(cache=True)
+def gap_sides(pos, mid, normal, band):
+    """How many rows of ``pos`` (m, 2) lie within ``band`` [m] of the centre line of the gap at
+    ``mid`` with exit direction ``normal``, past the gap (along > 0) and in front of it."""
+    through = before = 0
+    for i in range(pos.shape[0]):
+        rx = pos[i, 0] - mid[0]
+        ry = pos[i, 1] - mid[1]
+        if abs(rx * -normal[1] + ry * normal[0]) < band:
+            if rx * normal[0] + ry * normal[1] > 0.0:
+                through += 1
+            else:
+                before += 1
+    return through, before

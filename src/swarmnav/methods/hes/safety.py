@@ -31,15 +31,19 @@ class WallBarrier(Part):
         self.queue = queue
 
     def reset(self, hes, positions):
-        self.h = hes
+        p = self.p
+        self.rays = (hes.cos, hes.sin)
+        # the barrier's scalars, read once per run: dt, the speed cap, a_brake, margin, R_L, passes
+        self.consts = (p.paper.dt, p.safety.v_cap_frac * p.core.v_s, p.barrier.a_brake, p.barrier.margin,
+                       p.paper.lidar_range, p.barrier.passes)
 
     def wall(self, step, a: np.ndarray) -> np.ndarray:
-        p, h = self.p, self.h
-        return safety_filter(a, step.v, step.ring, h.cos, h.sin, p.paper.dt, p.safety.v_cap_frac * p.core.v_s, p.barrier.a_brake,
-                             p.barrier.margin, p.paper.lidar_range, p.barrier.passes, step.ring_min)
+        return safety_filter(a, step.v, step.ring, *self.rays, *self.consts, step.ring_min)
 
     def brake(self, step, a):
-        chained = self.queue.chained_agents(step) if self.queue is not None else None
+        if self.queue is None or not self.queue.any_passages():
+            return self.wall(step, a)
+        chained = self.queue.chained_agents(step)
         if chained is None or not np.count_nonzero(chained):
             return self.wall(step, a)
         a = self.wall(step, self.queue.queue_barrier(step, a, chained))
@@ -54,7 +58,12 @@ class ContactGuard(Part):
     def __init__(self, p):
         self.p = p
 
-    def guard(self, step, a):
+    def reset(self, hes, positions):
         p = self.p
-        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, p.paper.dt, p.guard.brake, p.guard.margin))
-        return agent_guard(a, step.x, step.v, p.paper.dt, p.guard.brake, p.guard.margin, p.a_bound, 4, ptr, idx)
+        self.consts = (p.paper.dt, p.guard.brake, p.guard.margin)  # read once per run
+        self.a_max = p.a_bound
+
+    def guard(self, step, a):
+        dt, brake, margin = self.consts
+        ptr, idx = neighbour_rows(step.x, lambda: brake_radius(a, step.v, dt, brake, margin))
+        return agent_guard(a, step.x, step.v, dt, brake, margin, self.a_max, 4, ptr, idx)

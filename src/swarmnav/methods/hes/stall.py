@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.forces import SIG_CENT, SIG_SL, SIG_SLOT
@@ -100,8 +101,7 @@ class StallPlanner(Part):
         engages the planner, so that the members cut off from their ring slots follow the field."""
         p, mem, k = self.p, self.mem[sub.sid], step.k
         mem.prog_step = None  # the head's progress is counted in navigate mode only
-        d = rep.pack.positions - self.h.goal
-        dmax = max(np.hypot(d[:, 0], d[:, 1]).tolist())
+        dmax = goal_range(rep.pack.positions, self.h.goal)[1]
         if mem.tail_step is None or dmax <= p.paper.r_out or dmax < mem.tail_d - p.stall.progress:
             mem.tail_d, mem.tail_step = dmax, k
         if not mem.planned and (k - mem.tail_step) * p.paper.dt >= p.stall.time:
@@ -119,8 +119,7 @@ class StallPlanner(Part):
         throat (mid, exit direction = path direction, width = twice its clearance)."""
         p, mem, k = self.p, self.mem[sub.sid], step.k
         mem.tail_step = None  # the tail's progress is counted in encircle mode only
-        d = rep.pack.positions - self.h.goal
-        dmin = min(np.hypot(d[:, 0], d[:, 1]).tolist())
+        dmin = goal_range(rep.pack.positions, self.h.goal)[0]
         if mem.prog_step is None or dmin < mem.prog_d - p.stall.progress:
             mem.prog_d, mem.prog_step = min(dmin, mem.prog_d), k
         if not mem.planned:
@@ -221,3 +220,15 @@ class StallPlanner(Part):
             ok = un > 1e-6
             step.exit_dir[j[ok]] = u[ok] / un[ok, None]
             step.exit_free[j[ok]] = True
+
+
+@njit(cache=True)
+def goal_range(pos, goal):
+    """The nearest and farthest distance [m] of the rows of ``pos`` (m >= 1, 2) from ``goal``,
+    ``np.hypot`` row by row."""
+    lo, hi = np.inf, -np.inf
+    for i in range(pos.shape[0]):
+        d = np.hypot(pos[i, 0] - goal[0], pos[i, 1] - goal[1])
+        lo = min(lo, d)
+        hi = max(hi, d)
+    return lo, hi

@@ -117,14 +117,23 @@ class Step:
 
 @njit(cache=True)
 def row_min(a):
-    """``a.min(axis=1)`` of a 2-D array (NaN-free), in one pass."""
-    out = np.empty(a.shape[0])
-    for i in range(a.shape[0]):
-        m = a[i, 0]
-        for j in range(1, a.shape[1]):
-            if a[i, j] < m:
-                m = a[i, j]
-        out[i] = m
+    """``a.min(axis=1)`` of a 2-D array (NaN-free, at least one column), in one pass: four running
+    minima per row (independent, so the loop pipelines), then the least of them."""
+    n, nr = a.shape
+    out = np.empty(n)
+    for i in range(n):
+        m0 = m1 = m2 = m3 = a[i, 0]
+        j = 1
+        while j + 3 < nr:
+            m0 = min(m0, a[i, j])
+            m1 = min(m1, a[i, j + 1])
+            m2 = min(m2, a[i, j + 2])
+            m3 = min(m3, a[i, j + 3])
+            j += 4
+        while j < nr:
+            m0 = min(m0, a[i, j])
+            j += 1
+        out[i] = min(min(m0, m1), min(m2, m3))
     return out
 
 

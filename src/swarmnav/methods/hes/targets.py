@@ -85,9 +85,17 @@ def ring_offsets(h, step: Step, sub: SubSwarm, members: np.ndarray) -> np.ndarra
     if not omega:
         return sub.ring_offsets
     turn = omega * (k - sub.slot_step) * p.paper.dt
-    c, s = math.cos(turn), math.sin(turn)
-    o = sub.ring_offsets
-    return np.column_stack([c * o[:, 0] - s * o[:, 1], s * o[:, 0] + c * o[:, 1]])
+    return turned(sub.ring_offsets, math.cos(turn), math.sin(turn))
+
+
+@njit(cache=True)
+def turned(o, c, s):
+    """The offsets ``o`` (m, 2) turned by the angle whose cosine and sine are ``c, s``."""
+    out = np.empty(o.shape)
+    for i in range(o.shape[0]):
+        out[i, 0] = c * o[i, 0] - s * o[i, 1]
+        out[i, 1] = s * o[i, 0] + c * o[i, 1]
+    return out
 
 
 def template(p, m: int, sub: SubSwarm) -> np.ndarray:

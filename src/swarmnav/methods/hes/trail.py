@@ -14,6 +14,7 @@ Parameters: ``trail_every``, ``trail_len``, ``trail_reach``, ``cut_time``, ``rho
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.hes.corridors import newest_visible
 from swarmnav.methods.hes.forces import SIG_CENT, SIG_NN, SIG_SL, SIG_SLOT
@@ -59,11 +60,11 @@ class TrailFollow(Part):
         (if blocked) nearest-neighbour couplings are switched off meanwhile."""
         p, h = self.p, self.h
         b = step.blocked
-        cut = b[:, SIG_SLOT] & b[:, SIG_SL] & b[:, SIG_CENT]
-        if not np.count_nonzero(cut):  # the common case: nobody is cut off
+        if not n_cut_off(b):  # the common case: nobody is cut off
             self.cut_steps[:] = 0
-            self.last_cut = cut
+            self.last_cut = np.zeros(h.n, dtype=np.bool_)
             return
+        cut = b[:, SIG_SLOT] & b[:, SIG_SL] & b[:, SIG_CENT]
         cut &= ~step.routed & (step.sl_idx != np.arange(h.n))  # a passage chain routes its own members
         cut &= np.hypot(*(step.x - step.cent).T) > p.core.d_c
         self.cut_steps = np.where(cut, self.cut_steps + 1, 0)
@@ -84,3 +85,14 @@ class TrailFollow(Part):
                 sig[i, SIG_SL] = sig[i, SIG_CENT] = 0.0
                 if b[i, SIG_NN]:
                     sig[i, SIG_NN] = 0.0
+
+
+@njit(cache=True)
+def n_cut_off(blocked):
+    """How many agents have the segments to their slot, subleader and centroid all blocked
+    (``blocked`` (N, 4), columns as ``forces.SIG_*``)."""
+    k = 0
+    for i in range(blocked.shape[0]):
+        if blocked[i, SIG_SLOT] and blocked[i, SIG_SL] and blocked[i, SIG_CENT]:
+            k += 1
+    return k
