@@ -237,10 +237,7 @@ def _place_trunks(rng, density, length, width, height, d_min, d_max, h_min, box_
     volume, tries = 0.0, 0
     while volume < target:
         if tries >= max_tries:
-            raise ScenarioError(
-                f"random_forest_3d: could not reach density {density} ({volume / (length * width * height):.3f} "
-                f"placed after {max_tries} tries); lower density or d_max, or raise h_min"
-            )
+            raise _unreached(density, volume / target * density, f"{max_tries} tries", "lower density or d_max, or raise h_min")
         w = rng.uniform(d_min, d_max, 256)
         h = rng.uniform(h_min, height, 256)
         square = rng.uniform(0.0, 1.0, 256) < box_share
@@ -265,6 +262,11 @@ def _place_trunks(rng, density, length, width, height, d_min, d_max, h_min, box_
     return trunks
 
 
+def _unreached(density: float, reached: float, spent: str, hint: str) -> ScenarioError:
+    return ScenarioError(f"random_forest_3d: could not reach density {density} ({reached:.3f} placed after "
+                         f"{spent}); {hint}")
+
+
 def _overlap_trunks(rng, density, length, width, height, d_min, d_max, h_min, box_share, min_gap, max_tries,
                     cell: float = 0.05):
     """Trunks drawn uniformly at random, free to overlap (``min_gap`` unused), until the volume of
@@ -279,9 +281,7 @@ def _overlap_trunks(rng, density, length, width, height, d_min, d_max, h_min, bo
     volume, tries = 0.0, 0
     while volume < target:
         if tries >= max_tries:
-            raise ScenarioError(
-                f"random_forest_3d: could not reach density {density} ({volume / (length * width * height):.3f} "
-                f"placed after {max_tries} trunks); lower density or raise h_min")
+            raise _unreached(density, volume / target * density, f"{max_tries} trunks", "lower density or raise h_min")
         w = rng.uniform(d_min, d_max)
         h = rng.uniform(h_min, height)
         square = bool(rng.uniform(0.0, 1.0) < box_share)
@@ -295,18 +295,22 @@ def _overlap_trunks(rng, density, length, width, height, d_min, d_max, h_min, bo
         else:
             foot = (cx[i0:i1, None] - x) ** 2 + (cy[None, j0:j1] - y) ** 2 <= (w / 2) ** 2
         patch = top[i0:i1, j0:j1]
-        gain = np.sum(np.maximum(patch[foot], h) - patch[foot]) * cell * cell
+        under = patch[foot]  # the tallest trunk over each cell of the footprint so far [m]
+
+        def gain_at(hk: float) -> float:  # union volume the trunk adds at height hk [m^3]
+            return float(np.sum(np.maximum(under, hk) - under)) * cell * cell
+
+        gain = gain_at(h)
         if gain <= 0.0:
             continue
         if volume + gain > target:  # the last trunk: shortened (bisection) to meet the target
             lo, hi = h_min, h
             for _ in range(40):
                 mid = 0.5 * (lo + hi)
-                g = np.sum(np.maximum(patch[foot], mid) - patch[foot]) * cell * cell
-                lo, hi = (mid, hi) if volume + g < target else (lo, mid)
+                lo, hi = (mid, hi) if volume + gain_at(mid) < target else (lo, mid)
             h = hi
-            gain = np.sum(np.maximum(patch[foot], h) - patch[foot]) * cell * cell
-        patch[foot] = np.maximum(patch[foot], h)
+            gain = gain_at(h)
+        patch[foot] = np.maximum(under, h)
         trunks.append((float(x), float(y), float(w), float(h), square))
         volume += gain
     return trunks
