@@ -172,3 +172,12 @@ def test_all_pairs_pass_matches_the_cell_list_passes_bit_for_bit(n, dim):
             ref_best = min_pair_run(positions, 0.0, contact)
         assert best == ref_best  # the same squared distances: the same bits
         assert hits == ref_hits
+
+
+def test_norms_equal_numpys_norm_bit_for_bit():
+    from swarmnav.metrics.navigation import norms
+
+    rng = np.random.default_rng(3)
+    for shape in [(50, 7, 2), (9, 2), (40, 5, 3), (6, 1)]:
+        a = rng.normal(0.0, 1.0, shape) * 10.0 ** rng.uniform(-8, 8, shape)
+        assert np.array_equal(norms(a), np.linalg.norm(a, axis=-1))
