@@ -84,49 +84,37 @@ def _closest_across(ring, hx, hy, a, pk, span, n, max_range, box):
     (side a: rays a .. a + pk - 1, side b: a + pk + 1 .. a + span; returns at ``hx, hy``), the
     first in scan order (side a outer, both ascending): ``(w^2, q_a x, y, q_b x, y)``, w^2 = inf if
     none. ``box``: workspace of (n + BLOCK - 1) // BLOCK rows."""
-    # each side's returns in blocks of BLOCK rays, each with the bounding box of its hits
+    # the b side's returns in blocks of BLOCK rays, each with the bounding box of its hits
     nb = _side_boxes(ring, hx, hy, a, pk + 1, span, n, max_range, box)
-    abox = np.empty_like(box)
-    live = np.empty(box.shape[0], dtype=np.int64)
     wbest = np.inf
     ax = ay = bx = by = 0.0
-    for j in range(_side_boxes(ring, hx, hy, a, 0, pk - 1, n, max_range, abox)):
-        # every pair of an a block and a b block is at least as far as their boxes (rounding is
-        # monotone, and wbest only falls): the b blocks that cannot beat wbest are left out
-        nl = 0
+    for s in range(0, pk):
+        ra = _wrap(a + s, n)
+        da = ring[ra]
+        if da >= max_range:
+            continue
+        qx = hx[ra]
+        qy = hy[ra]
         for k in range(nb):
-            ex = max(box[k, 0] - abox[j, 1], 0.0, abox[j, 0] - box[k, 1])
-            ey = max(box[k, 2] - abox[j, 3], 0.0, abox[j, 2] - box[k, 3])
-            if ex * ex + ey * ey < wbest:
-                live[nl] = k
-                nl += 1
-        for s in range(j * BLOCK, min((j + 1) * BLOCK, pk)):
-            ra = _wrap(a + s, n)
-            da = ring[ra]
-            if da >= max_range:
+            # every pair of this block is at least as far as its box (rounding is monotone):
+            # one that cannot beat wbest is skipped, the scan order is kept
+            ex = max(box[k, 0] - qx, 0.0, qx - box[k, 1])
+            ey = max(box[k, 2] - qy, 0.0, qy - box[k, 3])
+            if ex * ex + ey * ey >= wbest:
                 continue
-            qx = hx[ra]
-            qy = hy[ra]
-            for q in range(nl):
-                k = live[q]
-                # the same per ray: a block that cannot beat wbest is skipped, the scan order is kept
-                ex = max(box[k, 0] - qx, 0.0, qx - box[k, 1])
-                ey = max(box[k, 2] - qy, 0.0, qy - box[k, 3])
-                if ex * ex + ey * ey >= wbest:
+            t1 = min(pk + 1 + (k + 1) * BLOCK, span + 1)
+            for t in range(pk + 1 + k * BLOCK, t1):
+                rb = _wrap(a + t, n)
+                db = ring[rb]
+                if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
                     continue
-                t1 = min(pk + 1 + (k + 1) * BLOCK, span + 1)
-                for t in range(pk + 1 + k * BLOCK, t1):
-                    rb = _wrap(a + t, n)
-                    db = ring[rb]
-                    if db >= max_range or (da - db) * (da - db) >= wbest:  # |q_a - q_b| >= |d_a - d_b|
-                        continue
-                    ux = hx[rb] - qx
-                    uy = hy[rb] - qy
-                    w2 = ux * ux + uy * uy
-                    if w2 < wbest:
-                        wbest = w2
-                        ax, ay = qx, qy
-                        bx, by = qx + ux, qy + uy
+                ux = hx[rb] - qx
+                uy = hy[rb] - qy
+                w2 = ux * ux + uy * uy
+                if w2 < wbest:
+                    wbest = w2
+                    ax, ay = qx, qy
+                    bx, by = qx + ux, qy + uy
     return wbest, ax, ay, bx, by
 
 
