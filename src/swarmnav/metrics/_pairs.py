@@ -1,5 +1,6 @@
 """Close pairs over a whole trajectory in one compiled pass, on the shared cell-list neighbour
-lists of :mod:`swarmnav.sensing.cells` (never N x N)."""
+lists of :mod:`swarmnav.sensing.cells` (never N x N); below ``PAIRS_ALL_BELOW`` agents in an open
+world, every pair each step (:func:`all_pairs_run`, the same values)."""
 
 from __future__ import annotations
 
