@@ -153,3 +153,31 @@ def test_per_agent_unsafe_ratio_is_the_plain_mean_and_never_above_the_swarm_rati
         assert m["R_unsafe_agent"] <= m["R_unsafe"] + 1e-12
         if N == 1:
             assert m["R_unsafe_agent"] == pytest.approx(m["R_unsafe"])
+
+
+@pytest.mark.parametrize("n, dim", [(2, 2), (5, 2), (20, 2), (63, 2), (7, 3), (20, 3)])
+def test_all_pairs_pass_matches_the_cell_list_passes_bit_for_bit(n, dim):
+    from swarmnav.metrics._pairs import all_pairs_run, close_pairs_run, min_pair_run
+
+    rng = np.random.default_rng(100 * n + dim)
+    for trial in range(12):
+        spread = [0.5, 2.0, 6.0, 40.0][trial % 4]
+        positions = rng.uniform(0.0, spread, (1, n, dim)) + np.cumsum(rng.normal(0.0, 0.05, (30, n, dim)), axis=0)
+        if trial % 3 == 0:
+            positions[4:9, 1] = positions[4:9, 0]  # coincident agents: a contact at distance 0
+        contact = [0.1, 0.4, 1.0][trial % 3]
+        best, hits = all_pairs_run(positions, contact)
+        ref_best, ref_hits = close_pairs_run(positions, 0.0, contact)
+        if not np.isfinite(ref_best):
+            ref_best = min_pair_run(positions, 0.0, contact)
+        assert best == ref_best  # the same squared distances: the same bits
+        assert hits == ref_hits
+
+
+def test_norms_equal_numpys_norm_bit_for_bit():
+    from swarmnav.metrics.navigation import norms
+
+    rng = np.random.default_rng(3)
+    for shape in [(50, 7, 2), (9, 2), (40, 5, 3), (6, 1)]:
+        a = rng.normal(0.0, 1.0, shape) * 10.0 ** rng.uniform(-8, 8, shape)
+        assert np.array_equal(norms(a), np.linalg.norm(a, axis=-1))

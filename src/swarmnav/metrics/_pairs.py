@@ -1,5 +1,6 @@
 """Close pairs over a whole trajectory in one compiled pass, on the shared cell-list neighbour
-lists of :mod:`swarmnav.sensing.cells` (never N x N)."""
+lists of :mod:`swarmnav.sensing.cells` (never N x N); below ``PAIRS_ALL_BELOW`` agents in an open
+world, every pair each step (:func:`all_pairs_run`, the same values)."""
 
 from __future__ import annotations
 
@@ -95,12 +96,46 @@ def min_pair_run(positions, box, r0):
     return np.sqrt(best2)
 
 
+@njit(cache=True)
+def all_pairs_run(positions, contact):
+    """:func:`close_pairs_run` and :func:`min_pair_run` of an open world in one pass over every
+    pair (a few agents: cheaper than a cell list per step): (smallest distance between two agents
+    over the run [m], number of contact episodes). Each squared distance is computed as the cell
+    list computes it, so the minimum is the same, bit for bit. Needs N >= 2."""
+    K1, N, D = positions.shape
+    c2 = contact * contact
+    was = np.zeros((N, N), dtype=np.bool_)  # the pair was closer than contact at the last step
+    best2 = np.inf
+    hits = 0
+    for k in range(K1):
+        P = positions[k]
+        for i in range(N):
+            for j in range(i + 1, N):
+                d2 = 0.0
+                for c in range(D):
+                    dc = P[j, c] - P[i, c]
+                    d2 += dc * dc
+                best2 = min(best2, d2)
+                now = d2 < c2
+                if now and not was[i, j]:
+                    hits += 1
+                was[i, j] = now
+    return np.sqrt(best2), hits
+
+
+#: agents: below this, an open world's pairs are all visited each step (a cell list does not pay)
+PAIRS_ALL_BELOW = 64
+
+
 def inter_agent(positions: np.ndarray, contact: float, box: float | None) -> tuple[float, int]:
     """Minimum inter-agent distance over the run [m] and the number of agent-agent contacts
     (a pair closer than ``contact`` counts once per continuous episode)."""
     if positions.shape[1] < 2:
         return float("inf"), 0
     P = np.ascontiguousarray(positions, dtype=np.float64)
+    if not box and P.shape[1] < PAIRS_ALL_BELOW:
+        best, hits = all_pairs_run(P, contact)
+        return float(best), int(hits)
     best, hits = close_pairs_run(P, float(box or 0.0), contact)
     if not np.isfinite(best):  # no pair ever came within contact: the minimum needs a wider search
         best = min_pair_run(P, float(box or 0.0), contact)

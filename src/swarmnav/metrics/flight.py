@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swarmnav.metrics._pairs import inter_agent
-from swarmnav.metrics.navigation import MetricParams
+from swarmnav.metrics.navigation import MetricParams, norms
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,10 +74,10 @@ def flight_metrics(
     K = positions.shape[0] - 1
     n = positions.shape[1]
     p = params
-    dist_goal = np.linalg.norm(positions - goal, axis=2)  # (K + 1, N)
+    dist_goal = norms(positions - goal)  # (K + 1, N)
     inside = dist_goal <= p.r_goal
     arrival = np.where(inside.any(axis=0), inside.argmax(axis=0), K)  # (N,) step index
-    steps = np.linalg.norm(np.diff(positions, axis=0), axis=2)  # (K, N)
+    steps = norms(np.diff(positions, axis=0))  # (K, N)
     cum = np.vstack([np.zeros((1, n)), np.cumsum(steps, axis=0)])
     L = cum[arrival, np.arange(n)]
     T = arrival * dt
@@ -89,7 +89,7 @@ def flight_metrics(
     min_obs = float(clearance.min()) if clearance.size else float("inf")
     touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
     success = bool(inside[-1].all()) and not touched
-    centre = np.linalg.norm(velocities.mean(axis=1), axis=1)  # (K + 1,) common-mode speed [m/s]
+    centre = norms(velocities.mean(axis=1))  # (K + 1,) common-mode speed [m/s]
     cruise = float(np.median(centre[: max(int(arrival.min()), 1) + 1]))  # before anyone has arrived
     coord = centre >= p.phi_coord * cruise
     t_coord = float(np.argmax(coord)) * dt if cruise > 0 and coord.any() else K * dt

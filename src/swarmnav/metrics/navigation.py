@@ -14,6 +14,16 @@ import numpy as np
 from swarmnav.metrics._pairs import inter_agent
 
 
+def norms(a: np.ndarray) -> np.ndarray:
+    """``np.linalg.norm(a, axis=-1)``, the same bits: for planar vectors written out as
+    ``sqrt(x * x + y * y)``, which is what numpy's reduction computes there, at a fraction of its
+    cost on a long array of short rows."""
+    if a.shape[-1] == 2 and a.dtype == np.float64:
+        x, y = a[..., 0], a[..., 1]
+        return np.sqrt(x * x + y * y)
+    return np.linalg.norm(a, axis=-1)
+
+
 @dataclass(frozen=True, slots=True)
 class MetricParams:
     r_succ: float = 8.0  # single-UAV success radius [m], HES Section 5.1
@@ -46,7 +56,7 @@ def navigation_metrics(
     K = positions.shape[0] - 1
     N = positions.shape[1]
     p = params
-    e = np.linalg.norm(positions[-1] - goal, axis=1)  # terminal goal error e_i [m]
+    e = norms(positions[-1] - goal)  # terminal goal error e_i [m]
     R_goal = float(np.mean(e <= p.r_succ))
     d_min = clearance.min(axis=1)  # d_min(k): min over agents [m]
     inner = d_min[1:K] if K >= 2 else d_min[:0]
@@ -56,13 +66,13 @@ def navigation_metrics(
     # per agent (ours, beyond the paper): each agent's own share of steps 1..K-1 within d_safe,
     # averaged over agents; <= R_unsafe, which counts a step if *any* agent is within d_safe
     R_unsafe_agent = float(np.mean(clearance[1:K] < p.d_safe)) if K >= 2 else 0.0
-    steps = np.linalg.norm(np.diff(positions[:K], axis=0), axis=2) if K >= 2 else np.zeros((0, N))
+    steps = norms(np.diff(positions[:K], axis=0)) if K >= 2 else np.zeros((0, N))
     if periodic_box is not None:  # minimum-image displacement on the torus
         d = np.diff(positions[:K], axis=0)
         d -= periodic_box * np.round(d / periodic_box)
-        steps = np.linalg.norm(d, axis=2)
+        steps = norms(d)
     L = steps.sum(axis=0)  # L_i [m]
-    direct = np.linalg.norm(positions[0] - goal, axis=1)
+    direct = norms(positions[0] - goal)
     stretch = float(np.mean(L / np.maximum(direct, 1e-9)))
     Y = float(R_goal >= p.tau_ms)
     clr_term = float(np.clip(d_clr_min / p.r_s, 0.0, 1.0)) if np.isfinite(d_clr_min) else 1.0

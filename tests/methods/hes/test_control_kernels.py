@@ -73,8 +73,11 @@ def test_couple_occlude_is_couple_then_the_segments_tested_bit_for_bit():
         rows = neighbour_rows(x, 3.0)
         slot = x + rng.normal(0, 4, (n, 2))
         check = trial % 4 != 0
-        got = C.couple_occlude_kernel(x, labels, col, sub_sl, sub_wp, sub_nav, *rows, slot, 0.2, check,
-                                      *prep.planar_arrays)
+        got = C.couple_workspace(n)
+        for a in got:  # stale values from an earlier step must not survive
+            a.fill(7)
+        C.couple_occlude_kernel(x, labels, col, sub_sl, sub_wp, sub_nav, *rows, slot, 0.2, check,
+                                *prep.planar_arrays, *got)
         ref = C.couple(x, labels, col, sub_sl, sub_wp, sub_nav, *rows)
         for a, b in zip(got[:6], ref):
             assert np.array_equal(a, b)

@@ -58,44 +58,59 @@ def couple(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx):
     c_s and mode from its sub-swarm's (``sub_*``, rows in ``col`` order), whether it is a
     follower, its sub-swarm's centroid and its nearest neighbour in it."""
     n = x.shape[0]
-    sl_idx = np.empty(n, dtype=np.int64)
-    wp = np.empty((n, 2))
-    nav = np.empty(n, dtype=np.bool_)
-    follower = np.empty(n, dtype=np.bool_)
-    cent = np.empty((n, 2))
+    out = (np.empty(n, dtype=np.int64), np.empty((n, 2)), np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_),
+           np.empty((n, 2)), np.empty(n, dtype=np.int64))
+    couple_into(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx, *out)
+    return out
+
+
+@njit(cache=True)
+def couple_into(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx, sl_idx, wp, nav, follower, cent, nn):
+    """:func:`couple` written into ``sl_idx``, ``wp``, ``nav``, ``follower``, ``cent``, ``nn``."""
     g = F.group_centroids(x, col, sub_sl.shape[0])
-    for i in range(n):
+    for i in range(x.shape[0]):
         c = col[i]
         sl_idx[i] = sub_sl[c]
         follower[i] = sl_idx[i] != i
         nav[i] = sub_nav[c]
         wp[i, 0], wp[i, 1] = sub_wp[c, 0], sub_wp[c, 1]
         cent[i, 0], cent[i, 1] = g[c, 0], g[c, 1]
-    return sl_idx, wp, nav, follower, cent, F.nearest_in_group(x, labels, ptr, idx)
+    nn[:] = F.nearest_in_group(x, labels, ptr, idx)
 
 
 def couple_occlude(h, step: Step) -> None:
     """:func:`couplings` and :func:`occlusion` in one compiled pass when no agent is routed on
-    its own (the same values)."""
+    its own (the same values), written into the run's workspace (``couple_workspace``): these
+    arrays of a step are rewritten by the next step."""
     p = h.params
     part, sub_sl, sub_wp, sub_nav = _sub_rows(h)
     rows = step.rows = neighbour_rows(step.x, h.pair_radius)
     check = not (h.no_obstacles or (p.sigma == 1.0 and not h.needs_blocked))
     step.col = part.col
-    (step.sl_idx, step.wp, step.nav, step.follower, step.cent, step.nn, step.blocked,
-     step.sig) = couple_occlude_kernel(step.x, h.labels, part.col, sub_sl, sub_wp, sub_nav, *rows, step.slot,
-                                       p.sigma, check, *h.obstacles.planar_arrays)
+    ws = h.couple_ws
+    step.sl_idx, step.wp, step.nav, step.follower, step.cent, step.nn, step.blocked, step.sig = ws
+    couple_occlude_kernel(step.x, h.labels, part.col, sub_sl, sub_wp, sub_nav, *rows, step.slot, p.sigma, check,
+                          *h.obstacles.planar_arrays, *ws)
+
+
+def couple_workspace(n: int) -> tuple:
+    """The arrays :func:`couple_occlude_kernel` writes for ``n`` agents: ``sl_idx``, ``wp``,
+    ``nav``, ``follower``, ``cent``, ``nn``, ``blocked``, ``sig``."""
+    return (np.empty(n, dtype=np.int64), np.empty((n, 2)), np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_),
+            np.empty((n, 2)), np.empty(n, dtype=np.int64), np.empty((n, 4), dtype=np.bool_), np.empty((n, 4)))
 
 
 @njit(cache=True)
 def couple_occlude_kernel(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx, slot, sigma, check, seg_a, seg_b,
-                          poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
-    """:func:`couple`, then (``check``) the segments of eq. (30) tested against the obstacles: the
-    couplings, ``blocked`` (N, 4) and ``sig`` (N, 4); without ``check`` nothing is blocked."""
-    sl_idx, wp, nav, follower, cent, nn = couple(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx)
+                          poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, sl_idx, wp, nav, follower, cent, nn,
+                          blocked, sig):
+    """:func:`couple`, then (``check``) the segments of eq. (30) tested against the obstacles,
+    written into the last eight arguments (``couple_workspace``): the couplings, ``blocked``
+    (N, 4) and ``sig`` (N, 4); without ``check`` nothing is blocked."""
+    couple_into(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx, sl_idx, wp, nav, follower, cent, nn)
     n = x.shape[0]
-    blocked = np.zeros((n, 4), dtype=np.bool_)
-    sig = np.ones((n, 4))
+    blocked[:] = False
+    sig[:] = 1.0
     if check:
         P, Q = np.empty((4 * n, 2)), np.empty((4 * n, 2))
         occlusion_segments(x, slot, nn, sl_idx, cent, P, Q)
@@ -106,7 +121,6 @@ def couple_occlude_kernel(x, labels, col, sub_sl, sub_wp, sub_nav, ptr, idx, slo
                 if flat[c * n + i]:
                     blocked[i, c] = True
                     sig[i, c] = sigma
-    return sl_idx, wp, nav, follower, cent, nn, blocked, sig
 
 
 def occlusion(h, step: Step) -> None:

@@ -27,7 +27,7 @@ from swarmnav.dynamics import DampedDoubleIntegrator
 from swarmnav.llm import decision_source
 from swarmnav.methods.base import Observation
 from swarmnav.methods.hes import forces as F
-from swarmnav.methods.hes.control import control
+from swarmnav.methods.hes.control import control, couple_workspace
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePolicy, project
 from swarmnav.methods.hes.encircle import RingYield
@@ -152,6 +152,7 @@ class Hes:
         for q in self.parts:
             q.reset(self, positions)
         self.report_gaps, self.report_consts = report_constants(self)
+        self.couple_ws = couple_workspace(n)  # the control stage's coupling arrays, rewritten every step
 
     def summary(self) -> dict[str, float]:
         out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}

@@ -76,7 +76,8 @@ class Step:
     factors of eq. (30) with ``blocked`` (N, 4) the segments that meet an obstacle, ``dsafe``
     (N,) the safety distance of eq. (36) [m], and ``exit_dir`` (N, 2) / ``exit_free`` (N,): a
     member's way out of a narrow place, along which the LiDAR repulsion does not push it back
-    (0 / False: none).
+    (0 / False: none). The arrays of a step are valid for that step: the couplings (``sl_idx``
+    to ``sig``) are written into the run's workspace, which the next step rewrites.
     """
 
     k: int
