@@ -18,25 +18,23 @@ import time
 
 import numpy as np
 
+from swarmnav.experiments.spec import parse_seeds
 from swarmnav.methods.sph.gridsearch import OccupancyMaps
+from swarmnav.methods.sph.params import SphParams
 from swarmnav.world import load_scenario
 
 SPEC = "n=15,h_min=3.0,length=12,overlap=true"  # as experiments/specs/sph-forest-3d.toml
 
 
-def seeds(text: str) -> list[int]:
-    lo, _, hi = text.partition("-")
-    return list(range(int(lo), int(hi or lo) + 1))
-
-
 def has_way(spec: str, seed: int) -> tuple[bool, int]:
     """Whether the full-knowledge search finds a path, and the forest's number of trunks."""
     sc = load_scenario(spec)
-    maps = OccupancyMaps(sc.obstacles, sc.bounds, 1, 0.1, 0.3, 1e9, margin=0.5, wide=0.9, wide_cost=2.0,
-                         weight_3d=10.0)
+    p = SphParams()  # the planner's own grid, clearances and weight
+    maps = OccupancyMaps(sc.obstacles, sc.bounds, 1, p.grid_resolution, p.inflation, 1e9, margin=p.d_thr,
+                         wide=p.plan_clearance, wide_cost=p.plan_clearance_cost, weight_3d=p.search_weight_3d)
     start = sc.spawn_positions(np.random.default_rng(seed)).mean(axis=0)
     maps.observe(0, start)  # the whole forest is within the 1e9 m sensing range
-    return maps.search(0, start, sc.goal_array, 2_000_000) is not None, len(sc.obstacles) - 4
+    return maps.search(0, start, sc.goal_array, p.max_expand) is not None, len(sc.obstacles) - 4
 
 
 def main(argv=None) -> int:
@@ -47,7 +45,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
     found, trunks = 0, []
-    ss = seeds(a.seeds)
+    ss = parse_seeds(a.seeds)
     for s in ss:
         ok, k = has_way(f"random_forest_3d:density={a.density},seed={s},{a.forest}", s)
         found += ok
