@@ -14,6 +14,7 @@ from numba import njit
 
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.decision import NAVIGATE
+from swarmnav.methods.hes.hierarchy import gather_rows
 from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.step import Step
 from swarmnav.sensing import segments_blocked_kernel
@@ -195,13 +196,7 @@ def eq38_terms(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v
     """The eight terms of eq. (38) (``forces.force_terms``), the reference velocity of eq. (23)
     and the subleaders' rows gathered in the same call."""
     vslot = F.slot_velocity(x, slot, speed, eps_v)
-    n = x.shape[0]
-    sl_pos = np.empty((n, 2))
-    sl_vel = np.empty((n, 2))
-    for i in range(n):
-        s = sl_idx[i]
-        sl_pos[i, 0], sl_pos[i, 1] = x[s, 0], x[s, 1]
-        sl_vel[i, 0], sl_vel[i, 1] = v[s, 0], v[s, 1]
+    sl_pos, sl_vel = gather_rows(x, v, sl_idx)
     return F.force_terms(x, v, labels, sl_pos, sl_vel, follower, cent, wp, nav, slot, vslot, nn, sig, ring,
                          cos_t, sin_t, g, dsafe, ptr, idx)
 

@@ -77,16 +77,24 @@ def make_pack(sid: int, subleader: int, members: np.ndarray, x: np.ndarray, v: n
 
 
 @njit(cache=True)
+def gather_rows(x, v, idx):
+    """``x[idx]``, ``v[idx]`` of planar (N, 2) arrays, in one pass."""
+    m = idx.shape[0]
+    xs = np.empty((m, 2))
+    vs = np.empty((m, 2))
+    for k in range(m):
+        j = idx[k]
+        xs[k, 0], xs[k, 1] = x[j, 0], x[j, 1]
+        vs[k, 0], vs[k, 1] = v[j, 0], v[j, 1]
+    return xs, vs
+
+
+@njit(cache=True)
 def _pack_rows(x, v, members, subleader):
     """``x[members]``, ``v[members]``, their centroid (summed in row order and divided by the count,
     as ``pos.sum(axis=0) / len(pos)``: the same bits) and ``x[subleader]``, in one pass."""
     m = members.shape[0]
-    pos = np.empty((m, 2))
-    vel = np.empty((m, 2))
-    for k in range(m):
-        j = members[k]
-        pos[k, 0], pos[k, 1] = x[j, 0], x[j, 1]
-        vel[k, 0], vel[k, 1] = v[j, 0], v[j, 1]
+    pos, vel = gather_rows(x, v, members)
     cen = np.zeros(2)
     if m > 0:
         cen[0], cen[1] = pos[0, 0], pos[0, 1]
