@@ -20,8 +20,8 @@ def cruise_reference_speed(**params):
     speeds = []
     orig = m._replan
 
-    def spy(step, x, v):
-        orig(step, x, v)
+    def spy(step, x, v, *rest):
+        orig(step, x, v, *rest)
         if 4.0 <= step * m.dt <= 8.0:
             speeds.append(np.linalg.norm(m._ref_v[0], axis=1).mean())
 

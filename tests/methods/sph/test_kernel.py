@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from swarmnav.methods.sph.kernel import environment_force, kernel_sigma, kernel_slope, kernel_value, sph_forces
+from swarmnav.methods.sph.kernel import band_guard, environment_force, kernel_sigma, kernel_slope, kernel_value, sph_forces
 
 H, C = 10.0, 54.97
 
@@ -93,6 +93,42 @@ def test_environment_force_pushes_away_inside_the_threshold_only():
     grad = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 0.0]])  # ESDF gradient: away from the obstacle
     f = environment_force(np.array([0.2, 0.7, np.inf]), grad, k_env=10.0, d_thr=0.5)
     np.testing.assert_allclose(f, [[2 * 10 * 0.3, 0.0], [0.0, 0.0], [0.0, 0.0]])
+
+
+def _loop_band_guard(track, d, grad, d_thr):
+    """Plain per-robot reading of the band guard, the oracle."""
+    out = track.copy()
+    for i in range(len(d)):
+        n = np.linalg.norm(grad[i])
+        if d[i] < d_thr and n > 1e-12:
+            u = grad[i] / n
+            along = float(track[i] @ u)
+            if along < 0.0:
+                out[i] = track[i] - along * u
+    return out
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_band_guard_drops_only_the_push_into_an_obstacle_inside_the_band(dim):
+    rng = np.random.default_rng(dim)
+    n = 400
+    track = rng.normal(0.0, 3.0, (n, dim))
+    d = rng.uniform(-0.2, 1.0, n)
+    d[:5] = np.inf  # no obstacle in range
+    grad = rng.normal(0.0, 1.0, (n, dim)) * rng.uniform(0.5, 1.5, (n, 1))  # ESDF gradients, not exactly unit
+    grad[5] = 0.0  # a robot on a ridge of the ESDF
+    out = band_guard(track, d, grad, d_thr=0.5)
+    np.testing.assert_allclose(out, _loop_band_guard(track, d, grad, 0.5), rtol=0, atol=1e-12)
+    unit = grad / np.maximum(np.linalg.norm(grad, axis=1), 1e-12)[:, None]
+    inside = (d < 0.5) & (np.linalg.norm(grad, axis=1) > 0)
+    along = np.einsum("nd,nd->n", out, unit)
+    assert np.all(along[inside] >= -1e-12)  # never towards the obstacle inside the band
+    keep = ~inside | (np.einsum("nd,nd->n", track, unit) >= 0)
+    np.testing.assert_array_equal(out[keep], track[keep])  # away from it, or outside the band: as given
+    tangent = track - np.einsum("nd,nd->n", track, unit)[:, None] * unit
+    np.testing.assert_allclose((out - np.einsum("nd,nd->n", out, unit)[:, None] * unit)[inside], tangent[inside],
+                               atol=1e-12)  # the part along the obstacle is kept
+    assert (~keep).sum() > 50  # the case under test occurs
 
 
 def test_paper_kernel_is_the_3d_normalised_cubic_spline_scaled_by_c():

@@ -28,6 +28,10 @@ def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_valu
     # headroom: the default build with the planner at 0.8 v_max and the position pull capped at a_max
     h = registry.make("sph", preset="headroom").params
     assert (h.plan_v_max, h.ref_reset, h.k_p * h.ref_reset) == (0.8, 0.3, pytest.approx(h.a_max))
+    # guard: queue with the final approach's pull at Table I's bound and the band guard
+    q, g = registry.make("sph", preset="queue").params, registry.make("sph", preset="guard").params
+    assert (g.goal_reset, g.band_guard, q.goal_reset, q.band_guard) == (0.5, True, 0.0, False)
+    assert (g.plan_v_max, g.ref_reset, g.yield_range) == (q.plan_v_max, q.ref_reset, q.yield_range) == (0.8, 0.3, 1.2)
     # an explicit value applies on top of the preset
     assert registry.make("sph", preset="released", k_p=7.0).params.k_p == 7.0
     with pytest.raises(swarmnav.ConfigError, match="unknown preset 'relased'"):

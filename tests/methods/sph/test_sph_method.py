@@ -76,8 +76,8 @@ def test_reference_lag_is_bounded_at_each_replan():
     lags = []
     orig = m._replan
 
-    def spy(step, x, v):
-        orig(step, x, v)
+    def spy(step, x, v, *rest):
+        orig(step, x, v, *rest)
         lags.append(float(np.linalg.norm(m._ref_q[0, 0] - x[0])))
 
     m._replan = spy
@@ -109,9 +109,9 @@ def test_lag_reset_with_velocity_restarts_at_the_robot_at_rest():
         out = []
         orig = m._replan
 
-        def spy(step, x, v):
+        def spy(step, x, v, *rest):
             lag_before = None if m._ref_q is None else float(np.linalg.norm(m._reference(step)[0][0] - x[0]))
-            orig(step, x, v)
+            orig(step, x, v, *rest)
             out.append((lag_before, float(np.linalg.norm(m._ref_q[0, 0] - x[0])), float(np.linalg.norm(m._ref_v[0, 0]))))
 
         m._replan = spy
@@ -136,3 +136,22 @@ def test_plan_once_narrow_passage_keeps_the_body_clearance():
     assert res.metrics["min_inter_robot_distance"] > 0.4
     old = swarmnav.run("sph", "sph_narrow", seed=1, steps=round(25.0 / dt), plan_once=True, once_hold=0.0)
     assert old.metrics["min_robot_obstacle_distance"] < 0.2
+
+
+def test_goal_reset_gathers_twenty_robots_that_the_capped_pull_cannot():
+    # The 1/r repulsion of the robots gathered at one goal pushes a late robot out with about
+    # (robots gathered) / (crowd radius) m/s^2. With the final approach's lag bounded at
+    # ref_reset = 0.3 m (queue) one of 20 robots stays more than 3 m out; bounded at
+    # goal_reset = 0.5 m (Table I's k_p x 0.5 m = 2.5 m/s^2) all 20 gather within 3 m.
+    scn = from_dict({"name": "crowd", "world": {"bounds": [-10.0, -12.0, 20.0, 12.0]},
+                     "swarm": {"n": 20, "spawn": [-4.0, -3.0, 2.0, 3.0]}, "goal": {"position": [8.0, 0.0]}})
+
+    def radii(**params):
+        res = swarmnav.run("sph", scn, seed=1, horizon=50.0, preset="queue", **params)
+        return np.linalg.norm(res.positions[-1] - np.array([8.0, 0.0]), axis=1), res.metrics
+
+    capped, _ = radii()
+    final, m = radii(goal_reset=0.5)
+    assert capped.max() > 3.0
+    assert final.max() < 3.0 and m["sph_success"] == 1.0
+    assert np.median(final) < np.median(capped) - 0.3

@@ -30,7 +30,7 @@ from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.methods.base import Observation
 from swarmnav.methods.sph.bspline import SplineCosts, evaluate, optimize
 from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
-from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
+from swarmnav.methods.sph.kernel import band_guard, environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.yielding import goal_distance_field, yield_rates
@@ -96,6 +96,7 @@ class Sph:
                                                 p.yield_resolution)
         self._ref_q = self._ref_v = self._ref_a = None  # (N, L, D) sampled references
         self._ref_k = 0  # step at which the references were sampled
+        self._final = np.zeros(n, dtype=bool)  # each robot's last local plan ended at its goal
         self._hold = np.zeros(n)  # steps each robot's reference clock stood still (since the last plan)
         self._yield_steps = 0.0  # robot-steps with a slowed reference clock
         self._prev_labels: np.ndarray | None = None
@@ -142,7 +143,7 @@ class Sph:
         # trajectory planning every T_p (or once, Fig. 3B protocol)
         if self._ref_q is None or (not p.plan_once and obs.step - self._ref_k >= self._replan_every):
             self._visible = (vi, vj)
-            self._replan(obs.step, x, v)
+            self._replan(obs.step, x, v, d)
         q_ref, v_ref, a_ref = self._reference(obs.step)
         hold = p.once_hold if p.plan_once else p.ref_hold
         # The reference clock (ours, the hook of the waiting parts): each robot's reference runs at
@@ -169,7 +170,10 @@ class Sph:
             q_ref = q_ref.copy()
             q_ref[far] = x[far] + (q_ref[far] - x[far]) * (hold / lag[far])[:, None]
         # eq. (13)
-        a = force / p.m + p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref
+        if p.band_guard:
+            a = force / p.m + band_guard(p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref, d, grad, p.d_thr)
+        else:
+            a = force / p.m + p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref
         return a, {"labels": labels, "events": events}
 
     def summary(self) -> dict[str, float]:
@@ -206,7 +210,7 @@ class Sph:
         r = np.arange(n)
         return self._ref_q[r, k], self._ref_v[r, k], self._ref_a[r, k]
 
-    def _replan(self, step: int, x: np.ndarray, v: np.ndarray) -> None:
+    def _replan(self, step: int, x: np.ndarray, v: np.ndarray, clearance: np.ndarray) -> None:
         p = self.params
         n, dim = x.shape
         if self._ref_q is None:
@@ -217,9 +221,12 @@ class Sph:
                 start_q, start_v = x.copy(), v.copy()
             else:  # released behaviour: continue the reference unless the robot is far from it
                 lag = np.linalg.norm(start_q - x, axis=1)
-                off = lag > p.ref_reset
-                if p.ref_clamp:  # ours: pull the start back to ref_reset from the robot (no jump to 0)
-                    start_q[off] = x[off] + (start_q[off] - x[off]) * (p.ref_reset / lag[off])[:, None]
+                reset = np.full(n, p.ref_reset)
+                if p.goal_reset > 0:  # ours: the final approach needs no headroom for obstacles
+                    reset[self._final & (clearance > p.plan_clearance)] = p.goal_reset
+                off = lag > reset
+                if p.ref_clamp:  # ours: pull the start back to the bound from the robot (no jump to 0)
+                    start_q[off] = x[off] + (start_q[off] - x[off]) * (reset[off] / lag[off])[:, None]
                 else:  # released: restart at the robot
                     start_q[off] = x[off]
                 if p.reset_velocity:  # ours: restart from the measured velocity as well
@@ -264,6 +271,7 @@ class Sph:
         if len(pts) < 2:
             pts = np.vstack([q, path[-1]])
         reaches_end = p.plan_once or p.horizon_points == 0 or len(pts) - 1 <= p.horizon_points
+        self._final[r] = reaches_end
         if not reaches_end:
             pts = pts[: p.horizon_points + 1]
         end_v = np.zeros_like(q)

@@ -25,6 +25,8 @@ class SphParams:
         "paper": {},
         "headroom": {"plan_v_max": 0.8, "ref_reset": 0.3},
         "queue": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2},
+        "guard": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "goal_reset": 0.5,
+                  "band_guard": True},
         "released": {
             "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
             "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
@@ -121,6 +123,15 @@ class SphParams:
         "\"reference\" mode: bound on the reference lag at a replan (ours; released 1.0): k_p "
         "ref_reset = k_rep / (2 body radius) = 2.5 m/s^2, the tracking pull never beats the "
         "contact repulsion")
+    goal_reset: float = param(0.0, "m", "[0, inf)", "ours",
+        "\"reference\" mode: the lag bound at a replan on the final approach (the robot's last local "
+        "plan ended at its goal and it is farther than plan_clearance from every obstacle), where "
+        "the only force against the pull is the 1/r push of the robots already gathered at the "
+        "goal, which grows with their number (0 = ref_reset everywhere)")
+    band_guard: bool = param(False, "", None, "ours",
+        "inside the obstacle band (d < d_thr) drop the tracking term's component towards the "
+        "obstacle: the reference never presses a robot into an obstacle, the ESDF force and the "
+        "swarm alone set how close it comes (False: eq. 13 as printed)")
     ref_clamp: bool = param(True, "", None, "ours",
         "beyond ref_reset move the start to ref_reset from the robot (ours; False: onto the "
         "robot, released): the pull stays continuous, no jump of the reference to the robot")
