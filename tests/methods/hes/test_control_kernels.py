@@ -128,6 +128,25 @@ def test_lidar_repulsion_and_ring_anchors_test_every_ray_as_the_plain_loop():
         assert np.array_equal(got, ref)
 
 
+def test_candidate_rays_are_the_candidate_mask_in_ray_order():
+    """The word-skipping scan lists exactly the rays of the candidate mask, ascending, for ring
+    lengths that are and are not multiples of 8 (a stale workspace changes nothing)."""
+    rng = np.random.default_rng(17)
+    for _ in range(300):
+        n = int(rng.integers(1, 70))
+        ring = np.round(rng.uniform(0.5, 3.0, n), 1)  # plateaus of equal ranges
+        below = float(rng.uniform(0.5, 3.5))
+        mask = rng.integers(0, 256, 8 * ((n + 7) // 8) + int(rng.integers(0, 9))).astype(np.uint8)
+        idx = np.full(n, -7, dtype=np.int64)
+        m = F.candidate_rays(ring, below, mask, idx)
+        want = np.empty(n, dtype=np.bool_)
+        F.minimum_candidates(ring, below, want)
+        plain = [r for r in range(n) if r in (0, n - 1) or
+                 (ring[r] < below and ring[r] < ring[r - 1] and ring[r] <= ring[r + 1])]
+        assert np.flatnonzero(want).tolist() == plain
+        assert idx[:m].tolist() == plain
+
+
 def _guard_reference(a, x, v, dt, a_brake, margin, a_max, passes=4):
     """agent_guard's contact guard written out over every pair (no distance skip), plain Python."""
     n = len(x)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from swarmnav.methods.hes.forces import is_local_min, minimum_candidates
+from swarmnav.methods.hes.forces import candidate_rays, is_local_min
 
 # Columns of the detect_gaps output rows.
 GAP_QA_X, GAP_QA_Y, GAP_QB_X, GAP_QB_Y, GAP_W, GAP_NX, GAP_NY, GAP_PEAK = range(8)
@@ -46,11 +46,11 @@ def ring_anchors(ring, max_range):
     test (flat runs included) as the active set of the LiDAR repulsion, eq. (35)."""
     n = ring.shape[0]
     out = np.empty(n, dtype=np.int64)
-    cand = np.empty(n, dtype=np.bool_)
-    minimum_candidates(ring, max_range, cand)
+    cand = np.empty(n, dtype=np.int64)
     m = 0
-    for r in range(n):
-        if cand[r] and ring[r] < max_range and is_local_min(ring, r):
+    for c in range(candidate_rays(ring, max_range, np.empty(8 * ((n + 7) // 8), dtype=np.uint8), cand)):
+        r = cand[c]
+        if ring[r] < max_range and is_local_min(ring, r):
             out[m] = r
             m += 1
     return out[:m]
