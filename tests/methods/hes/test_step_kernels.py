@@ -80,10 +80,14 @@ def test_report_rows_are_the_report_stages_one_by_one():
             goal = rng.uniform(lo, hi)
             seen_w, depth = (3.6, 0.6) if trial % 2 else (0.0, 0.0)
             approach, approach_w = (2.0, 3.6) if trial % 3 else (0.0, np.inf)
-            got = report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, 20.0, 1.0, seen_w, depth,
-                              goal[0], goal[1], 1.2, math.cos(math.radians(75.0)), 0.4, 20.0, True,
-                              approach, approach_w, 1.5)
+            consts = np.array([20.0, 1.0, seen_w, depth, goal[0], goal[1], 1.2, math.cos(math.radians(75.0)), 0.4,
+                               20.0, True, approach, approach_w, 1.5])
+            m = len(members)
+            buf = np.full((2 * m + 2, 2), np.nan)  # stale values must all be overwritten
+            rows_out = np.full((360, 8), np.nan)
+            k, clear = report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, consts, buf, rows_out)
             pack = make_pack(0, a, members, x, v)
+            got = (buf[:m], buf[m:2 * m], buf[2 * m], buf[2 * m + 1], rows_out[:k], clear)
             for g, r in zip(got[:4], (pack.positions, pack.velocities, pack.centroid, pack.sl_row)):
                 assert np.array_equal(g, r)
             gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], cos_t, sin_t, 20.0, 1.0)

@@ -93,9 +93,11 @@ def report(h, step: Step, s: int) -> Report:
                             h.sin, pack.centroid[0], pack.centroid[1], *h.report_consts[4:])
         clear = float(step.ring_min[members].min())
     else:
-        pos, vel, cen, sl_row, rows, clear = report_rows(x, step.v, members, a, step.ring, step.ring_min, h.cos, h.sin,
-                                                         *h.report_gaps, *h.report_consts)
-        pack = Pack(s, a, members, pos, vel, cen, sl_row)
+        m = len(members)
+        buf, rows = np.empty((2 * m + 2, 2)), np.empty((len(h.cos), 8))  # (fewer openings than rays)
+        k, clear = report_rows(x, step.v, members, a, step.ring, step.ring_min, h.cos, h.sin, h.report_c, buf, rows)
+        pack = Pack(s, a, members, buf[:m], buf[m:2 * m], buf[2 * m], buf[2 * m + 1])
+        rows = rows[:k]
     cors = [Corridor(r[0:2], r[2:4], w, r[5:7], c) for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
     cors.sort(key=lambda c: c.cost)
     for q in h.at["corridors"]:
@@ -113,7 +115,8 @@ def report(h, step: Step, s: int) -> Report:
 def report_constants(h) -> tuple[tuple, tuple]:
     """The report's scalars, read once per run: gap detection's (R_L, h_open, and a part's
     ``seen_w``, ``seen_depth``) and the corridor filter's (goal, w_pass, cos of toward_deg, rho_vis,
-    R_L, the approach to narrow throats, through), as :func:`report_rows` takes them."""
+    R_L, the approach to narrow throats, through); :func:`report_rows` takes them as one float
+    array, ``np.array(gaps + consts, dtype=float)``."""
     p = h.params
     seen = next(((q.seen_w, q.seen_depth) for q in reversed(h.parts) if q.seen_w > 0.0), (0.0, 0.0))
     approach, approach_w = h.approach
@@ -123,13 +126,25 @@ def report_constants(h) -> tuple[tuple, tuple]:
 
 
 @njit(cache=True)
-def report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, max_range, h_open, seen_w, seen_depth,
-                gx, gy, w_pass, cos_toward, rho_vis, max_range2, check, approach, approach_w, through):
+def report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, c, pack, rows_out):
     """One report's arrays in one pass: the Pack's rows (``hierarchy._pack_rows``), the openings of
     subleader ``a``'s ring (:func:`detect_gaps`; one narrower than ``seen_w`` kept only if
     ``seen_passages`` at ``seen_depth``), the candidate corridors among them (rows of
-    ``corridors._filter_gaps``) and the members' nearest return [m]."""
+    ``corridors._filter_gaps``) and the members' nearest return [m].
+
+    ``c``: the report's scalars (:func:`report_constants`, gap detection's then the filter's, as
+    floats). Written into ``pack`` (2m + 2, 2): the members' positions, their velocities, the
+    centroid and the subleader's row, and into ``rows_out`` (at least one row per ray): the K
+    corridor rows. Returns ``(K, nearest return)`` (arrays written in place are cheaper to hand
+    back than returned ones)."""
+    max_range, h_open, seen_w, seen_depth = c[0], c[1], c[2], c[3]
     pos, vel, cen, sl_row = _pack_rows(x, v, members, a)
+    m = members.shape[0]
+    for i in range(m):
+        pack[i, 0], pack[i, 1] = pos[i, 0], pos[i, 1]
+        pack[m + i, 0], pack[m + i, 1] = vel[i, 0], vel[i, 1]
+    pack[2 * m, 0], pack[2 * m, 1] = cen[0], cen[1]
+    pack[2 * m + 1, 0], pack[2 * m + 1, 1] = sl_row[0], sl_row[1]
     sx, sy = x[a, 0], x[a, 1]
     gaps = detect_gaps(ring[a], sx, sy, cos_t, sin_t, max_range, h_open)
     if seen_w > 0.0:
@@ -147,12 +162,15 @@ def report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, max_range, h_ope
                     kept[k] = gaps[j]
                     k += 1
             gaps = kept
-    rows = _filter_gaps(gaps, sx, sy, gx, gy, w_pass, cos_toward, ring[a], sx, sy, cos_t, sin_t, cen[0], cen[1],
-                        rho_vis, max_range2, check, approach, approach_w, through)
+    rows = _filter_gaps(gaps, sx, sy, c[4], c[5], c[6], c[7], ring[a], sx, sy, cos_t, sin_t, cen[0], cen[1],
+                        c[8], c[9], c[10] > 0.5, c[11], c[12], c[13])
+    for j in range(rows.shape[0]):
+        for q in range(8):
+            rows_out[j, q] = rows[j, q]
     clear = np.inf
     for j in members:
         clear = min(clear, ring_min[j])
-    return pos, vel, cen, sl_row, rows, clear
+    return rows.shape[0], clear
 
 
 def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float, rho_vis: float,
