@@ -197,16 +197,33 @@ def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float,
 
 
 def decision_state(h, step: Step) -> DecisionState:
-    """z(k) of eq. (18) from the reports alone."""
+    """z(k) of eq. (18) from the reports alone (n_c: :func:`split_paths`, counted in one pass per
+    report with the centroid's goal distance of eq. (19) computed once)."""
     p = h.params
     k, reports = step.k, step.reports
     ids = sorted(reports)
     gx, gy = float(h.goal[0]), float(h.goal[1])
-    cents = [reports[s].pack.centroid.tolist() for s in ids]
+    w_split, rho_vis, max_range = p.core.w_split, p.core.rho_vis, p.paper.lidar_range
+    cents, d_goal, widths, n_c = [], [], [], 0
+    for s in ids:
+        rep = reports[s]
+        cx, cy = rep.pack.centroid.tolist()
+        d0 = math.hypot(cx - gx, cy - gy)
+        cents.append((cx, cy))
+        d_goal.append(d0)
+        n = 0
+        for c in rep.corridors:
+            widths.append(c.width)
+            if c.width >= w_split:  # split_paths' test
+                mx, my = c.mid.tolist()
+                if math.hypot(mx - gx, my - gy) <= d0:
+                    if not c.direct:
+                        sx, sy = rep.pack.subleader_position.tolist()
+                        if not in_view(step.ring[rep.pack.subleader], sx, sy, c.target, rho_vis, max_range):
+                            continue
+                    n += 1
+        n_c = max(n_c, n)
     S = len(ids)
-    d_goal = [math.hypot(cx - gx, cy - gy) for cx, cy in cents]
-    widths = [c.width for s in ids for c in reports[s].corridors]
-    n_c = max(len(h.split_paths(step, reports[s])) for s in ids)
     n_near = sum(d < p.paper.r_merge for d in d_goal)  # eq. (15)
     d_swarm_min = math.inf
     for a in range(S):  # eq. (14)
