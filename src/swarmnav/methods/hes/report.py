@@ -98,16 +98,18 @@ def report(h, step: Step, s: int) -> Report:
         k, clear = report_rows(x, step.v, members, a, step.ring, step.ring_min, h.cos, h.sin, h.report_c, buf, rows)
         pack = Pack(s, a, members, buf[:m], buf[m:2 * m], buf[2 * m], buf[2 * m + 1])
         rows = rows[:k]
-    cors = [Corridor(r[0:2], r[2:4], w, r[5:7], c) for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
-    cors.sort(key=lambda c: c.cost)
+    widths, costs = rows[:, 4].tolist(), rows[:, 7].tolist()
+    cors = [Corridor(rows[j, 0:2], rows[j, 2:4], widths[j], rows[j, 5:7], costs[j])
+            for j in sorted(range(len(costs)), key=costs.__getitem__)]  # by cost, stable
     for q in h.at["corridors"]:
         cors = q.corridors(step, sub, cors)
-    if h.at["cruise_mask"]:
-        clr = step.ring_min[members]
-        for q in h.at["cruise_mask"]:
-            free = q.cruise_mask(members)
-            if free is not None:
-                clr = clr[free] if np.count_nonzero(free) else clr
+    clr = None  # the members' returns a part's cruise mask keeps (None: every member's, as `clear`)
+    for q in h.at["cruise_mask"]:
+        free = q.cruise_mask(members)
+        if free is not None:
+            clr = step.ring_min[members] if clr is None else clr
+            clr = clr[free] if np.count_nonzero(free) else clr
+    if clr is not None:
         clear = min(clr.tolist())
     return Report(pack, tuple(cors), clear)
 
