@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from swarmnav.methods.hes.report import strayed
+from swarmnav.methods.hes.report import handed_over, strayed
 from swarmnav.methods.hes.targets import turned
 from swarmnav.methods.hes.trail import n_cut_off
 from swarmnav.sensing import PreparedGeometry, segments_blocked
@@ -36,6 +36,9 @@ def test_strayed_is_distance_or_line_of_sight_to_the_centroid():
             m = np.flatnonzero(labels == s)
             d2 = np.sum((x[m] - cents[j]) ** 2, axis=1)
             assert nearest[j] == m[np.argmin(d2)]
+        new = sl.copy()
+        assert handed_over(x, col, new, stray, check, *arrays) == np.count_nonzero(ref)
+        assert np.array_equal(new, np.where(ref, nearest, sl))
 
 
 def test_turned_is_the_rotation_of_the_offsets():

@@ -37,10 +37,9 @@ def reelect(h, step: Step) -> None:
     part = h.partition()
     ids = part.ids
     sl = np.array([h.subs[s].subleader for s in ids])
-    far, nearest = strayed(x, part.col, sl, h.params.core.stray, not h.no_obstacles, *h.obstacles.planar_arrays)
-    for j, f in enumerate(far.tolist()):
-        if f:
-            h.subs[ids[j]].subleader = int(nearest[j])
+    if handed_over(x, part.col, sl, h.params.core.stray, not h.no_obstacles, *h.obstacles.planar_arrays):
+        for s, a in zip(ids, sl.tolist()):
+            h.subs[s].subleader = a
     for q in h.at["elect"]:
         q.elect(step, part.col)
 
@@ -73,6 +72,19 @@ def strayed(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r
         if d2 < best[j] or nearest[j] < 0:
             best[j], nearest[j] = d2, i
     return far, nearest
+
+
+@njit(cache=True)
+def handed_over(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
+    """:func:`strayed`, with each strayed subleader in ``sl`` replaced in place by its sub-swarm's
+    member nearest the centroid; returns how many were replaced (nothing is returned as an array)."""
+    far, nearest = strayed(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi)
+    k = 0
+    for j in range(sl.shape[0]):
+        if far[j]:
+            sl[j] = nearest[j]
+            k += 1
+    return k
 
 
 def report(h, step: Step, s: int) -> Report:
