@@ -11,6 +11,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field, replace
 from importlib import resources
+from operator import add
 from pathlib import Path
 from typing import Any
 
@@ -353,6 +354,7 @@ def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60)
     # instead of O(n^2) (n up to MAX_AGENTS must not hang the load).
     cells: dict[tuple[float, ...], list[int]] = {}
     near = [tuple(float(v) for v in o) for o in np.ndindex(*(3,) * d)]
+    one = (1.0,) * d
     lo = np.asarray(region[:d], dtype=float)
     batch = max(64, 4 * n)
     for _ in range(max_rounds):
@@ -369,10 +371,10 @@ def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60)
             for p, c in zip(cand, key):  # sequential acceptance keeps the spacing rule exact
                 if k == n:
                     break
-                idx = [i for o in near for i in cells.get(tuple(a + b for a, b in zip(c, o)), ())]
+                idx = [i for o in near for i in cells.get(tuple(map(add, c, o)), ())]
                 if not idx or np.min(np.sum((kept[idx] - p) ** 2, axis=1)) >= spacing**2:
                     kept[k] = p
-                    cells.setdefault(tuple(a + 1.0 for a in c), []).append(k)
+                    cells.setdefault(tuple(map(add, c, one)), []).append(k)
                     k += 1
         if k == n:
             return kept
