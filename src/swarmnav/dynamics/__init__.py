@@ -41,7 +41,9 @@ class DampedDoubleIntegrator:
 
     def step(self, p: np.ndarray, v: np.ndarray, a_cmd: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         if _plain(p) and _plain(v) and _plain(a_cmd) and p.shape == v.shape == a_cmd.shape:
-            return _damped_step(p, v, a_cmd, float(dt), float(self.mass), float(self.drag))
+            p_new, v_new = np.empty(p.shape), np.empty(p.shape)  # (a returned array costs more to box)
+            _damped_step(p, v, a_cmd, float(dt), float(self.mass), float(self.drag), p_new, v_new)
+            return p_new, v_new
         u = self.input(a_cmd, v)
         v_new = v + dt * (u / self.mass - self.drag * v)
         return p + dt * v_new, v_new
@@ -53,19 +55,17 @@ def _plain(a) -> bool:
 
 
 @njit(cache=True)
-def _damped_step(p, v, a_cmd, dt, mass, drag):
-    """:meth:`DampedDoubleIntegrator.step` in one pass, element by element the same operations
-    as its numpy form (the same bits), without its five temporaries."""
+def _damped_step(p, v, a_cmd, dt, mass, drag, p_new, v_new):
+    """:meth:`DampedDoubleIntegrator.step` in one pass into ``p_new``, ``v_new``, element by
+    element the same operations as its numpy form (the same bits), without its five temporaries."""
     n, d = p.shape
-    p_new = np.empty((n, d))
-    v_new = np.empty((n, d))
     for i in range(n):
         for c in range(d):
             u = mass * (a_cmd[i, c] + drag * v[i, c])
             w = v[i, c] + dt * (u / mass - drag * v[i, c])
             v_new[i, c] = w
             p_new[i, c] = p[i, c] + dt * w
-    return p_new, v_new
+
 
 
 @dataclass(frozen=True, slots=True)

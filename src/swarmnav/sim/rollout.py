@@ -90,8 +90,8 @@ def run(
         clear = lambda x: np.full(len(x), np.inf)  # noqa: E731
     else:  # the geometry converted once: the same kernel as signed_distance, without per-step packing
         prepared = PreparedGeometry(geom)
-        clear = lambda x, out=None: prepared.distance_into(  # noqa: E731
-            np.ascontiguousarray(x, dtype=np.float64), np.empty(len(x)) if out is None else out)
+        distance_into = prepared.distance_into  # a row of P is a C-contiguous float64 (N, d) array
+        clear = lambda x: distance_into(np.ascontiguousarray(x, dtype=np.float64), np.empty(len(x)))  # noqa: E731
     lift = vlift = _identity
     if plane_z is not None:  # the slice's (N, 2) state at altitude plane_z, no vertical velocity
         lift = lambda x, z=plane_z: np.column_stack([x, np.full(len(x), z)])  # noqa: E731
@@ -103,19 +103,27 @@ def run(
     t0 = time.perf_counter()
     lo = np.array(world.bounds[:2])
     period = world.bounds[2] - world.bounds[0] if world.periodic else None
+    # the usual case -- the state is (N, d) float64 arrays recorded as they are -- checks finiteness
+    # and copies the new state into its rows of P and V in one compiled pass
+    direct = plane_z is None and period is None
     for k in range(steps):
         cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
-        if not _all_finite(pos, vel):
+        if direct and _plain(pos, vel, d):
+            finite = _finite_into(pos, vel, P[k + 1], V[k + 1])
+        else:
+            finite = _all_finite(pos, vel)
+            if finite:
+                if period is not None:  # the world is a torus whatever the method's dynamics
+                    pos = lo + np.mod(pos - lo, period)
+                P[k + 1], V[k + 1] = lift(pos), vlift(vel)
+        if not finite:
             raise DivergedError(f"{m.name} diverged at step {k + 1} (t = {(k + 1) * dt:g} s): non-finite "
                                 f"positions or velocities; check the parameters ({_changed(m.params)})")
-        if period is not None:  # the world is a torus whatever the method's dynamics
-            pos = lo + np.mod(pos - lo, period)
-        P[k + 1], V[k + 1] = lift(pos), vlift(vel)
         if no_obstacles:
             C[k + 1] = clear(P[k + 1])
         else:  # written in place (a row of C is a contiguous float64 buffer): the same values
-            clear(P[k + 1], C[k + 1])
+            distance_into(P[k + 1], C[k + 1])
         labels = info.get("labels")
         lab[k + 1] = lab[k] if labels is None else labels
         r = info.get("roles")
@@ -181,6 +189,27 @@ def _all_finite(pos: np.ndarray, vel: np.ndarray) -> bool:
     if type(pos) is np.ndarray and type(vel) is np.ndarray and pos.dtype == vel.dtype == np.float64:
         return _finite_kernel(pos.reshape(-1), vel.reshape(-1))
     return bool(np.isfinite(pos).all() and np.isfinite(vel).all())
+
+
+def _plain(pos, vel, d: int) -> bool:
+    """``pos`` and ``vel`` are (N, d) float64 numpy arrays (what :func:`_finite_into` takes)."""
+    return (type(pos) is np.ndarray and type(vel) is np.ndarray and pos.dtype == vel.dtype == np.float64
+            and pos.ndim == 2 and pos.shape == vel.shape and pos.shape[1] == d)
+
+
+@njit(cache=True)
+def _finite_into(pos, vel, p_row, v_row):
+    """Whether every position and velocity is finite; if so, ``p_row[:] = pos``, ``v_row[:] = vel``."""
+    n, d = pos.shape
+    for i in range(n):
+        for c in range(d):
+            if not (np.isfinite(pos[i, c]) and np.isfinite(vel[i, c])):
+                return False
+    for i in range(n):
+        for c in range(d):
+            p_row[i, c] = pos[i, c]
+            v_row[i, c] = vel[i, c]
+    return True
 
 
 @njit(cache=True)

@@ -11,6 +11,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field, replace
 from importlib import resources
+from operator import add
 from pathlib import Path
 from typing import Any
 
@@ -352,7 +353,8 @@ def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60)
     # candidate accepts exactly the candidates a check against every agent accepts, in O(n)
     # instead of O(n^2) (n up to MAX_AGENTS must not hang the load).
     cells: dict[tuple[float, ...], list[int]] = {}
-    near = [np.array(o, dtype=float) for o in np.ndindex(*(3,) * d)]
+    near = [tuple(float(v) for v in o) for o in np.ndindex(*(3,) * d)]
+    one = (1.0,) * d
     lo = np.asarray(region[:d], dtype=float)
     batch = max(64, 4 * n)
     for _ in range(max_rounds):
@@ -365,14 +367,14 @@ def _sample_spawn(scn: Scenario, rng: np.random.Generator, max_rounds: int = 60)
             kept[k : k + len(take)] = take
             k += len(take)
         else:
-            key = np.floor((cand - lo) / (2.0 * spacing)) - 1.0
+            key = (np.floor((cand - lo) / (2.0 * spacing)) - 1.0).tolist()  # cell keys as Python floats
             for p, c in zip(cand, key):  # sequential acceptance keeps the spacing rule exact
                 if k == n:
                     break
-                idx = [i for o in near for i in cells.get(tuple(c + o), ())]
+                idx = [i for o in near for i in cells.get(tuple(map(add, c, o)), ())]
                 if not idx or np.min(np.sum((kept[idx] - p) ** 2, axis=1)) >= spacing**2:
                     kept[k] = p
-                    cells.setdefault(tuple(c + 1.0), []).append(k)
+                    cells.setdefault(tuple(map(add, c, one)), []).append(k)
                     k += 1
         if k == n:
             return kept

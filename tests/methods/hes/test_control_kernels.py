@@ -31,7 +31,7 @@ def random_case(rng, n):
             ring[i, r0:r0 + 40] = rng.uniform(0.3, 15.0) + rng.uniform(0, 1, len(ring[i, r0:r0 + 40]))
     return dict(x=x, v=v, labels=labels, sl=sl, follower=sl != np.arange(n), cent=cent, wp=cent + rng.normal(size=(n, 2)),
                 nav=rng.random(n) < 0.7, slot=x + rng.normal(size=(n, 2)), speed=rng.uniform(0.5, 3.0, n),
-                nn=F.nearest_in_group(x, labels), sig=np.where(rng.random((n, 4)) < 0.2, 0.2, 1.0), ring=ring,
+                nn=F.nearest_in_group(x, labels), sig=rng.choice([0.0, 0.2, 1.0], (n, 4), p=[0.1, 0.2, 0.7]), ring=ring,
                 dsafe=rng.uniform(0.5, P.paper.d_safe, n))
 
 
@@ -50,7 +50,8 @@ def test_eq38_is_synthesize_of_the_gathered_rows_bit_for_bit():
         assert np.array_equal(C.eq38_terms(*args), ref_t)
         ref = F.synthesize(x, v, c["labels"], x[c["sl"]], v[c["sl"]], c["follower"], c["cent"], c["wp"], c["nav"],
                            c["slot"], vslot, c["nn"], c["sig"], c["ring"], COS, SIN, G, c["dsafe"], *rows)
-        assert np.array_equal(C.eq38(*args), ref)
+        got = C.eq38(*args)
+        assert got.tobytes() == ref.tobytes()  # the same bits, signed zeros included
 
 
 def test_couple_occlude_is_couple_then_the_segments_tested_bit_for_bit():
@@ -126,6 +127,25 @@ def test_lidar_repulsion_and_ring_anchors_test_every_ray_as_the_plain_loop():
             assert ring_anchors(ring[i], P.paper.lidar_range).tolist() == anchors
         got = F.lidar_repulsion_each(ring, COS, SIN, *args, dsafe, P.core.d_floor, False)
         assert np.array_equal(got, ref)
+
+
+def test_candidate_rays_are_the_candidate_mask_in_ray_order():
+    """The word-skipping scan lists exactly the rays of the candidate mask, ascending, for ring
+    lengths that are and are not multiples of 8 (a stale workspace changes nothing)."""
+    rng = np.random.default_rng(17)
+    for _ in range(300):
+        n = int(rng.integers(1, 70))
+        ring = np.round(rng.uniform(0.5, 3.0, n), 1)  # plateaus of equal ranges
+        below = float(rng.uniform(0.5, 3.5))
+        mask = rng.integers(0, 256, 8 * ((n + 7) // 8) + int(rng.integers(0, 9))).astype(np.uint8)
+        idx = np.full(n, -7, dtype=np.int64)
+        m = F.candidate_rays(ring, below, mask, idx)
+        want = np.empty(n, dtype=np.bool_)
+        F.minimum_candidates(ring, below, want)
+        plain = [r for r in range(n) if r in (0, n - 1) or
+                 (ring[r] < below and ring[r] < ring[r - 1] and ring[r] <= ring[r + 1])]
+        assert np.flatnonzero(want).tolist() == plain
+        assert idx[:m].tolist() == plain
 
 
 def _guard_reference(a, x, v, dt, a_brake, margin, a_max, passes=4):

@@ -88,3 +88,38 @@ def test_segment_clear():
     assert not segment_clear(ring, 0.0, 0.0, COS, SIN, 0.0, 0.0, 10.0, 0.0, 0.4, 20.0)
     assert segment_clear(ring, 0.0, 0.0, COS, SIN, 0.0, 0.0, 10.0, 3.0 + 10.0, 0.4, 20.0)
     assert segment_clear(ring, 0.0, 0.0, COS, SIN, 0.0, 5.0, 10.0, 5.0, 0.4, 20.0)  # a parallel line above
+
+
+def _segment_clear_plain(ring, sx, sy, cos_t, sin_t, ax, ay, bx, by, rho, max_range):
+    """segment_clear as a per-ray loop with an early exit, plain Python."""
+    ex, ey = bx - ax, by - ay
+    ee = ex * ex + ey * ey
+    for r in range(len(ring)):
+        d = ring[r]
+        if d >= max_range:
+            continue
+        qx, qy = sx + d * cos_t[r] - ax, sy + d * sin_t[r] - ay
+        s = min(max((qx * ex + qy * ey) / ee, 0.0), 1.0) if ee > 0.0 else 0.0
+        dx, dy = qx - s * ex, qy - s * ey
+        if dx * dx + dy * dy < rho * rho:
+            return False
+    return True
+
+
+def test_segment_clear_tests_every_ray_as_the_plain_loop():
+    """The blocked, branch-free ray test answers as the per-ray loop: random rings of 1 to 400
+    rays (partly at max range), segments of zero length included, returns near the tube's edge."""
+    rng = np.random.default_rng(5)
+    answers = set()
+    for _ in range(400):
+        n = int(rng.integers(1, 400))
+        cos_t, sin_t = ray_table(n)
+        ring = np.where(rng.random(n) < 0.3, 20.0, rng.uniform(0.5, 20.0, n))
+        sx, sy = rng.uniform(-3, 3, 2)
+        ax, ay = rng.uniform(-10, 10, 2)
+        bx, by = (ax, ay) if rng.random() < 0.1 else tuple(rng.uniform(-10, 10, 2))
+        rho = float(rng.choice([0.05, 0.4, 2.0]))
+        want = _segment_clear_plain(ring, sx, sy, cos_t, sin_t, ax, ay, bx, by, rho, 20.0)
+        assert segment_clear(ring, sx, sy, cos_t, sin_t, ax, ay, bx, by, rho, 20.0) == want
+        answers.add(want)
+    assert answers == {True, False}

@@ -95,6 +95,36 @@ def test_decision_state_reads_reports_and_matches_feasibility():
     assert project("split", z) == "split" and project("merge", z) == "keep"
 
 
+def test_decision_state_counts_the_split_paths_of_every_report():
+    """z(k)'s n_c, widths and distances, at every step of a run that splits and merges, as the
+    public pieces give them: the largest len(split_paths) over the reports, and so on."""
+    import math
+
+    m = registry.make("hes")
+    scn = swarmnav.load_scenario("default_corridor")
+    rng = np.random.default_rng(1)
+    x = scn.spawn_positions(rng)
+    v = np.zeros_like(x)
+    m.reset(scn, x, v, rng)
+    seen_s, seen_nc = set(), set()
+    for k in range(400):
+        a, _ = m.act(Observation(k, k * m.dt, x, v), rng)
+        step, z = m.last_step, m.last_z
+        reps = m.last_reports if z.S == len(m.last_reports) else None
+        if reps is not None:
+            ids = sorted(reps)
+            assert z.n_c == max(len(m.split_paths(step, reps[s])) for s in ids)
+            widths = [c.width for s in ids for c in reps[s].corridors]
+            assert z.w_max == (max(widths) if widths else 0.0) and z.w_min == (min(widths) if widths else 0.0)
+            g = m.goal
+            d = [math.hypot(*(reps[s].pack.centroid - g).tolist()) for s in ids]
+            assert z.d_goal_avg == sum(d) / len(d)
+            seen_s.add(z.S)
+            seen_nc.add(z.n_c)
+        x, v = m.dynamics.step(x, v, a, m.dt)
+    assert len(seen_s) >= 2 and len(seen_nc) >= 2
+
+
 def _occlusion(m, x, slot, nn, sl_idx, cent):
     """Eq. (30) as the control stage computes it, for the given couplings."""
     step = Step(0, x, np.zeros_like(x), np.zeros((len(x), 1)), slot=slot, nn=nn, sl_idx=sl_idx, cent=cent)

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from swarmnav.methods.hes.report import strayed
+from swarmnav.methods.hes.report import handed_over, strayed
 from swarmnav.methods.hes.targets import turned
 from swarmnav.methods.hes.trail import n_cut_off
 from swarmnav.sensing import PreparedGeometry, segments_blocked
@@ -36,6 +36,9 @@ def test_strayed_is_distance_or_line_of_sight_to_the_centroid():
             m = np.flatnonzero(labels == s)
             d2 = np.sum((x[m] - cents[j]) ** 2, axis=1)
             assert nearest[j] == m[np.argmin(d2)]
+        new = sl.copy()
+        assert handed_over(x, col, new, stray, check, *arrays) == np.count_nonzero(ref)
+        assert np.array_equal(new, np.where(ref, nearest, sl))
 
 
 def test_turned_is_the_rotation_of_the_offsets():
@@ -80,10 +83,14 @@ def test_report_rows_are_the_report_stages_one_by_one():
             goal = rng.uniform(lo, hi)
             seen_w, depth = (3.6, 0.6) if trial % 2 else (0.0, 0.0)
             approach, approach_w = (2.0, 3.6) if trial % 3 else (0.0, np.inf)
-            got = report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, 20.0, 1.0, seen_w, depth,
-                              goal[0], goal[1], 1.2, math.cos(math.radians(75.0)), 0.4, 20.0, True,
-                              approach, approach_w, 1.5)
+            consts = np.array([20.0, 1.0, seen_w, depth, goal[0], goal[1], 1.2, math.cos(math.radians(75.0)), 0.4,
+                               20.0, True, approach, approach_w, 1.5])
+            m = len(members)
+            buf = np.full((2 * m + 2, 2), np.nan)  # stale values must all be overwritten
+            rows_out = np.full((360, 8), np.nan)
+            k, clear = report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, consts, buf, rows_out)
             pack = make_pack(0, a, members, x, v)
+            got = (buf[:m], buf[m:2 * m], buf[2 * m], buf[2 * m + 1], rows_out[:k], clear)
             for g, r in zip(got[:4], (pack.positions, pack.velocities, pack.centroid, pack.sl_row)):
                 assert np.array_equal(g, r)
             gaps = detect_gaps(ring[a], x[a, 0], x[a, 1], cos_t, sin_t, 20.0, 1.0)

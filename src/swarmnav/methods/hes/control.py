@@ -9,6 +9,8 @@ parts' ``guard`` hook.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -204,6 +206,52 @@ def eq38_terms(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v
 @njit(cache=True)
 def eq38(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring, cos_t, sin_t,
          g, dsafe, ptr, idx):
-    """Eq. (38), the sum of :func:`eq38_terms` (as ``forces.synthesize``), (N, 2) [m/s^2]."""
-    return eq38_terms(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, sig, ring,
-                      cos_t, sin_t, g, dsafe, ptr, idx).sum(axis=0)
+    """Eq. (38), the sum of :func:`eq38_terms` (as ``forces.synthesize``), (N, 2) [m/s^2]: the pair
+    and LiDAR terms by their own passes, the six per-agent terms and the sum in one loop, every
+    term computed and added in the stack's order (0 + att + sep + ... + obs, as the stack's sum)
+    without the (8, N, 2) stack and its temporaries -- the same bits."""
+    n = x.shape[0]
+    sep = F.separation(x, labels, g[F.G_KSEP], g[F.G_RSEP], g[F.G_DFLOOR], False, ptr, idx)
+    ir = F.separation(x, labels, g[F.G_KIR], g[F.G_DIR], g[F.G_DFLOOR], True, ptr, idx)
+    obs = F.lidar_repulsion_each(ring, cos_t, sin_t, g[F.G_KREP], g[F.G_RT], g[F.G_KB], g[F.G_GAMMA], g[F.G_KE],
+                                 dsafe, g[F.G_DFLOOR], g[F.G_KE_RATIO] > 0.5)
+    k_p, k_v, k_path, k_vl = g[F.G_KP], g[F.G_KV], g[F.G_KPATH], g[F.G_KVL]
+    out = np.empty((n, 2))
+    for i in range(n):
+        ex = slot[i, 0] - x[i, 0]  # eq. (23)'s v*, as forces.slot_velocity
+        ey = slot[i, 1] - x[i, 1]
+        s = speed[i] / (math.sqrt(ex * ex + ey * ey) + eps_v)
+        vs = (s * ex, s * ey)
+        j = nn[i] if nn[i] >= 0 else i
+        a = sl_idx[i]
+        intra = _spring(x, i, x[j, 0], x[j, 1], g[F.G_KINTRA], g[F.G_DTHR], nn[i] >= 0)
+        fol = _spring(x, i, x[a, 0], x[a, 1], g[F.G_KL], g[F.G_D0], follower[i])
+        coh = _spring(x, i, cent[i, 0], cent[i, 1], g[F.G_KCOH], g[F.G_DC], True)
+        for c in range(2):
+            att = (k_p * (slot[i, c] - x[i, c]) + k_v * (vs[c] - v[i, c])) * sig[i, F.SIG_SLOT]
+            path = k_path * (wp[i, c] - x[i, c]) if nav[i] else 0.0
+            vm = k_vl * (v[a, c] - v[i, c]) if follower[i] else 0.0
+            acc = 0.0 + att
+            acc += sep[i, c]
+            acc += path
+            acc += intra[c] * sig[i, F.SIG_NN]
+            acc += ir[i, c] if nav[i] else 0.0
+            acc += (fol[c] + vm) * sig[i, F.SIG_SL]
+            acc += coh[c] * sig[i, F.SIG_CENT]
+            acc += obs[i, c]
+            out[i, c] = acc
+    return out
+
+
+@njit(cache=True, inline="always")
+def _spring(x, i, qx, qy, k, d0, on):
+    """Agent i's row of ``forces.spring`` toward ``(qx, qy)`` (zero unless ``on``)."""
+    if not on:
+        return 0.0, 0.0
+    ex = qx - x[i, 0]
+    ey = qy - x[i, 1]
+    d = math.sqrt(ex * ex + ey * ey)
+    if d > d0 and d > 0.0:
+        s = k * (d - d0) / d
+        return s * ex, s * ey
+    return 0.0, 0.0

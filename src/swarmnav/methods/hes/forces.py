@@ -230,14 +230,37 @@ def is_local_min(ring, r):
 def minimum_candidates(ring, below, out):
     """``out[r]`` (R,) bool: ray r may be a local minimum of :func:`is_local_min` closer than
     ``below`` -- ``d_r < below``, ``d_r < d_{r-1}`` and ``d_r <= d_{r+1}``, which every such
-    minimum meets (the two end rays are always candidates). A branch-free pass over the ring, so
-    that the exact test runs on the few candidates only."""
+    minimum meets (the two end rays are always candidates). A branch-free pass over the ring on
+    0-based slices (so that it vectorises), so that the exact test runs on the few candidates only."""
     n = ring.shape[0]
-    for r in range(1, n - 1):
-        d = ring[r]
-        out[r] = (d < below) & (d < ring[r - 1]) & (d <= ring[r + 1])
+    if n > 2:
+        lo, mid, hi, o = ring[0:n - 2], ring[1:n - 1], ring[2:n], out[1:n - 1]
+        for j in range(n - 2):
+            d = mid[j]
+            o[j] = (d < below) & (d < lo[j]) & (d <= hi[j])
     out[0] = True
     out[n - 1] = True
+
+
+@njit(cache=True)
+def candidate_rays(ring, below, mask, idx):
+    """The rays of :func:`minimum_candidates`, ascending, written to ``idx`` (R,) int; returns
+    their count. ``mask``: a uint8 workspace of at least R rounded up to a multiple of 8, read as
+    64-bit words, so that the scan skips eight rays without a candidate at once."""
+    n = ring.shape[0]
+    nw = (n + 7) // 8
+    mask[n:nw * 8] = 0
+    minimum_candidates(ring, below, mask[:n].view(np.bool_))
+    words = mask[:nw * 8].view(np.uint64)
+    m = 0
+    for w in range(nw):
+        if words[w] == 0:
+            continue
+        for r in range(8 * w, min(8 * w + 8, n)):
+            if mask[r]:
+                idx[m] = r
+                m += 1
+    return m
 
 
 @njit(cache=True)
@@ -268,13 +291,12 @@ def lidar_repulsion_each(ring, cos_t, sin_t, k_rep, r_t, k_b, gamma, k_e, d_safe
     """
     n, nr = ring.shape
     out = np.zeros((n, 2))
-    cand = np.empty(nr, dtype=np.bool_)
+    mask = np.empty(8 * ((nr + 7) // 8), dtype=np.uint8)
+    cand = np.empty(nr, dtype=np.int64)
     for i in range(n):
         row = ring[i]
-        minimum_candidates(row, r_t, cand)
-        for r in range(nr):
-            if not cand[r]:
-                continue
+        for c in range(candidate_rays(row, r_t, mask, cand)):
+            r = cand[c]
             d = row[r]
             if d >= r_t or not is_local_min(row, r):
                 continue

@@ -152,6 +152,7 @@ class Hes:
         for q in self.parts:
             q.reset(self, positions)
         self.report_gaps, self.report_consts = report_constants(self)
+        self.report_c = np.array(self.report_gaps + self.report_consts, dtype=float)  # report_rows' scalars
         self.couple_ws = couple_workspace(n)  # the control stage's coupling arrays, rewritten every step
 
     def summary(self) -> dict[str, float]:

@@ -36,17 +36,21 @@ _DJ = np.array([-1, 0, 1, -1, 1, -1, 0, 1], dtype=np.int64)
 def mark_hits(occ, ring, x, cos_t, sin_t, max_range, x0, y0, cell):
     """Set ``occ[iy, ix] = True`` for every LiDAR return (range < ``max_range``) of the rings
     ``ring`` (N, R) sensed at ``x`` (N, 2); grid origin ``(x0, y0)`` [m], cell size ``cell`` [m].
-    Returns outside the grid are dropped."""
+    Returns outside the grid are dropped. Per ring, every ray's cell is computed in one
+    branch-free pass (it vectorises), then the hits are marked."""
     ny, nx = occ.shape
+    nr = ring.shape[1]
+    ix = np.empty(nr, dtype=np.int64)
+    iy = np.empty(nr, dtype=np.int64)
     for i in range(ring.shape[0]):
-        for r in range(ring.shape[1]):
-            d = ring[i, r]
-            if d >= max_range:
-                continue
-            ix = int(math.floor((x[i, 0] + d * cos_t[r] - x0) / cell))
-            iy = int(math.floor((x[i, 1] + d * sin_t[r] - y0) / cell))
-            if 0 <= ix < nx and 0 <= iy < ny:
-                occ[iy, ix] = True
+        row = ring[i]
+        px, py = x[i, 0], x[i, 1]
+        for r in range(nr):  # (a ray at max_range hit nothing: its cell is not marked below)
+            ix[r] = int(math.floor((px + row[r] * cos_t[r] - x0) / cell))
+            iy[r] = int(math.floor((py + row[r] * sin_t[r] - y0) / cell))
+        for r in range(nr):
+            if row[r] < max_range and 0 <= ix[r] < nx and 0 <= iy[r] < ny:
+                occ[iy[r], ix[r]] = True
 
 
 def clearance(occ: np.ndarray, cell: float) -> np.ndarray:

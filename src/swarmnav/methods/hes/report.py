@@ -37,10 +37,9 @@ def reelect(h, step: Step) -> None:
     part = h.partition()
     ids = part.ids
     sl = np.array([h.subs[s].subleader for s in ids])
-    far, nearest = strayed(x, part.col, sl, h.params.core.stray, not h.no_obstacles, *h.obstacles.planar_arrays)
-    for j, f in enumerate(far.tolist()):
-        if f:
-            h.subs[ids[j]].subleader = int(nearest[j])
+    if handed_over(x, part.col, sl, h.params.core.stray, not h.no_obstacles, *h.obstacles.planar_arrays):
+        for s, a in zip(ids, sl.tolist()):
+            h.subs[s].subleader = a
     for q in h.at["elect"]:
         q.elect(step, part.col)
 
@@ -75,6 +74,19 @@ def strayed(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r
     return far, nearest
 
 
+@njit(cache=True)
+def handed_over(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi):
+    """:func:`strayed`, with each strayed subleader in ``sl`` replaced in place by its sub-swarm's
+    member nearest the centroid; returns how many were replaced (nothing is returned as an array)."""
+    far, nearest = strayed(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi)
+    k = 0
+    for j in range(sl.shape[0]):
+        if far[j]:
+            sl[j] = nearest[j]
+            k += 1
+    return k
+
+
 def report(h, step: Step, s: int) -> Report:
     """Subleader s's report: its Pack and the corridors toward the goal its ring shows (those
     whose throat is reachable straight from the centroid), and its members' nearest return."""
@@ -93,19 +105,23 @@ def report(h, step: Step, s: int) -> Report:
                             h.sin, pack.centroid[0], pack.centroid[1], *h.report_consts[4:])
         clear = float(step.ring_min[members].min())
     else:
-        pos, vel, cen, sl_row, rows, clear = report_rows(x, step.v, members, a, step.ring, step.ring_min, h.cos, h.sin,
-                                                         *h.report_gaps, *h.report_consts)
-        pack = Pack(s, a, members, pos, vel, cen, sl_row)
-    cors = [Corridor(r[0:2], r[2:4], w, r[5:7], c) for r, w, c in zip(rows, rows[:, 4].tolist(), rows[:, 7].tolist())]
-    cors.sort(key=lambda c: c.cost)
+        m = len(members)
+        buf, rows = np.empty((2 * m + 2, 2)), np.empty((len(h.cos), 8))  # (fewer openings than rays)
+        k, clear = report_rows(x, step.v, members, a, step.ring, step.ring_min, h.cos, h.sin, h.report_c, buf, rows)
+        pack = Pack(s, a, members, buf[:m], buf[m:2 * m], buf[2 * m], buf[2 * m + 1])
+        rows = rows[:k]
+    widths, costs = rows[:, 4].tolist(), rows[:, 7].tolist()
+    cors = [Corridor(rows[j, 0:2], rows[j, 2:4], widths[j], rows[j, 5:7], costs[j])
+            for j in sorted(range(len(costs)), key=costs.__getitem__)]  # by cost, stable
     for q in h.at["corridors"]:
         cors = q.corridors(step, sub, cors)
-    if h.at["cruise_mask"]:
-        clr = step.ring_min[members]
-        for q in h.at["cruise_mask"]:
-            free = q.cruise_mask(members)
-            if free is not None:
-                clr = clr[free] if np.count_nonzero(free) else clr
+    clr = None  # the members' returns a part's cruise mask keeps (None: every member's, as `clear`)
+    for q in h.at["cruise_mask"]:
+        free = q.cruise_mask(members)
+        if free is not None:
+            clr = step.ring_min[members] if clr is None else clr
+            clr = clr[free] if np.count_nonzero(free) else clr
+    if clr is not None:
         clear = min(clr.tolist())
     return Report(pack, tuple(cors), clear)
 
@@ -113,7 +129,8 @@ def report(h, step: Step, s: int) -> Report:
 def report_constants(h) -> tuple[tuple, tuple]:
     """The report's scalars, read once per run: gap detection's (R_L, h_open, and a part's
     ``seen_w``, ``seen_depth``) and the corridor filter's (goal, w_pass, cos of toward_deg, rho_vis,
-    R_L, the approach to narrow throats, through), as :func:`report_rows` takes them."""
+    R_L, the approach to narrow throats, through); :func:`report_rows` takes them as one float
+    array, ``np.array(gaps + consts, dtype=float)``."""
     p = h.params
     seen = next(((q.seen_w, q.seen_depth) for q in reversed(h.parts) if q.seen_w > 0.0), (0.0, 0.0))
     approach, approach_w = h.approach
@@ -123,13 +140,25 @@ def report_constants(h) -> tuple[tuple, tuple]:
 
 
 @njit(cache=True)
-def report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, max_range, h_open, seen_w, seen_depth,
-                gx, gy, w_pass, cos_toward, rho_vis, max_range2, check, approach, approach_w, through):
+def report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, c, pack, rows_out):
     """One report's arrays in one pass: the Pack's rows (``hierarchy._pack_rows``), the openings of
     subleader ``a``'s ring (:func:`detect_gaps`; one narrower than ``seen_w`` kept only if
     ``seen_passages`` at ``seen_depth``), the candidate corridors among them (rows of
-    ``corridors._filter_gaps``) and the members' nearest return [m]."""
+    ``corridors._filter_gaps``) and the members' nearest return [m].
+
+    ``c``: the report's scalars (:func:`report_constants`, gap detection's then the filter's, as
+    floats). Written into ``pack`` (2m + 2, 2): the members' positions, their velocities, the
+    centroid and the subleader's row, and into ``rows_out`` (at least one row per ray): the K
+    corridor rows. Returns ``(K, nearest return)`` (arrays written in place are cheaper to hand
+    back than returned ones)."""
+    max_range, h_open, seen_w, seen_depth = c[0], c[1], c[2], c[3]
     pos, vel, cen, sl_row = _pack_rows(x, v, members, a)
+    m = members.shape[0]
+    for i in range(m):
+        pack[i, 0], pack[i, 1] = pos[i, 0], pos[i, 1]
+        pack[m + i, 0], pack[m + i, 1] = vel[i, 0], vel[i, 1]
+    pack[2 * m, 0], pack[2 * m, 1] = cen[0], cen[1]
+    pack[2 * m + 1, 0], pack[2 * m + 1, 1] = sl_row[0], sl_row[1]
     sx, sy = x[a, 0], x[a, 1]
     gaps = detect_gaps(ring[a], sx, sy, cos_t, sin_t, max_range, h_open)
     if seen_w > 0.0:
@@ -147,12 +176,15 @@ def report_rows(x, v, members, a, ring, ring_min, cos_t, sin_t, max_range, h_ope
                     kept[k] = gaps[j]
                     k += 1
             gaps = kept
-    rows = _filter_gaps(gaps, sx, sy, gx, gy, w_pass, cos_toward, ring[a], sx, sy, cos_t, sin_t, cen[0], cen[1],
-                        rho_vis, max_range2, check, approach, approach_w, through)
+    rows = _filter_gaps(gaps, sx, sy, c[4], c[5], c[6], c[7], ring[a], sx, sy, cos_t, sin_t, cen[0], cen[1],
+                        c[8], c[9], c[10] > 0.5, c[11], c[12], c[13])
+    for j in range(rows.shape[0]):
+        for q in range(8):
+            rows_out[j, q] = rows[j, q]
     clear = np.inf
     for j in members:
         clear = min(clear, ring_min[j])
-    return pos, vel, cen, sl_row, rows, clear
+    return rows.shape[0], clear
 
 
 def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float, rho_vis: float,
@@ -179,16 +211,33 @@ def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float,
 
 
 def decision_state(h, step: Step) -> DecisionState:
-    """z(k) of eq. (18) from the reports alone."""
+    """z(k) of eq. (18) from the reports alone (n_c: :func:`split_paths`, counted in one pass per
+    report with the centroid's goal distance of eq. (19) computed once)."""
     p = h.params
     k, reports = step.k, step.reports
     ids = sorted(reports)
     gx, gy = float(h.goal[0]), float(h.goal[1])
-    cents = [reports[s].pack.centroid.tolist() for s in ids]
+    w_split, rho_vis, max_range = p.core.w_split, p.core.rho_vis, p.paper.lidar_range
+    cents, d_goal, widths, n_c = [], [], [], 0
+    for s in ids:
+        rep = reports[s]
+        cx, cy = rep.pack.centroid.tolist()
+        d0 = math.hypot(cx - gx, cy - gy)
+        cents.append((cx, cy))
+        d_goal.append(d0)
+        n = 0
+        for c in rep.corridors:
+            widths.append(c.width)
+            if c.width >= w_split:  # split_paths' test
+                mx, my = c.mid.tolist()
+                if math.hypot(mx - gx, my - gy) <= d0:
+                    if not c.direct:
+                        sx, sy = rep.pack.subleader_position.tolist()
+                        if not in_view(step.ring[rep.pack.subleader], sx, sy, c.target, rho_vis, max_range):
+                            continue
+                    n += 1
+        n_c = max(n_c, n)
     S = len(ids)
-    d_goal = [math.hypot(cx - gx, cy - gy) for cx, cy in cents]
-    widths = [c.width for s in ids for c in reports[s].corridors]
-    n_c = max(len(h.split_paths(step, reports[s])) for s in ids)
     n_near = sum(d < p.paper.r_merge for d in d_goal)  # eq. (15)
     d_swarm_min = math.inf
     for a in range(S):  # eq. (14)
