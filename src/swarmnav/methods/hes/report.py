@@ -195,19 +195,21 @@ def split_paths(rep: Report, goal: np.ndarray, ring: np.ndarray, w_split: float,
     seen back through the gate it is threading -- does not lead to the target, and a sub-swarm
     sent there turned back through the gate (alternating 4.5 / 5 m gates: Y 0.3 / 0.7 with such
     splits, 1 / 1 with none)."""
-    wide = [c for c in rep.corridors if c.width >= w_split]
-    if not wide:
-        return []
     gx, gy = float(goal[0]), float(goal[1])
     cx, cy = rep.pack.centroid.tolist()
     d0 = math.hypot(cx - gx, cy - gy)
     sx, sy = rep.pack.subleader_position.tolist()
-    out = []
-    for c in wide:
-        mx, my = c.mid.tolist()
-        if math.hypot(mx - gx, my - gy) <= d0 and (c.direct or in_view(ring, sx, sy, c.target, rho_vis, max_range)):
-            out.append(c)
-    return out
+    return [c for c in rep.corridors if _leads_on(c, gx, gy, d0, ring, sx, sy, w_split, rho_vis, max_range)]
+
+
+def _leads_on(c: Corridor, gx: float, gy: float, d0: float, ring: np.ndarray, sx: float, sy: float,
+              w_split: float, rho_vis: float, max_range: float) -> bool:
+    """:func:`split_paths`' test of one corridor: at least ``w_split`` wide, its mouth no farther
+    from the goal (gx, gy) than the centroid (``d0``), its exit in view of the subleader at (sx, sy)."""
+    if c.width < w_split:
+        return False
+    mx, my = c.mid.tolist()
+    return math.hypot(mx - gx, my - gy) <= d0 and (c.direct or in_view(ring, sx, sy, c.target, rho_vis, max_range))
 
 
 def decision_state(h, step: Step) -> DecisionState:
@@ -225,17 +227,12 @@ def decision_state(h, step: Step) -> DecisionState:
         d0 = math.hypot(cx - gx, cy - gy)
         cents.append((cx, cy))
         d_goal.append(d0)
+        sx, sy = rep.pack.subleader_position.tolist()
+        ring = step.ring[rep.pack.subleader]
         n = 0
         for c in rep.corridors:
             widths.append(c.width)
-            if c.width >= w_split:  # split_paths' test
-                mx, my = c.mid.tolist()
-                if math.hypot(mx - gx, my - gy) <= d0:
-                    if not c.direct:
-                        sx, sy = rep.pack.subleader_position.tolist()
-                        if not in_view(step.ring[rep.pack.subleader], sx, sy, c.target, rho_vis, max_range):
-                            continue
-                    n += 1
+            n += _leads_on(c, gx, gy, d0, ring, sx, sy, w_split, rho_vis, max_range)
         n_c = max(n_c, n)
     S = len(ids)
     n_near = sum(d < p.paper.r_merge for d in d_goal)  # eq. (15)

@@ -168,11 +168,13 @@ def band_guard(track: np.ndarray, d: np.ndarray, grad_d: np.ndarray, d_thr: floa
     for robots inside the obstacle band (``d < d_thr``; ours, not in the paper): the reference may
     steer a robot along an obstacle but never presses it into one, so how close the robot comes
     is set by the ESDF force of eq. (6) against the swarm's push alone."""
-    norm = np.linalg.norm(grad_d, axis=1)
-    inside = (d < d_thr) & (norm > 1e-12)
-    if not inside.any():
+    inside = np.flatnonzero(d < d_thr)  # most robots are outside the band: no norms for them
+    if inside.size == 0:
         return track
-    unit = grad_d[inside] / norm[inside, None]  # away from the obstacle
+    g = grad_d[inside]
+    norm = np.linalg.norm(g, axis=1)
+    keep = norm > 1e-12
+    inside, unit = inside[keep], g[keep] / norm[keep, None]  # away from the obstacle
     along = np.einsum("nd,nd->n", track[inside], unit)
     out = track.copy()
     out[inside] -= np.minimum(along, 0.0)[:, None] * unit
