@@ -1,6 +1,7 @@
 """SPH presets (``preset=paper`` / ``preset=released``) and the released parts they switch on:
 the quadratic obstacle force, the per-axis clamp, the planner's own speed bound."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -32,6 +33,12 @@ def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_valu
     q, g = registry.make("sph", preset="queue").params, registry.make("sph", preset="guard").params
     assert (g.goal_reset, g.band_guard, q.goal_reset, q.band_guard) == (0.5, True, 0.0, False)
     assert (g.plan_v_max, g.ref_reset, g.yield_range) == (q.plan_v_max, q.ref_reset, q.yield_range) == (0.8, 0.3, 1.2)
+    # retime: queue with re-timed local plans, nothing else
+    r = registry.make("sph", preset="retime").params
+    assert (r.retime, q.retime) == (0.8, 0.0)
+    assert dataclasses.replace(r, retime=0.0) == q
+    # the released 3-D controller has no SPH term in z; the paper's Algorithm 1 acts in every axis
+    assert (p.swarm_vertical, q.swarm_vertical, registry.make("sph").params.swarm_vertical) == (False, True, True)
     # an explicit value applies on top of the preset
     assert registry.make("sph", preset="released", k_p=7.0).params.k_p == 7.0
     with pytest.raises(swarmnav.ConfigError, match="unknown preset 'relased'"):

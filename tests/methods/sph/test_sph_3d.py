@@ -1,12 +1,17 @@
 """``sph`` on a 3-D scene: the same method, flown in (N, 3) (the SPH paper's Fig. 3 (C, D) setting)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 import swarmnav
 from swarmnav.methods import registry
+from swarmnav.methods.base import Observation
+from swarmnav.methods.sph.kernel import sph_forces
 from swarmnav.sensing import segments_blocked
-from swarmnav.world import loads
+from swarmnav.world import load_scenario, loads
+from swarmnav.world.scenario import Swarm
 
 # 30 m x 10 m x 6 m: posts, a low box, a hanging box and a ball between the swarm and its goal,
 # closed by walls, ground and ceiling so the swarm must thread the obstacles in 3-D
@@ -90,3 +95,41 @@ def test_sph_3d_is_deterministic_for_a_seed():
     np.testing.assert_array_equal(a.velocities, b.velocities)
     c = swarmnav.run("sph", scn, seed=5, steps=150)
     assert not np.array_equal(a.positions, c.positions)
+
+
+def test_swarm_vertical_false_drops_only_the_vertical_component_of_algorithm_1():
+    # two robots stacked 0.6 m apart in open space: their 1/r repulsion is vertical
+    scn = loads(SCENE)
+    scn = dataclasses.replace(scn, swarm=Swarm(n=2, spawn=scn.swarm.spawn))
+    x = np.array([[-3.0, 0.0, 2.0], [-3.0, 0.0, 2.6]])
+    v = np.array([[0.1, 0.0, 0.2], [0.0, 0.1, -0.1]])
+    obs = Observation(step=0, time=0.0, positions=x, velocities=v)
+    commands = {}
+    for vertical in (True, False):
+        m = registry.make("sph", swarm_vertical=vertical)
+        m.reset(scn, x, v, np.random.default_rng(0))
+        commands[vertical], _ = m.act(obs, np.random.default_rng(0))
+    p = registry.make("sph").params
+    force, _, _ = sph_forces(x, v, np.array([0]), np.array([1]), h=p.h, c=p.c, m=p.m, k_den=p.k_den,
+                             k_rep=p.k_rep, k_vis=p.k_vis, rho0=p.rho0, gamma=p.gamma)
+    assert abs(force[0, 2]) > 1.0  # the pair pushes itself apart vertically
+    np.testing.assert_array_equal(commands[True][:, :2], commands[False][:, :2])
+    np.testing.assert_allclose(commands[True][:, 2] - commands[False][:, 2], force[:, 2] / p.m, rtol=1e-12)
+
+
+def test_retime_frees_a_robot_whose_spline_cuts_its_path_short():
+    # Forest 0.25/7 of sph-forest-3d, where a robot of a 90 s run stood still for 40 s: at rest at
+    # the mouth of a slot 0.88 m wide (narrower than 2 d_thr), its grid path climbs 1.5 m and comes
+    # back down over the slot, and the spline, seeded on that path, cuts through the slot. The knots
+    # are spent on the path's length, so the cut spline starts so slowly (3 mm in the first 0.2 s)
+    # that every replan starts from rest again. Re-seeding the spline from its own curve frees it.
+    sc = load_scenario("random_forest_3d:density=0.25,seed=7,n=15,h_min=3.0,length=12,overlap=true")
+    at = np.array([2.31, 0.14, 3.39])
+    one = dataclasses.replace(sc, swarm=Swarm(n=1, spawn=(*(at - 0.005), *(at + 0.005)), clearance=0.0))
+    moved = {}
+    for retime in (0.0, 0.8):
+        res = swarmnav.run("sph", one, seed=1, horizon=8.0, preset="queue", retime=retime)
+        moved[retime] = float(np.linalg.norm(res.positions[-1, 0] - res.positions[0, 0]))
+        assert (res.metrics["sph_retimes"] > 0) == (retime > 0)
+    assert moved[0.0] < 0.1  # stuck
+    assert moved[0.8] > 3.0  # on its way, 0.4 m/s or more

@@ -103,6 +103,7 @@ class Sph:
         self._prev_visible = np.zeros(0, dtype=np.int64)
         self._plans = 0
         self._search_failures = 0
+        self._retimes = 0
         self._iterations = 0
         self._link_merges = 0
         self._link_splits = 0
@@ -132,6 +133,8 @@ class Sph:
         # Algorithm 1 over the visible neighbours, plus the ESDF environment force
         force, _, _ = sph_forces(x, v, vi, vj, h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep, k_vis=p.k_vis,
                                  rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor)
+        if not p.swarm_vertical and x.shape[1] == 3:  # released 3-D: Algorithm 1 acts in x, y only
+            force[:, 2] = 0.0
         d, grad = self.esdf.query(x)
         if p.env_law == "paper":
             force += environment_force(d, grad, p.k_env, p.d_thr)
@@ -181,6 +184,7 @@ class Sph:
         return {
             "sph_plans": float(self._plans),
             "sph_search_failures": float(self._search_failures),
+            "sph_retimes": float(self._retimes),
             "sph_opt_iterations_mean": self._iterations / max(self._plans, 1),
             "sph_link_merges": float(self._link_merges),
             "sph_link_splits": float(self._link_splits),
@@ -258,6 +262,41 @@ class Sph:
         if not p.plan_once:
             self._hold[:] = 0.0  # the new reference starts at this step
 
+    def _guide(self, pts: np.ndarray, reaches_end: bool) -> np.ndarray:
+        """Initial interior control points C_3 .. C_{K-3} from path points ``pts`` (ctrl_spacing apart)."""
+        p = self.params
+        if p.ctrl_seed == "knots":
+            # C_2 already stands for the path point one knot ahead (q + v dt, eq. 12) and, with a
+            # moving end, C_{K-2} for the one a knot before the end: seed the interior points
+            # with the path points at the knots between, so the reference runs at the knot speed
+            # ctrl_spacing / dt_knot = v_max instead of repeating those two points.
+            return pts[2:-1] if reaches_end or p.end_state == "rest" else pts[2:-2]
+        return pts[1:-1]  # released: C_3 .. C_{K-3} = path[1] .. path[-2] (two knots on repeated points)
+
+    def _retimed(self, plan, start, end, pts: np.ndarray, reaches_end: bool):
+        """``plan`` again, seeded from its own curve, if that curve is shorter than ``retime``
+        times the grid path it was seeded from (a path the spline cuts short): the knots are
+        spent on the path's length, so the cut spline flies slower than the planner's speed, and
+        from a reference at rest it starts so slowly that the next replan starts from rest again
+        (docs/methods/sph.md, *Re-timing*)."""
+        p = self.params
+        tau = np.linspace(0.0, plan.duration, 8 * (plan.ctrl.shape[0] - 3) + 1)
+        curve, _, _ = evaluate(plan.ctrl, plan.dt_knot, tau)
+        length = float(np.sum(np.linalg.norm(np.diff(curve, axis=0), axis=1)))
+        if length >= p.retime * float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1))):
+            return plan
+        seed = resample(curve, p.ctrl_spacing)
+        if len(seed) < 2:
+            return plan
+        seed[-1] = pts[-1]
+        guide = self._guide(seed, reaches_end)
+        if len(guide) == 0:
+            return plan
+        self._retimes += 1
+        again = optimize(start, end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
+        self._iterations += plan.iterations  # the first optimisation's; the plan's own are added by the caller
+        return again
+
     def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, others: np.ndarray | None = None):
         """One robot's replan: update its map, grid search to its goal, optimise the spline."""
         p = self.params
@@ -278,16 +317,11 @@ class Sph:
         if not reaches_end and p.end_state == "moving":
             tangent = pts[-1] - pts[-2]
             end_v = self._plan_v * tangent / max(np.linalg.norm(tangent), 1e-9)
-        if p.ctrl_seed == "knots":
-            # C_2 already stands for the path point one knot ahead (q + v dt, eq. 12) and, with a
-            # moving end, C_{K-2} for the one a knot before the end: seed the interior points
-            # with the path points at the knots between, so the reference runs at the knot speed
-            # ctrl_spacing / dt_knot = v_max instead of repeating those two points.
-            guide = pts[2:-1] if reaches_end or p.end_state == "rest" else pts[2:-2]
-        else:  # released: C_3 .. C_{K-3} = path[1] .. path[-2] (two knots spent on repeated points)
-            guide = pts[1:-1]
-        plan = optimize((q, v, a), (pts[-1], end_v, np.zeros_like(q)), guide, self._dt_knot,
-                        self.esdf, self._costs, p.max_iter)
+        end = (pts[-1], end_v, np.zeros_like(q))
+        guide = self._guide(pts, reaches_end)
+        plan = optimize((q, v, a), end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
+        if p.retime > 0 and len(guide):
+            plan = self._retimed(plan, (q, v, a), end, pts, reaches_end)
         self._plans += 1
         self._iterations += plan.iterations
         return plan

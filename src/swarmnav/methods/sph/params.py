@@ -20,18 +20,22 @@ class SphParams:
     #: kept below what the swarm forces can hold: the planner plans at 0.8 v_max, so a robot the swarm
     #: held back can catch up, and the position pull is capped at a_max (ref_reset = a_max / k_p).
     #: ``queue`` is ``headroom`` with yielding in narrow places (yielding.py): two robots near an
-    #: obstacle pass one after the other.
+    #: obstacle pass one after the other. ``guard`` (the 2-D Table II set) is ``queue`` with a
+    #: stronger pull on the final approach and no tracking into an obstacle; ``retime`` (the 3-D
+    #: Table II set) is ``queue`` with local plans re-timed where the spline cuts its path short.
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "paper": {},
         "headroom": {"plan_v_max": 0.8, "ref_reset": 0.3},
         "queue": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2},
         "guard": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "goal_reset": 0.5,
                   "band_guard": True},
+        "retime": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "retime": 0.8},
         "released": {
             "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
             "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
             "env_law": "released", "clip": "axis",
             "ctrl_seed": "released", "ref_reset": 1.0, "ref_clamp": False, "end_state": "rest",
+            "swarm_vertical": False,
         },
     }
 
@@ -74,6 +78,11 @@ class SphParams:
         "env_law = released only: the released ESDF is built on obstacles grown by this")
     clip: Literal["norm", "axis"] = param("norm", "", None, "eq. (2)",
         "bound of speed and command: the Euclidean norm (eq. 2), or each axis (the released clamp)")
+    swarm_vertical: bool = param(True, "", None, "ours (released: False)",
+        "3-D only: Algorithm 1 (density, repulsion, viscosity) acts along every axis (True: the paper "
+        "writes it for q in R^3), or in the horizontal plane only, the vertical left to the "
+        "tracking law and the obstacle force (False: the released sph_zhang_3d.cpp, whose z command "
+        "has no SPH term)")
     r_floor: float = param(0.05, "m", "(0, inf)", "ours", "distance floor in the 1/r repulsion (finite force)")
     esdf_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "ESDF grid, as the released sdf_map")
     grid_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "grid-search cell, as the released A*")
@@ -117,6 +126,10 @@ class SphParams:
         "an older field as heuristic); the planar search is always A* (weight 1.001)")
     search_weight_3d: float = param(10.0, "", "[1, inf)", "released astar/lambda_heu",
         "search_3d = astar only: heuristic weight of the 3-D A*, the released planner's")
+    retime: float = param(0.0, "", "[0, 1]", "ours",
+        "a local plan whose spline is shorter than this fraction of the grid path it was seeded "
+        "from is optimised again, seeded from its own curve at ctrl_spacing, so that it flies at "
+        "the planner's speed (0 = off)")
     replan_from: Literal["state", "reference"] = param("reference", "", None, "ours",
         "start state of a replan (released)")
     ref_reset: float = param(0.5, "m", "[0, inf)", "ours",
