@@ -274,28 +274,21 @@ class Sph:
         return pts[1:-1]  # released: C_3 .. C_{K-3} = path[1] .. path[-2] (two knots on repeated points)
 
     def _retimed(self, plan, start, end, pts: np.ndarray, reaches_end: bool):
-        """``plan`` again, seeded from its own curve, if that curve is shorter than ``retime``
-        times the grid path it was seeded from (a path the spline cuts short): the knots are
-        spent on the path's length, so the cut spline flies slower than the planner's speed, and
-        from a reference at rest it starts so slowly that the next replan starts from rest again
-        (docs/methods/sph.md, *Re-timing*)."""
+        """``plan`` optimised again, seeded from its own curve, if that curve is shorter than
+        ``retime`` times the grid path ``pts`` it was seeded from (a path the spline cuts short);
+        None if it is not. The knots are spent on the path's length, so the cut spline flies
+        slower than the planner's speed, and from a reference at rest it starts so slowly that
+        the next replan starts from rest again (docs/methods/sph.md, *Re-timing*)."""
         p = self.params
         tau = np.linspace(0.0, plan.duration, 8 * (plan.ctrl.shape[0] - 3) + 1)
         curve, _, _ = evaluate(plan.ctrl, plan.dt_knot, tau)
         length = float(np.sum(np.linalg.norm(np.diff(curve, axis=0), axis=1)))
         if length >= p.retime * float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1))):
-            return plan
-        seed = resample(curve, p.ctrl_spacing)
-        if len(seed) < 2:
-            return plan
-        seed[-1] = pts[-1]
-        guide = self._guide(seed, reaches_end)
+            return None
+        guide = self._guide(resample(curve, p.ctrl_spacing), reaches_end)  # the end point is not a guide
         if len(guide) == 0:
-            return plan
-        self._retimes += 1
-        again = optimize(start, end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
-        self._iterations += plan.iterations  # the first optimisation's; the plan's own are added by the caller
-        return again
+            return None
+        return optimize(start, end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
 
     def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, others: np.ndarray | None = None):
         """One robot's replan: update its map, grid search to its goal, optimise the spline."""
@@ -320,8 +313,12 @@ class Sph:
         end = (pts[-1], end_v, np.zeros_like(q))
         guide = self._guide(pts, reaches_end)
         plan = optimize((q, v, a), end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
-        if p.retime > 0 and len(guide):
-            plan = self._retimed(plan, (q, v, a), end, pts, reaches_end)
         self._plans += 1
         self._iterations += plan.iterations
+        if p.retime > 0 and len(guide):
+            again = self._retimed(plan, (q, v, a), end, pts, reaches_end)
+            if again is not None:
+                self._retimes += 1
+                self._iterations += again.iterations
+                plan = again
         return plan
