@@ -13,8 +13,8 @@ options after density and seed (default: the spec's ``n=15,h_min=3.0,length=12,o
 ``--below`` searches again under a roof lowered to each given altitude [m] (a slab over the whole
 forest) and prints the highest altitude of each path found: how high a robot must climb to cross.
 Each line also gives the share of the forest's floor under trunks at the spawn altitude (1.5 m;
-points every 5 cm over the 12 m x 18 m forest): d_obs counts volume, and trunks shorter than the
-ceiling cover more floor than d_obs.
+points every 5 cm over the forest, 12 m x 18 m in the spec): d_obs counts volume, and trunks
+shorter than the ceiling cover more floor than d_obs.
 """
 
 from __future__ import annotations
@@ -27,17 +27,16 @@ import numpy as np
 from swarmnav.experiments.spec import parse_seeds
 from swarmnav.methods.sph.gridsearch import OccupancyMaps
 from swarmnav.methods.sph.params import SphParams
-from swarmnav.world import load_scenario
+from swarmnav.world import Scenario, load_scenario
 from swarmnav.sensing import signed_distance
 from swarmnav.world.obstacles import Box
 
 SPEC = "n=15,h_min=3.0,length=12,overlap=true"  # as experiments/specs/sph-forest-3d.toml
 
 
-def has_way(spec: str, seed: int, roof: float | None = None) -> tuple[np.ndarray | None, int]:
-    """The full-knowledge search's path (None: no way through) and the forest's number of trunks;
-    with ``roof`` [m], under a slab that closes everything above that altitude."""
-    sc = load_scenario(spec)
+def has_way(sc: Scenario, seed: int, roof: float | None = None) -> np.ndarray | None:
+    """The full-knowledge search's path through forest ``sc`` (None: no way through); with
+    ``roof`` [m], under a slab that closes everything above that altitude."""
     obstacles = tuple(sc.obstacles)
     if roof is not None:
         b = sc.bounds
@@ -47,14 +46,15 @@ def has_way(spec: str, seed: int, roof: float | None = None) -> tuple[np.ndarray
                          wide=p.plan_clearance, wide_cost=p.plan_clearance_cost, weight_3d=p.search_weight_3d)
     start = sc.spawn_positions(np.random.default_rng(seed)).mean(axis=0)
     maps.observe(0, start)  # the whole forest is within the 1e9 m sensing range
-    return maps.search(0, start, sc.goal_array, p.max_expand), len(sc.obstacles) - 4
+    return maps.search(0, start, sc.goal_array, p.max_expand)
 
 
-def floor_cover(spec: str, length: float = 12.0, width: float = 18.0, altitude: float = 1.5) -> float:
-    """Share of the forest's floor (``x in [0, length]``, ``|y| <= width / 2``) inside a trunk at
-    ``altitude`` [m], on points 5 cm apart."""
-    sc = load_scenario(spec)
-    x, y = np.meshgrid(np.arange(0.025, length, 0.05), np.arange(-width / 2 + 0.025, width / 2, 0.05))
+def floor_cover(sc: Scenario, altitude: float = 1.5) -> float:
+    """Share of forest ``sc``'s floor inside a trunk at ``altitude`` [m], on points 5 cm apart. The
+    floor is where random_forest_3d draws trunks: x from 0 to 4 m before the goal, y between the
+    inner faces of the side walls (its first two obstacles)."""
+    length, half = sc.goal[0] - 4.0, sc.obstacles[0].min[1]
+    x, y = np.meshgrid(np.arange(0.025, length, 0.05), np.arange(-half + 0.025, half, 0.05))
     pts = np.column_stack([x.ravel(), y.ravel(), np.full(x.size, altitude)])
     return float(np.mean(signed_distance(sc.geometry, pts) < 0.0))
 
@@ -73,18 +73,18 @@ def main(argv=None) -> int:
     covers = []
     ss = parse_seeds(a.seeds)
     for s in ss:
-        spec = f"random_forest_3d:density={a.density},seed={s},{a.forest}"
-        path, k = has_way(spec, s)
+        sc = load_scenario(f"random_forest_3d:density={a.density},seed={s},{a.forest}")
+        path, k = has_way(sc, s), len(sc.obstacles) - 4  # trunks: all but the walls, ground and ceiling
         found += path is not None
         trunks.append(k)
-        cover = floor_cover(spec)
+        cover = floor_cover(sc)
         covers.append(cover)
         line = (f"  forest {s:3d}: {k:4d} trunks, floor covered {100 * cover:.0f} %, way through: "
                 f"{'yes' if path is not None else 'no'}")
         if path is not None:
             line += f" (highest {path[:, 2].max():.1f} m)"
         for i, z in enumerate(roofs):
-            low, _ = has_way(spec, s, roof=z)
+            low = has_way(sc, s, roof=z)
             under[i] += low is not None
             line += f"; under {z:g} m: " + (f"yes ({low[:, 2].max():.1f} m)" if low is not None else "no")
         print(line, flush=True)
