@@ -8,8 +8,10 @@ import pytest
 import swarmnav
 from swarmnav.methods import registry
 from swarmnav.methods.base import Observation
-from swarmnav.methods.sph.kernel import sph_forces
+from swarmnav.methods.sph import Sph
+from swarmnav.methods.sph.kernel import environment_force, sph_forces
 from swarmnav.sensing import segments_blocked
+from swarmnav.sensing.esdf import Esdf
 from swarmnav.world import load_scenario, loads
 from swarmnav.world.scenario import Swarm
 
@@ -133,3 +135,32 @@ def test_retime_frees_a_robot_whose_spline_cuts_its_path_short():
         assert (res.metrics["sph_retimes"] > 0) == (retime > 0)
     assert moved[0.0] < 0.1  # stuck
     assert moved[0.8] > 3.0  # on its way, 0.4 m/s or more
+
+
+def test_start_clearance_stops_a_reference_that_runs_into_a_trunk():
+    # Forest 0.45/19 of sph-forest-3d, where a robot of a 90 s retime run came 0.063 m from a trunk:
+    # held by the swarm 0.14 m from the trunk, its reference kept the 0.95 m/s it had towards the
+    # trunk, every replan started from that reference state (clamped to ref_reset from the robot, at
+    # the trunk's surface), so every new spline began by running into the trunk again. Here one
+    # robot is put there with that velocity and then held still (the swarm's part), and the tracking
+    # term of eq. (13) is measured along the way into the trunk.
+    sc = load_scenario("random_forest_3d:density=0.45,seed=19,n=15,h_min=3.0,length=12,overlap=true")
+    at = np.array([[0.52, 0.5, 4.41]])
+    one = dataclasses.replace(sc, swarm=Swarm(n=1, spawn=(*(at[0] - 0.005), *(at[0] + 0.005)), clearance=0.0))
+    esdf = Esdf.build(one.geometry, one.bounds, 0.1)
+    d, grad = esdf.query(at)
+    assert 0.1 < d[0] < 0.2
+    env = environment_force(d, grad, 10.0, 0.5)  # Table I's k_env, d_thr (the retime preset keeps them)
+    pressing = {}
+    for start_clearance in (0.0, 0.2):
+        m = Sph(preset="retime", start_clearance=start_clearance)
+        rng = np.random.default_rng(1)
+        m.reset(one, at, np.array([[0.95, 0.19, 0.2]]), rng)
+        into = []
+        for k in range(300):  # 3 s, 15 replans
+            v = np.array([[0.95, 0.19, 0.2]]) if k == 0 else np.zeros((1, 3))
+            a, _ = m.act(Observation(k, k * m.dt, at, v), rng)
+            into.append(-float((a[0] - env[0]) @ grad[0]))  # tracking term towards the trunk [m/s^2]
+        pressing[start_clearance] = float(np.mean(into[100:]))  # after the first second
+    assert pressing[0.0] > 2.0  # the reference keeps pulling the robot into the trunk
+    assert abs(pressing[0.2]) < 0.5  # restarted from the robot: no pull into it

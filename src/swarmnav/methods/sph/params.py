@@ -30,6 +30,8 @@ class SphParams:
         "guard": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "goal_reset": 0.5,
                   "band_guard": True},
         "retime": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "retime": 0.8},
+        "restart": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "retime": 0.8,
+                    "start_clearance": 0.2, "swarm_vertical": False},
         "released": {
             "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
             "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
@@ -145,6 +147,11 @@ class SphParams:
         "inside the obstacle band (d < d_thr) drop the tracking term's component towards the "
         "obstacle: the reference never presses a robot into an obstacle, the ESDF force and the "
         "swarm alone set how close it comes (False: eq. 13 as printed)")
+    start_clearance: float = param(0.0, "m", "[0, inf)", "ours",
+        "\"reference\" mode: a replan whose start (the reference state) is closer than this to an "
+        "obstacle starts from the robot's measured position and velocity instead, at rest in "
+        "acceleration: the reference's velocity there points into the obstacle, and a plan that "
+        "starts with it runs on into the obstacle at every replan (0 = off)")
     ref_clamp: bool = param(True, "", None, "ours",
         "beyond ref_reset move the start to ref_reset from the robot (ours; False: onto the "
         "robot, released): the pull stays continuous, no jump of the reference to the robot")
