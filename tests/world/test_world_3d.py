@@ -218,3 +218,25 @@ def test_only_overlapping_trunks_reach_the_densest_table_ii_forest():
     a = random_forest_3d(density=0.45, seed=1, h_min=3.0, length=12.0, overlap=True)
     b = random_forest_3d(density=0.45, seed=1, h_min=3.0, length=12.0, overlap=True)
     assert a.to_dict()["obstacles"] == b.to_dict()["obstacles"]
+
+
+def test_extruded_forest_is_the_planar_forest_as_full_height_trunks():
+    spec = "random_forest:density=0.35,seed=4,length=12,r_min=1.0,r_max=2.0,min_passage=1.0"
+    flat, tall = load_scenario(spec), load_scenario(spec + ",height=6")
+    assert (flat.dim, tall.dim) == (2, 3)
+    discs = [o for o in flat.obstacles if isinstance(o, Circle)]
+    trunks = [o for o in tall.obstacles if isinstance(o, Cylinder)]
+    assert [(d.center, d.radius) for d in discs] == [(t.center, t.radius) for t in trunks]
+    assert all(t.z == (0.0, 6.0) for t in trunks)
+    # V_obs / V_total of the forest box is the planar area fraction
+    volume = sum(_volume(t) for t in trunks)
+    assert volume / (12.0 * 20.0 * 6.0) == pytest.approx(sum(math.pi * d.radius**2 for d in discs) / (12.0 * 20.0))
+    assert 0.35 <= volume / (12.0 * 20.0 * 6.0) < 0.35 + math.pi * 2.0**2 / (12.0 * 20.0)
+    # closed: side walls, ground and ceiling; spawn and goal in a layer at 1.5 m
+    xs = np.linspace(-10.0, 22.0, 40)
+    for y, z in ((10.25, 1.5), (-10.25, 3.0), (0.0, -0.25), (0.0, 6.25)):
+        assert points_inside(tall.geometry, np.column_stack([xs, np.full(40, y), np.full(40, z)])).all()
+    assert tall.swarm.spawn[2::3] == (1.0, 2.0) and tall.goal_array[2] == 1.5
+    assert tall.goal_array[:2].tolist() == flat.goal_array.tolist()
+    with pytest.raises(ScenarioError, match="altitude must be in"):
+        load_scenario(spec + ",height=6,altitude=5.5")

@@ -32,6 +32,8 @@ def random_forest(
     min_passage: float = 0.0,
     max_forests: int = 200,
     spawn_length: float = 6.0,
+    height: float = 0.0,
+    altitude: float = 1.5,
 ) -> Scenario:
     """A planar forest of non-overlapping discs filling ``density`` of a rectangle.
 
@@ -50,6 +52,13 @@ def random_forest(
     continues, so a forest that passes on the first draw is the one ``min_passage = 0`` gives)
     until a corridor at least ``min_passage`` wide joins the two ends of the strip, checked on
     a 0.1 m grid of the exact distance to discs and walls; ``max_forests`` draws at most.
+
+    ``height`` [m] > 0 builds the same forest in 3-D: every disc a trunk from the ground to a
+    ceiling at ``height``, the side walls as tall, a ground slab under z = 0 and a ceiling slab
+    over z = ``height`` (each 0.5 m thick), the swarm spawning in the same area in a 1 m layer
+    centred at ``altitude`` [m] and the goal at that altitude. Full-height trunks cover ``density``
+    of the floor at every altitude, so ``V_obs / V_total`` is ``density`` exactly, and a forest
+    crossable in 2-D is crossable at every altitude. 0 (the default): the planar scene.
     """
     if not 0.0 <= density < 0.55:
         raise ScenarioError(f"random_forest: density must be in [0, 0.55), got {density}")
@@ -57,6 +66,9 @@ def random_forest(
         raise ScenarioError(f"random_forest: need 0 < r_min <= r_max, got {r_min}, {r_max}")
     if not 0.0 < spawn_length <= 8.0:
         raise ScenarioError(f"random_forest: spawn_length must be in (0, 8] m, got {spawn_length}")
+    if height and not (math.isfinite(height) and 1.0 <= altitude <= height - 1.0):
+        raise ScenarioError(f"random_forest: with a height, altitude must be in [1, height - 1] m (the 1 m spawn "
+                            f"layer keeps 0.5 m from ground and ceiling), got altitude={altitude}, height={height}")
     rng = np.random.default_rng(seed)
     for _ in range(max(1, int(max_forests))):
         centers, radii = _place_discs(rng, density, length, width, r_min, r_max, min_gap, max_tries)
@@ -67,6 +79,8 @@ def random_forest(
             f"random_forest: no forest of {max_forests} draws at density {density} has a "
             f"{min_passage} m passage; lower density or min_passage"
         )
+    if height:
+        return _extruded_forest(centers, radii, density, seed, n, length, width, spawn_length, height, altitude)
     wall = 1.0
     obstacles: list = [
         Box((-10.0, width / 2), (length + 10.0, width / 2 + wall)),
@@ -81,6 +95,30 @@ def random_forest(
         obstacles=tuple(obstacles),
         description=f"Random forest, obstacle area density {density:g}, seed {seed}",
         source=f"random_forest(density={density:g}, seed={seed})",
+    )
+    return validate(scn)
+
+
+def _extruded_forest(centers, radii, density, seed, n, length, width, spawn_length, height, altitude) -> Scenario:
+    """The planar forest ``random_forest`` drew, as full-height trunks in a closed 3-D world."""
+    height, altitude = float(height), float(altitude)
+    wall, x0, x1 = 0.5, -10.0, length + 10.0
+    yw = width / 2 + wall
+    obstacles: list = [
+        Box((x0, width / 2, -wall), (x1, yw, height + wall)),  # side walls
+        Box((x0, -yw, -wall), (x1, -width / 2, height + wall)),
+        Box((x0, -yw, -wall), (x1, yw, 0.0)),  # ground
+        Box((x0, -yw, height), (x1, yw, height + wall)),  # ceiling
+    ]
+    obstacles += [Cylinder((float(c[0]), float(c[1])), float(r), (0.0, height)) for c, r in zip(centers, radii)]
+    scn = Scenario(
+        name=f"random_forest:density={density:g},seed={seed},height={height:g}",
+        bounds=(x0, -yw, 0.0, x1, yw, height),
+        swarm=Swarm(n=n, spawn=(-2.0 - spawn_length, -4.0, altitude - 0.5, -2.0, 4.0, altitude + 0.5)),
+        goal=(length + 6.0, 0.0, altitude),
+        obstacles=tuple(obstacles),
+        description=f"Random forest of full-height trunks, obstacle volume density {density:g}, seed {seed}",
+        source=f"random_forest(density={density:g}, seed={seed}, height={height:g})",
     )
     return validate(scn)
 

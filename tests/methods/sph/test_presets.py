@@ -37,10 +37,6 @@ def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_valu
     r = registry.make("sph", preset="retime").params
     assert (r.retime, q.retime) == (0.8, 0.0)
     assert dataclasses.replace(r, retime=0.0) == q
-    # restart: retime with a replan at an obstacle restarted from the robot, nothing else
-    s = registry.make("sph", preset="restart").params
-    assert (s.start_clearance, r.start_clearance) == (0.2, 0.0)
-    assert dataclasses.replace(s, start_clearance=0.0) == r
     # the released 3-D controller has no SPH term in z; the paper's Algorithm 1 acts in every axis
     assert (p.swarm_vertical, q.swarm_vertical, registry.make("sph").params.swarm_vertical) == (False, True, True)
     # an explicit value applies on top of the preset

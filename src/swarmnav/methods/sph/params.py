@@ -30,8 +30,6 @@ class SphParams:
         "guard": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "goal_reset": 0.5,
                   "band_guard": True},
         "retime": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "retime": 0.8},
-        "restart": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "retime": 0.8,
-                    "start_clearance": 0.2},
         "released": {
             "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
             "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
