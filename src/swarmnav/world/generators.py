@@ -66,7 +66,9 @@ def random_forest(
         raise ScenarioError(f"random_forest: need 0 < r_min <= r_max, got {r_min}, {r_max}")
     if not 0.0 < spawn_length <= 8.0:
         raise ScenarioError(f"random_forest: spawn_length must be in (0, 8] m, got {spawn_length}")
-    if height and not (math.isfinite(height) and 1.0 <= altitude <= height - 1.0):
+    if not (height >= 0.0 and math.isfinite(height)):
+        raise ScenarioError(f"random_forest: height must be 0 (a planar forest) or > 0 m, got {height}")
+    if height and not 1.0 <= altitude <= height - 1.0:
         raise ScenarioError(f"random_forest: with a height, altitude must be in [1, height - 1] m (the 1 m spawn "
                             f"layer keeps 0.5 m from ground and ceiling), got altitude={altitude}, height={height}")
     rng = np.random.default_rng(seed)
@@ -99,17 +101,27 @@ def random_forest(
     return validate(scn)
 
 
+_SLAB = 0.5  # [m] thickness of the side walls, ground and ceiling of a 3-D forest
+
+
+def _closed_world(x0: float, x1: float, width: float, height: float) -> list:
+    """Side walls at y = +-width/2, a ground slab under z = 0 and a ceiling slab over z = height,
+    from x0 to x1: a 3-D forest's swarm must cross it, not fly round or over it."""
+    yw = width / 2 + _SLAB
+    return [
+        Box((x0, width / 2, -_SLAB), (x1, yw, height + _SLAB)),  # side walls
+        Box((x0, -yw, -_SLAB), (x1, -width / 2, height + _SLAB)),
+        Box((x0, -yw, -_SLAB), (x1, yw, 0.0)),  # ground
+        Box((x0, -yw, height), (x1, yw, height + _SLAB)),  # ceiling
+    ]
+
+
 def _extruded_forest(centers, radii, density, seed, n, length, width, spawn_length, height, altitude) -> Scenario:
     """The planar forest ``random_forest`` drew, as full-height trunks in a closed 3-D world."""
     height, altitude = float(height), float(altitude)
-    wall, x0, x1 = 0.5, -10.0, length + 10.0
-    yw = width / 2 + wall
-    obstacles: list = [
-        Box((x0, width / 2, -wall), (x1, yw, height + wall)),  # side walls
-        Box((x0, -yw, -wall), (x1, -width / 2, height + wall)),
-        Box((x0, -yw, -wall), (x1, yw, 0.0)),  # ground
-        Box((x0, -yw, height), (x1, yw, height + wall)),  # ceiling
-    ]
+    x0, x1 = -10.0, length + 10.0
+    yw = width / 2 + _SLAB
+    obstacles = _closed_world(x0, x1, width, height)
     obstacles += [Cylinder((float(c[0]), float(c[1])), float(r), (0.0, height)) for c, r in zip(centers, radii)]
     scn = Scenario(
         name=f"random_forest:density={density:g},seed={seed},height={height:g}",
@@ -236,14 +248,9 @@ def random_forest_3d(
     rng = np.random.default_rng(seed)
     place = _overlap_trunks if overlap else _place_trunks
     trunks = place(rng, density, length, width, height, d_min, d_max, h_min, box_share, min_gap, max_tries)
-    wall, x0, x1 = 0.5, -8.0, length + 6.0
-    yw = width / 2 + wall
-    obstacles: list = [
-        Box((x0, width / 2, -wall), (x1, yw, height + wall)),  # side walls
-        Box((x0, -yw, -wall), (x1, -width / 2, height + wall)),
-        Box((x0, -yw, -wall), (x1, yw, 0.0)),  # ground
-        Box((x0, -yw, height), (x1, yw, height + wall)),  # ceiling
-    ]
+    x0, x1 = -8.0, length + 6.0
+    yw = width / 2 + _SLAB
+    obstacles = _closed_world(x0, x1, width, height)
     for x, y, w, h, square in trunks:
         if square:
             obstacles.append(Box((x - w / 2, y - w / 2, 0.0), (x + w / 2, y + w / 2, h)))

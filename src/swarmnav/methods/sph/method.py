@@ -235,7 +235,7 @@ class Sph:
                     start_q[off] = x[off]
                 if p.reset_velocity:  # ours: restart from the measured velocity as well
                     start_v[off] = v[off]
-            if p.start_clearance > 0:  # ours: a reference at an obstacle is no start (Re-timing)
+            if p.start_clearance > 0:  # ours: a reference at an obstacle is no start (docs: A start at an obstacle)
                 bad = self.esdf.query(start_q)[0] < p.start_clearance
                 start_q[bad], start_v[bad], start_a[bad] = x[bad], v[bad], 0.0
         plans = []
