@@ -34,7 +34,7 @@ from swarmnav.world.obstacles import Box
 SPEC = "n=15,h_min=3.0,length=12,overlap=true"  # as experiments/specs/sph-forest-3d.toml
 
 
-def has_way(sc: Scenario, seed: int, roof: float | None = None) -> np.ndarray | None:
+def way_through(sc: Scenario, seed: int, roof: float | None = None) -> np.ndarray | None:
     """The full-knowledge search's path through forest ``sc`` (None: no way through); with
     ``roof`` [m], under a slab that closes everything above that altitude."""
     obstacles = tuple(sc.obstacles)
@@ -74,7 +74,7 @@ def main(argv=None) -> int:
     ss = parse_seeds(a.seeds)
     for s in ss:
         sc = load_scenario(f"random_forest_3d:density={a.density},seed={s},{a.forest}")
-        path, k = has_way(sc, s), len(sc.obstacles) - 4  # trunks: all but the walls, ground and ceiling
+        path, k = way_through(sc, s), len(sc.obstacles) - 4  # trunks: all but the walls, ground and ceiling
         found += path is not None
         trunks.append(k)
         cover = floor_cover(sc)
@@ -84,7 +84,7 @@ def main(argv=None) -> int:
         if path is not None:
             line += f" (highest {path[:, 2].max():.1f} m)"
         for i, z in enumerate(roofs):
-            low = has_way(sc, s, roof=z)
+            low = way_through(sc, s, roof=z)
             under[i] += low is not None
             line += f"; under {z:g} m: " + (f"yes ({low[:, 2].max():.1f} m)" if low is not None else "no")
         print(line, flush=True)

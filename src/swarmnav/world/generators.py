@@ -81,8 +81,9 @@ def random_forest(
             f"random_forest: no forest of {max_forests} draws at density {density} has a "
             f"{min_passage} m passage; lower density or min_passage"
         )
+    spawn, goal = (-2.0 - spawn_length, -4.0, -2.0, 4.0), (length + 6.0, 0.0)  # [m]: ends 2 m before, 6 m past
     if height:
-        return _extruded_forest(centers, radii, density, seed, n, length, width, spawn_length, height, altitude)
+        return _extruded_forest(centers, radii, density, seed, n, length, width, spawn, goal, height, altitude)
     wall = 1.0
     obstacles: list = [
         Box((-10.0, width / 2), (length + 10.0, width / 2 + wall)),
@@ -92,8 +93,8 @@ def random_forest(
     scn = Scenario(
         name=f"random_forest:density={density:g},seed={seed}",
         bounds=(-10.0, -width / 2 - wall - 1.0, length + 10.0, width / 2 + wall + 1.0),
-        swarm=Swarm(n=n, spawn=(-2.0 - spawn_length, -4.0, -2.0, 4.0)),
-        goal=(length + 6.0, 0.0),
+        swarm=Swarm(n=n, spawn=spawn),
+        goal=goal,
         obstacles=tuple(obstacles),
         description=f"Random forest, obstacle area density {density:g}, seed {seed}",
         source=f"random_forest(density={density:g}, seed={seed})",
@@ -116,8 +117,9 @@ def _closed_world(x0: float, x1: float, width: float, height: float) -> list:
     ]
 
 
-def _extruded_forest(centers, radii, density, seed, n, length, width, spawn_length, height, altitude) -> Scenario:
-    """The planar forest ``random_forest`` drew, as full-height trunks in a closed 3-D world."""
+def _extruded_forest(centers, radii, density, seed, n, length, width, spawn, goal, height, altitude) -> Scenario:
+    """The planar forest ``random_forest`` drew, as full-height trunks in a closed 3-D world; the
+    planar ``spawn`` rectangle and ``goal`` lifted to a 1 m layer and a point at ``altitude``."""
     height, altitude = float(height), float(altitude)
     x0, x1 = -10.0, length + 10.0
     yw = width / 2 + _SLAB
@@ -126,8 +128,8 @@ def _extruded_forest(centers, radii, density, seed, n, length, width, spawn_leng
     scn = Scenario(
         name=f"random_forest:density={density:g},seed={seed},height={height:g}",
         bounds=(x0, -yw, 0.0, x1, yw, height),
-        swarm=Swarm(n=n, spawn=(-2.0 - spawn_length, -4.0, altitude - 0.5, -2.0, 4.0, altitude + 0.5)),
-        goal=(length + 6.0, 0.0, altitude),
+        swarm=Swarm(n=n, spawn=(*spawn[:2], altitude - 0.5, *spawn[2:], altitude + 0.5)),
+        goal=(*goal, altitude),
         obstacles=tuple(obstacles),
         description=f"Random forest of full-height trunks, obstacle volume density {density:g}, seed {seed}",
         source=f"random_forest(density={density:g}, seed={seed}, height={height:g})",
