@@ -187,8 +187,12 @@ def _cmd_run(args) -> int:
     steps = res.config["steps"]
     print(f"{res.config['method']} on {scn.name}, seed {args.seed}, {steps} steps of {res.config['dt']:g} s "
           f"({res.config['horizon']:g} s simulated, {res.wall_time:.2f} s wall)")
-    print(f"  Y = {m['Y']:.0f}  R_goal = {m['R_goal']:.3f}  E_mean = {m['E_mean']:.3f} m  "
-          f"R_unsafe = {m['R_unsafe']:.3f}  d_clr_min = {m['d_clr_min']:.3f} m  L_mean = {m['L_mean']:.1f} m")
+    goal = (f"Y = {m['Y']:.0f}  R_goal = {m['R_goal']:.3f}  E_mean = {m['E_mean']:.3f} m  "
+            if "Y" in m else "no goal (periodic box)  ")
+    print(f"  {goal}R_unsafe = {m['R_unsafe']:.3f}  d_clr_min = {m['d_clr_min']:.3f} m"
+          + (f"  L_mean = {m['L_mean']:.1f} m" if "L_mean" in m else "")
+          + f"  collisions = {m['collisions']:.0f}  crashes = {m['crashes']:.0f} of {res.positions.shape[1]} "
+          f"(contact = {res.config['rules']['contact']})")
     if args.plot:
         from swarmnav.viz import plot_run
 
@@ -299,7 +303,8 @@ def _cmd_experiment(args) -> int:
     failed = sum(r["status"] != "done" for r in rows)
     print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/results.sqlite, runs.csv, summary.csv")
     for s in summary:
-        keys = [k for k in ("Y_mean", "R_goal_mean", "E_mean_mean", "R_unsafe_mean") if k in s]
+        keys = [k for k in ("Y_mean", "R_goal_mean", "E_mean_mean", "R_unsafe_mean", "collisions_mean",
+                            "crashes_mean") if k in s]
         print(f"  {s['variant']:32s} " + "  ".join(f"{k}={s[k]:.3f}" for k in keys))
     if failed:
         print(f"  {failed} run(s) failed (see the error column of runs.csv); rerun the same command to retry them",

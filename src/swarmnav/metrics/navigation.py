@@ -37,11 +37,12 @@ class MetricParams:
 def navigation_metrics(
     positions: np.ndarray,
     clearance: np.ndarray,
-    goal: np.ndarray,
+    goal: np.ndarray | None,
     n_subswarms: np.ndarray | None = None,
     n_events: int = 0,
     params: MetricParams = MetricParams(),
     periodic_box: float | None = None,
+    reached: np.ndarray | None = None,
 ) -> dict[str, float]:
     """All scalar run metrics.
 
@@ -49,15 +50,22 @@ def navigation_metrics(
         positions: (K + 1, N, d) positions [m], d = 2 or 3.
         clearance: (K + 1, N) signed distance of every agent to the nearest obstacle [m]
             (+inf in an obstacle-free world).
-        goal: (d,) goal position [m].
+        goal: (d,) goal position [m]; None for a scene without a goal (a periodic box): the
+            goal metrics (E_*, R_goal, Y, path_stretch, S_scene) are then left out.
         n_subswarms: (K + 1,) sub-swarm count per step (None: one swarm throughout).
         n_events: number of structural (split / merge) events.
+        reached: (N,) whether each agent ended at the goal, as the referee judges it (within the
+            goal radius, in line of sight of the goal, inside the world, not crashed: see
+            :func:`swarmnav.sim.rollout.goal_reached`); None: within ``r_succ`` of the goal.
     """
     K = positions.shape[0] - 1
     N = positions.shape[1]
     p = params
+    has_goal = goal is not None
+    if not has_goal:
+        goal = positions[0].mean(axis=0)  # a placeholder: nothing measured against it is reported
     e = norms(positions[-1] - goal)  # terminal goal error e_i [m]
-    R_goal = float(np.mean(e <= p.r_succ))
+    R_goal = float(np.mean(e <= p.r_succ if reached is None else reached))
     d_min = clearance.min(axis=1)  # d_min(k): min over agents [m]
     inner = d_min[1:K] if K >= 2 else d_min[:0]
     frac = (lambda thr: float(np.mean(inner < thr))) if len(inner) else (lambda thr: 0.0)
@@ -98,7 +106,14 @@ def navigation_metrics(
         "N_swarm": float(np.mean(n_subswarms)) if n_subswarms is not None else 1.0,
         "N_event": float(n_events),
     }
+    if not has_goal:
+        for k in GOAL_METRICS:
+            del out[k]
     return out
+
+
+#: The metrics measured against the goal, left out for a scene without one.
+GOAL_METRICS = ("E_mean", "E_90", "sigma_E", "R_goal", "Y", "L_mean", "path_stretch", "S_scene")
 
 
 def _rising_edges(flags: np.ndarray) -> int:

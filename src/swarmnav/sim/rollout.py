@@ -12,18 +12,21 @@ from swarmnav._version import __version__
 from swarmnav.errors import ConfigError, DivergedError, ScenarioError
 from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
-from swarmnav.metrics.flight import flight_metrics
+from swarmnav.metrics.flight import FlightParams, flight_metrics
 from swarmnav.metrics.navigation import MetricParams, navigation_metrics
 from swarmnav.params import as_dict
 from swarmnav.sensing import PreparedGeometry
+from swarmnav.sim.referee import Referee
 from swarmnav.sim.result import RunResult
 from swarmnav.world.catalog import load_scenario
-from swarmnav.world.scenario import Scenario
+from swarmnav.world.scenario import Rules, Scenario
 
 
 #: Options of the run itself, accepted by :func:`run` beside the method's parameters (and by
 #: ``--set`` on the command line and in experiment specs).
-RUN_OPTIONS = ("z_fly",)
+RUN_OPTIONS = ("z_fly", "boundary", "contact", "goal_radius", "d_safe", "body_radius")
+#: The run options that override the scene's referee settings (``world.boundary``, ``[rules]``).
+SCENE_OPTIONS = RUN_OPTIONS[1:]
 
 
 def run(
@@ -35,6 +38,11 @@ def run(
     horizon: float | None = None,
     progress: bool | Any = False,
     z_fly: float | str | None = None,
+    boundary: str | None = None,
+    contact: str | None = None,
+    goal_radius: float | None = None,
+    d_safe: float | None = None,
+    body_radius: float | None = None,
     **params: Any,
 ) -> RunResult:
     """Simulate ``method`` on ``scenario`` for ``steps`` steps from a seeded start.
@@ -57,11 +65,15 @@ def run(
         progress: True for a tqdm bar, or a callable ``f(done_steps)``.
         z_fly: altitude [m] of a planar method on a 3-D scene (default: the middle of the
             spawn box's z range); an error anywhere else.
+        boundary, contact, goal_radius, d_safe, body_radius: override the scene's
+            ``world.boundary`` and ``[rules]`` (docs/scenarios.md); None keeps the scene's.
         **params: method parameters (unknown names raise ConfigError).
 
     The same (method, params, scene, seed, steps) always gives identical arrays.
     """
     scn = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
+    scn = with_rules(scn, boundary=boundary, contact=contact, goal_radius=goal_radius, d_safe=d_safe,
+                     body_radius=body_radius)
     m = registry.make(method, **params) if isinstance(method, str) else method
     if (steps is None) == (horizon is None):
         raise ConfigError("give exactly one of steps or horizon")
@@ -106,9 +118,16 @@ def run(
     # the usual case -- the state is (N, d) float64 arrays recorded as they are -- checks finiteness
     # and copies the new state into its rows of P and V in one compiled pass
     direct = plane_z is None and period is None
+    rules = scn.rules
+    referee = Referee(N, rules.body_radius, period, bounds=world.bounds if scn.boundary == "wall" else None) \
+        if scn.contact == "crash" else None
+    if referee is not None:
+        events += referee.judge(0, P[0], C[0])
     for k in range(steps):
         cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
+        if referee is not None:
+            referee.hold(pos, vel)
         if direct and _plain(pos, vel, d):
             finite = _finite_into(pos, vel, P[k + 1], V[k + 1])
         else:
@@ -137,9 +156,11 @@ def run(
         if evs:
             for ev in evs:
                 events.append({"step": k, **ev})
+        if referee is not None:
+            events += referee.judge(k + 1, P[k + 1], C[k + 1])
         if bar is not None and (k % 10 == 9 or k == steps - 1):
             bar(k + 1)
-        if info.get("done"):  # the method's task is complete: record this state and stop
+        if info.get("done") or (referee is not None and referee.crashed.all()):  # the method's task is complete: record this state and stop
             P, V, C, lab = P[: k + 2].copy(), V[: k + 2].copy(), C[: k + 2].copy(), lab[: k + 2].copy()
             roles = None if roles is None else roles[: k + 2].copy()
             if bar is not None:
@@ -156,6 +177,8 @@ def run(
             "params": as_dict(m.params),
             "scenario": scn.to_dict(),
             "seed": int(seed),
+            "rules": {"boundary": scn.boundary, "contact": scn.contact, "goal_radius": rules.goal_radius,
+                      "d_safe": rules.d_safe, "body_radius": rules.body_radius},
             "steps": int(steps),
             "dt": dt,
             "horizon": int(steps) * dt,  # [s] simulated time asked for (a method may end the run early)
@@ -165,14 +188,20 @@ def run(
         positions=P, velocities=V, clearance=C, labels=lab, roles=roles, events=events, wall_time=wall,
     )
     n_struct = sum(1 for e in events if e.get("action") in ("split", "merge"))
+    crashed = referee.crashed if referee is not None else np.zeros(N, dtype=bool)
+    goal = scn.goal_array if scn.has_goal else None
     metrics = navigation_metrics(
-        P, C, scn.goal_array, result.n_subswarms, n_struct, MetricParams(),
+        P, C, goal, result.n_subswarms, n_struct,
+        MetricParams(r_succ=rules.goal_radius, d_safe=rules.d_safe, r_s=rules.d_safe, body_radius=rules.body_radius),
         periodic_box=period,
+        reached=None if goal is None else goal_reached(scn, P[-1], crashed),
     )
+    metrics["crashes"] = float(crashed.sum())
     if period is None:  # the SPH flight metrics cross an open world to a goal; on a torus the wrap
         # jumps would count as path and jerk, and there is no goal to arrive at (docs/metrics.md).
         # Same pairs, same contact distance: the minimum is reused, not searched again.
-        metrics.update(flight_metrics(P, V, C, scn.goal_array, dt, min_pair=metrics["min_inter_agent_distance"]))
+        metrics.update(flight_metrics(P, V, C, scn.goal_array, dt, FlightParams(body_radius=rules.body_radius),
+                                      min_pair=metrics["min_inter_agent_distance"]))
     metrics.update(m.summary())
     result.metrics = metrics
     timings = getattr(m, "timings", None)  # optional hook: wall-clock figures, never metrics
@@ -182,6 +211,55 @@ def run(
     if callable(artifacts):
         result.artifacts = dict(artifacts())
     return result
+
+
+def with_rules(scn: Scenario, *, boundary: Any = None, contact: Any = None, goal_radius: Any = None,
+               d_safe: Any = None, body_radius: Any = None) -> Scenario:
+    """``scn`` with its boundary and referee settings overridden where given (None: the scene's).
+    A bad value raises ConfigError naming the option."""
+    from dataclasses import replace
+
+    given = {k: v for k, v in (("goal_radius", goal_radius), ("d_safe", d_safe), ("body_radius", body_radius))
+             if v is not None}
+    for k, v in given.items():
+        try:
+            given[k] = float(v)
+        except (TypeError, ValueError):
+            raise ConfigError(f"{k} must be a number [m], got {v!r}") from None
+    if contact is not None:
+        given["contact"] = str(contact)
+    if boundary is not None and str(boundary) != scn.boundary:
+        b = str(boundary)
+        if b == "periodic" or scn.periodic:
+            raise ConfigError(f"boundary={b}: a scene is periodic or not by its own geometry "
+                              f"({scn.name} is {scn.boundary}); only wall and open are interchangeable")
+        try:
+            scn = replace(scn, boundary=b)
+        except ScenarioError as e:
+            raise ConfigError(str(e).split(": ", 1)[-1]) from None
+    if given:
+        try:
+            scn = replace(scn, rules=replace(scn.rules, **given))
+        except ScenarioError as e:
+            raise ConfigError(str(e)) from None
+    return scn
+
+
+def goal_reached(scn: Scenario, final: np.ndarray, crashed: np.ndarray) -> np.ndarray:
+    """(N,) whether each agent ended at the goal: within ``rules.goal_radius`` of it, in line of
+    sight of it (no obstacle or wall between), inside the world's bounds (in a walled or open
+    world) and not crashed. ``final`` is the last recorded (N, d) state."""
+    from swarmnav.sensing import segments_blocked
+
+    goal = scn.goal_array
+    x = np.asarray(final, dtype=np.float64)
+    near = np.linalg.norm(x - goal, axis=1) <= scn.rules.goal_radius
+    inside = np.all((x >= scn.lower) & (x <= scn.upper), axis=1)
+    ok = near & inside & ~np.asarray(crashed, dtype=bool)
+    if ok.any() and not scn.geometry.is_empty:
+        idx = np.flatnonzero(ok)
+        ok[idx] = ~segments_blocked(scn.geometry, x[idx], np.broadcast_to(goal, (len(idx), len(goal))))
+    return ok
 
 
 def _all_finite(pos: np.ndarray, vel: np.ndarray) -> bool:

@@ -56,6 +56,10 @@ def draw_scene(
             shapes, facecolor=OBSTACLE_FACE, edgecolor=OBSTACLE_EDGE, linewidth=0.8, zorder=1))
         handles.append(mpatches.Patch(facecolor=OBSTACLE_FACE, edgecolor=OBSTACLE_EDGE, label="obstacle"))
     x0, y0, x1, y1 = scenario.bounds
+    if scenario.boundary == "wall":  # the closed world's walls: a solid frame on the bounds
+        handles.append(ax.add_patch(mpatches.Rectangle(
+            (x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=OBSTACLE_EDGE, linewidth=2.5,
+            zorder=1, label="world wall")))
     if scenario.periodic:
         handles.append(ax.add_patch(mpatches.Rectangle(
             (x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor="0.4", linestyle=":", linewidth=1.0,

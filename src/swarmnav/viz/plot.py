@@ -160,6 +160,12 @@ def _trajectories(ax, result: RunResult, scn: Scenario) -> list:
             ax.scatter(*xy.T, s=45, marker=marker, color=color, edgecolors="black", linewidths=0.6, zorder=7,
                        **flat)
     handles += [h for h in event_handles() if any(a == h.get_label() for _, a, _ in points)]
+    crashes = [(e["step"], e["agent"]) for e in result.events if e.get("action") == "crash"]
+    if crashes:  # where each crashed agent hit (it stayed there)
+        xy = np.array([P[min(k, K), i] for k, i in crashes]).reshape(-1, d)
+        ax.scatter(*xy.T, s=60, marker="X", color="black", edgecolors="white", linewidths=0.6, zorder=8, **flat)
+        handles.append(Line2D([], [], linestyle="none", marker="X", color="black", markersize=7,
+                              label=f"crash ({len(crashes)})"))
     n_ids = len(palette)
     if 1 < n_ids <= 8:  # few sub-swarms: name their colours; many: the colours speak for themselves
         ids = np.unique(labels)
@@ -176,7 +182,7 @@ def _clearance_and_structure(ax_t, result: RunResult) -> None:
     K = result.positions.shape[0] - 1
     dt = float(result.config.get("dt", 1.0))
     t = np.arange(K + 1) * dt
-    d_safe = MetricParams().d_safe
+    d_safe = float(result.config.get("rules", {}).get("d_safe", MetricParams().d_safe))
     d_min = np.where(np.isfinite(result.min_clearance), result.min_clearance, np.nan)
     ax_t.plot(t, d_min, color="tab:red", linewidth=1.2, label="min clearance [m]")
     ax_t.axhline(d_safe, color="0.5", linestyle="--", linewidth=1.0, label=f"d_safe = {d_safe:g} m")
@@ -200,11 +206,13 @@ def _clearance_and_structure(ax_t, result: RunResult) -> None:
 
 
 def _run_title(result: RunResult, scn: Scenario) -> str:
-    """Method, scene, seed, N and K; Y, R_goal, E_mean and R_unsafe."""
+    """Method, scene, seed, N and K; Y, R_goal, E_mean and R_unsafe; collisions and crashes."""
     K, N = result.positions.shape[0] - 1, result.positions.shape[1]
     m, cfg = result.metrics, result.config
+    goal = (f"Y = {fmt_metric(m, 'Y', '.0f')}   R_goal = {fmt_metric(m, 'R_goal', '.2f')}   "
+            f"E_mean = {fmt_metric(m, 'E_mean', '.2f', ' m')}   " if "Y" in m else "")
     return (
         f"{cfg.get('method', '?')} on {scn.name}, seed {cfg.get('seed', '?')}, N = {N}, K = {K}\n"
-        f"Y = {fmt_metric(m, 'Y', '.0f')}   R_goal = {fmt_metric(m, 'R_goal', '.2f')}   "
-        f"E_mean = {fmt_metric(m, 'E_mean', '.2f', ' m')}   R_unsafe = {fmt_metric(m, 'R_unsafe', '.3f')}"
+        f"{goal}R_unsafe = {fmt_metric(m, 'R_unsafe', '.3f')}   "
+        f"collisions = {fmt_metric(m, 'collisions', '.0f')}   crashes = {fmt_metric(m, 'crashes', '.0f')}"
     )

@@ -6,6 +6,7 @@ the generators (which build scenarios) need not import each other.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -31,6 +32,7 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> Scenario:
         scn = load_file(s)
     elif ":" in s or s in generators.GENERATORS:
         scn = generators.from_spec(s, n=overrides.get("n"))
+        scn = replace(scn, name=_label(scn.name, s, overrides.get("n")))
     elif s in builtin_names():
         text = resources.files("swarmnav.world").joinpath("scenes", f"{s}.toml").read_text("utf-8")
         scn = loads(text, source=f"{s}.toml")
@@ -52,3 +54,24 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> Scenario:
             raise ScenarioError(f"{s}: n must be an integer >= 1, got {n!r}")
         scn = scn.with_n(int(n))
     return scn
+
+
+def _label(name: str, spec: str, n: Any) -> str:
+    """The generated scene's name with every option of ``spec`` it leaves out appended, so the
+    label rebuilds the same scene (``random_forest:density=0.45,seed=1,length=12,...``).
+
+    The generator's own name comes first (it spells the options that define the family, e.g.
+    density and seed, defaults included); then the spec's other options as written; then the
+    swarm size when ``n`` overrides it."""
+    head, _, rest = name.partition(":")
+    have = {item.partition("=")[0].strip() for item in rest.split(",") if item.strip()}
+    extra = []
+    for item in (x.strip() for x in spec.partition(":")[2].split(",")):
+        key, _, val = item.partition("=")
+        key = key.strip()
+        if key and key not in have and not (key == "n" and n is not None):
+            extra.append(f"{key}={val.strip()}")
+            have.add(key)
+    if n is not None and "n" not in have:
+        extra.append(f"n={int(n)}")
+    return ",".join([name, *extra]) if rest or not extra else f"{head}:{','.join(extra)}"

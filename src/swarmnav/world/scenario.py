@@ -35,6 +35,46 @@ from swarmnav.world.obstacles import (
 DEFAULT_SPAWN_CLEARANCE = 0.5
 #: Smallest distance [m] between two spawned agents (our choice: two bodies of 0.3 m radius).
 DEFAULT_MIN_SPACING = 0.6
+#: What a world's bounds are (``world.boundary``): walls every method senses and crashes into, an
+#: open edge, or the period cell of a torus.
+BOUNDARIES = ("wall", "open", "periodic")
+#: What touching an obstacle, a wall or another agent does (``rules.contact``): the agent crashes
+#: (stops where it hit and has failed), or the contact is only counted and the agent flies on.
+CONTACT_RULES = ("crash", "count")
+#: Thickness [m] of the walls a closed world (``boundary = "wall"``) puts just outside its bounds
+#: (our choice: thicker than any step an agent takes, so no agent steps across one unseen).
+WALL_THICKNESS = 1.0
+
+
+@dataclass(frozen=True, slots=True)
+class Rules:
+    """The referee's settings of a scene (``[rules]`` in a scene file; ``--set`` overrides them).
+
+    Attributes:
+        goal_radius: [m] an agent has reached the goal when it ends within this distance of it,
+            in line of sight of it, not crashed (HES Section 5.1: r_succ = 8 m).
+        d_safe: [m] clearance below which a step counts as unsafe (HES Table A1: 1.5 m).
+        body_radius: [m] an agent touches an obstacle or wall when its clearance is below this,
+            and another agent when they are nearer than twice this (our choice: 0.2 m, a
+            Crazyflie-class UAV with guards; the papers give none).
+        contact: ``"crash"`` or ``"count"`` (:data:`CONTACT_RULES`); None: ``"crash"`` in a
+            walled or open world, ``"count"`` in a periodic box (Vicsek agents are points).
+    """
+
+    goal_radius: float = 8.0
+    d_safe: float = 1.5
+    body_radius: float = 0.2
+    contact: str | None = None
+
+    def __post_init__(self) -> None:
+        for k in ("goal_radius", "d_safe", "body_radius"):
+            v = getattr(self, k)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0 \
+                    or (k == "goal_radius" and v == 0):
+                raise ScenarioError(f"rules.{k} must be a finite number {'> 0' if k == 'goal_radius' else '>= 0'} "
+                                    f"[m], got {v!r}")
+        if self.contact is not None and self.contact not in CONTACT_RULES:
+            raise ScenarioError(f"rules.contact must be one of {', '.join(CONTACT_RULES)}, got {self.contact!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,10 +115,15 @@ class Scenario:
         goal: goal position [m] (two or three numbers: the world's dimension).
         obstacles: the obstacles; walls are obstacles too.
         periodic: True for a periodic (toroidal) box; then ``bounds`` is the period cell.
+        boundary: what the bounds are (:data:`BOUNDARIES`): ``"wall"`` (the default: walls
+            :data:`WALL_THICKNESS` thick just outside the bounds, in :attr:`geometry`, so every
+            method senses them and the contact rule sees them), ``"open"`` or ``"periodic"``
+            (the same as ``periodic = True``).
+        rules: the referee's settings (goal radius, d_safe, body radius, contact rule).
         path: optional predetermined polyline [m] from start to goal (information UAV of the
             Vicsek family); empty if not given.
         description: free text.
-        geometry: the obstacles flattened for the kernels (derived).
+        geometry: the obstacles and the boundary walls flattened for the kernels (derived).
     """
 
     name: str
@@ -90,10 +135,52 @@ class Scenario:
     path: tuple[tuple[float, ...], ...] = ()
     description: str = ""
     source: str = "<dict>"
+    boundary: str = "wall"
+    rules: Rules = Rules()
     geometry: Geometry = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "geometry", Geometry.from_obstacles(self.obstacles, dim=len(self.goal)))
+        if self.boundary not in BOUNDARIES:
+            raise ScenarioError(f"{self.source}: world.boundary must be one of {', '.join(BOUNDARIES)}, "
+                                f"got {self.boundary!r}")
+        if self.periodic or self.boundary == "periodic":
+            object.__setattr__(self, "periodic", True)
+            object.__setattr__(self, "boundary", "periodic")
+        object.__setattr__(self, "geometry", Geometry.from_obstacles(self.solid_obstacles, dim=len(self.goal)))
+
+    @property
+    def walls(self) -> tuple[Obstacle, ...]:
+        """The boundary walls of a closed world: slabs :data:`WALL_THICKNESS` thick just outside
+        ``bounds`` (four in the plane, six in 3-D: the floor and the ceiling too), overlapping at
+        the corners; none in an open or periodic world."""
+        if self.boundary != "wall":
+            return ()
+        d, t = len(self.goal), WALL_THICKNESS
+        lo, hi = list(self.bounds[:d]), list(self.bounds[d:])
+        out = []
+        for a in range(d):
+            olo, ohi = [v - t for v in lo], [v + t for v in hi]
+            below = Box(tuple(olo), tuple(lo[a] if b == a else ohi[b] for b in range(d)))
+            above = Box(tuple(hi[a] if b == a else olo[b] for b in range(d)), tuple(ohi))
+            out += [below, above]
+        return tuple(out)
+
+    @property
+    def solid_obstacles(self) -> tuple[Obstacle, ...]:
+        """Everything an agent can hit: the obstacles, then the boundary walls."""
+        return self.obstacles + self.walls
+
+    @property
+    def contact(self) -> str:
+        """The contact rule in force: ``rules.contact``, else ``"count"`` in a periodic box and
+        ``"crash"`` elsewhere."""
+        return self.rules.contact or ("count" if self.periodic else "crash")
+
+    @property
+    def has_goal(self) -> bool:
+        """Whether the scene's goal means anything: not in a periodic box, whose goal is a
+        placeholder (no goal metrics are reported there)."""
+        return not self.periodic
 
     @property
     def n(self) -> int:
@@ -141,6 +228,8 @@ class Scenario:
             goal=tuple(self.goal[:2]),
             obstacles=slice_at(self.obstacles, z),
             periodic=self.periodic,
+            boundary=self.boundary,
+            rules=self.rules,
             path=tuple(tuple(p[:2]) for p in self.path),
             description=f"{self.description} (horizontal slice at z = {z:g} m)".strip(),
             source=f"{self.source}@z={z:g}",
@@ -170,7 +259,7 @@ class Scenario:
         """The scene as a dictionary in scene-file form (round-trips through :func:`from_dict`)."""
         d: dict[str, Any] = {
             "name": self.name,
-            "world": {"bounds": list(self.bounds), "periodic": self.periodic},
+            "world": {"bounds": list(self.bounds), "boundary": self.boundary},
             "swarm": {
                 "n": self.n,
                 "spawn": list(self.swarm.spawn),
@@ -179,6 +268,8 @@ class Scenario:
                 **({"density": self.swarm.density} if self.swarm.density is not None else {}),
             },
             "goal": {"position": list(self.goal)},
+            "rules": {"goal_radius": self.rules.goal_radius, "d_safe": self.rules.d_safe,
+                      "body_radius": self.rules.body_radius, "contact": self.contact},
             "obstacles": [o.to_dict() for o in self.obstacles],
         }
         if self.description:
@@ -198,8 +289,9 @@ class Scenario:
 
 # --------------------------------------------------------------------------- parsing
 
-_TOP_KEYS = {"name", "description", "world", "swarm", "goal", "obstacles"}
-_WORLD_KEYS = {"bounds", "periodic"}
+_TOP_KEYS = {"name", "description", "world", "swarm", "goal", "rules", "obstacles"}
+_WORLD_KEYS = {"bounds", "periodic", "boundary"}
+_RULES_KEYS = {"goal_radius", "d_safe", "body_radius", "contact"}
 _SWARM_KEYS = {"n", "spawn", "min_spacing", "clearance", "density"}
 _GOAL_KEYS = {"position", "path"}
 _OBSTACLE_KEYS = {"box": {"type", "min", "max"}, "circle": {"type", "center", "radius"},
@@ -234,6 +326,12 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     periodic = world.get("periodic", False)
     if not isinstance(periodic, bool):
         raise ctx.err("world.periodic", "must be true or false")
+    boundary = world.get("boundary", "periodic" if periodic else "wall")
+    if not isinstance(boundary, str) or boundary not in BOUNDARIES:
+        raise ctx.err("world.boundary", f"must be one of {', '.join(repr(b) for b in BOUNDARIES)}, got {boundary!r}")
+    if periodic and boundary != "periodic":
+        raise ctx.err("world.periodic", f"= true contradicts world.boundary = {boundary!r}")
+    periodic = boundary == "periodic"
 
     swarm_t = ctx.table(data, "swarm", required=True)
     ctx.keys(swarm_t, _SWARM_KEYS, "swarm")
@@ -274,6 +372,19 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
             raise ctx.err("goal.path", f"must be a list of at least two {_POINT[dim]} points")
         path = tuple(ctx.point(p, f"goal.path[{k}]", dim) for k, p in enumerate(pts))
 
+    rules_t = ctx.table(data, "rules", required=False)
+    ctx.keys(rules_t, _RULES_KEYS, "rules")
+    rv: dict[str, Any] = {}
+    for k in ("goal_radius", "d_safe", "body_radius"):
+        if k in rules_t:
+            rv[k] = (ctx.positive if k == "goal_radius" else ctx.nonneg)(rules_t[k], f"rules.{k}")
+    if "contact" in rules_t:
+        c = rules_t["contact"]
+        if not isinstance(c, str) or c not in CONTACT_RULES:
+            raise ctx.err("rules.contact", f"must be one of {', '.join(repr(r) for r in CONTACT_RULES)}, got {c!r}")
+        rv["contact"] = c
+    rules = Rules(**rv)
+
     obstacles_raw = data.get("obstacles", [])
     if not isinstance(obstacles_raw, list):
         raise ctx.err("obstacles", "must be an array of tables ([[obstacles]])")
@@ -294,6 +405,8 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
         path=path,
         description=description,
         source=source,
+        boundary=boundary,
+        rules=rules,
     )
     return validate(scn)
 

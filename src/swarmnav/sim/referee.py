@@ -1,0 +1,126 @@
+"""The contact rule of a run, applied step by step (the scene's ``rules.contact``).
+
+Under ``contact = "crash"`` an agent whose clearance falls below the body radius (it touched an
+obstacle or a boundary wall) or that comes nearer than twice the body radius to another agent
+crashes: from that step on it stays where it hit with zero velocity, the method still sees it
+there (a wreck is an obstacle to the others), and the metrics count it as failed. Under
+``"count"`` nothing is enforced; the metrics only count the contacts (the behaviour before the
+rule existed, for ablations and RL).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from swarmnav.sensing.cells import neighbour_csr
+
+#: agents: below this, every pair is visited each step (a cell list does not pay)
+ALL_PAIRS_BELOW = 64
+
+
+@njit(cache=True)
+def _touching_all(P, contact, box, out):
+    """``out[i]`` = agent i is nearer than ``contact`` to another agent (every pair visited;
+    minimum image in a periodic square of side ``box`` > 0)."""
+    n, d = P.shape
+    c2 = contact * contact
+    for i in range(n):
+        out[i] = False
+    for i in range(n):
+        for j in range(i + 1, n):
+            d2 = 0.0
+            for c in range(d):
+                dc = P[j, c] - P[i, c]
+                if box > 0.0:
+                    dc -= box * np.round(dc / box)
+                d2 += dc * dc
+            if d2 < c2:
+                out[i] = True
+                out[j] = True
+
+
+@njit(cache=True)
+def _touching_cells(P, contact, box, out, idx, d2):
+    """:func:`_touching_all` on the shared cell list (many agents); returns the buffers, grown
+    if they were too short."""
+    n = P.shape[0]
+    Q = P - box * np.floor(P / box) if box > 0.0 else P
+    order, start, end, total = neighbour_csr(Q, contact, box, box > 0.0, idx, d2, -1.0)
+    if total > idx.shape[0]:
+        idx = np.empty(2 * total, np.int64)
+        d2 = np.empty(2 * total)
+        order, start, end, total = neighbour_csr(Q, contact, box, box > 0.0, idx, d2, -1.0)
+    c2 = contact * contact
+    for i in range(n):
+        out[i] = False
+    for i in range(n):
+        for e in range(start[i], end[i]):
+            if idx[e] != i and d2[e] < c2:
+                out[i] = True
+    return idx, d2
+
+
+class Referee:
+    """Applies the crash rule to a run's states (see the module docstring).
+
+    Args:
+        n: number of agents.
+        body_radius: [m] obstacle contact below this clearance, agent contact below twice it.
+        period: side of the periodic square [m], or None in an open or walled world.
+        bounds: the world's bounds in a walled world (a contact near them is reported as a wall).
+    """
+
+    def __init__(self, n: int, body_radius: float, period: float | None = None,
+                 bounds: tuple[float, ...] | None = None):
+        self.body_radius = float(body_radius)
+        self.bounds = None if bounds is None else np.asarray(bounds, dtype=np.float64).reshape(2, -1)
+        self.box = float(period or 0.0)
+        self.crashed = np.zeros(n, dtype=bool)
+        self.crash_step = np.full(n, -1, dtype=np.int64)  # the step of each agent's crash (-1: none)
+        self.where = np.zeros((n, 0))  # crashed agents' positions, filled at the first crash
+        self._near = np.zeros(n, dtype=np.bool_)
+        self._idx = np.empty(8 * n, np.int64)
+        self._d2 = np.empty(8 * n)
+
+    def hold(self, pos: np.ndarray, vel: np.ndarray) -> None:
+        """Keep every crashed agent where it hit, at rest (in place, before the state is recorded)."""
+        if self.crashed.any():
+            pos[self.crashed] = self.where[self.crashed]
+            vel[self.crashed] = 0.0
+
+    def judge(self, k: int, pos: np.ndarray, clearance: np.ndarray) -> list[dict]:
+        """Crash every agent still flying that touches an obstacle, a wall or another agent at
+        recorded step ``k`` (positions ``pos`` (N, d), clearance (N,) [m]); returns one event per
+        new crash."""
+        hit_obstacle = clearance < self.body_radius
+        P = np.ascontiguousarray(pos, dtype=np.float64)
+        contact = 2.0 * self.body_radius
+        if len(P) >= 2 and contact > 0.0:
+            if len(P) < ALL_PAIRS_BELOW:
+                _touching_all(P, contact, self.box, self._near)
+            else:
+                self._idx, self._d2 = _touching_cells(P, contact, self.box, self._near, self._idx, self._d2)
+            hit_agent = self._near
+        else:
+            hit_agent = np.zeros(len(P), dtype=bool)
+        new = (hit_obstacle | hit_agent) & ~self.crashed
+        if not new.any():
+            return []
+        if self.where.shape[1] != P.shape[1]:
+            self.where = np.zeros_like(P)
+        self.where[new] = P[new]
+        self.crashed |= new
+        self.crash_step[new] = k
+        return [{"step": int(k), "action": "crash", "agent": int(i), "source": "referee",
+                 "reason": self._what(P[i]) if hit_obstacle[i] else "agent",
+                 "clearance": float(clearance[i])} for i in np.flatnonzero(new)]
+
+    def _what(self, p: np.ndarray) -> str:
+        """What an agent at ``p`` touched: the boundary wall if it is within a body radius of the
+        bounds (or beyond them), else an obstacle."""
+        if self.bounds is not None and p.shape[0] == self.bounds.shape[1]:
+            r = self.body_radius
+            if np.any(p - self.bounds[0] < r) or np.any(self.bounds[1] - p < r):
+                return "wall"
+        return "obstacle"
