@@ -28,6 +28,9 @@ from swarmnav.experiments.store import DB_NAME, Store
 
 #: Columns shown when a spec's [report] does not list its own.
 DEFAULT_METRICS = ("Y", "R_goal", "E_mean", "R_unsafe", "d_clr_min", "L_mean", "N_swarm", "S_scene")
+#: Contacts and crashes: in every report, whatever metrics a spec chooses (a run that flew
+#: through a wall or crashed must never look clean).
+REFEREE_METRICS = ("collisions", "crashes")
 UNITS = {"E_mean": "m", "E_90": "m", "sigma_E": "m", "d_clr_min": "m", "L_mean": "m",
          "min_inter_agent_distance": "m", "flight_distance": "m", "flight_time": "s", "avg_velocity": "m/s",
          "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%", "min_inter_robot_distance": "m",
@@ -39,7 +42,7 @@ METRIC_GROUPS = (
                  "success_rate", "arrived_fraction")),  # the sph_ pair's names in stores written before the rename
     ("Safety and clearance", ("R_unsafe", "R_unsafe_agent", "d_clr_min", "R_below_0_75", "R_below_0_30",
                               "min_inter_agent_distance", "min_inter_robot_distance",
-                              "min_robot_obstacle_distance", "D_obs", "D_ind", "collisions")),
+                              "min_robot_obstacle_distance", "D_obs", "D_ind", "collisions", "crashes")),
     ("Path, time and velocity", ("L_mean", "path_stretch", "flight_distance", "flight_time", "avg_velocity",
                                  "jerk_energy", "k_con", "coordination_time")),
 )
@@ -122,10 +125,10 @@ def report_metrics(meta: dict, rows: list[dict]) -> list[str]:
     """The report's columns: the spec's ``[report] metrics``, else those of :data:`DEFAULT_METRICS`
     that some finished run has."""
     names = list((meta.get("report") or {}).get("metrics") or [])
+    present = set().union(*(r["metrics"] for r in rows if r["status"] == "done")) if rows else set()
     if not names:
-        present = set().union(*(r["metrics"] for r in rows if r["status"] == "done")) if rows else set()
         names = [m for m in DEFAULT_METRICS if m in present]
-    return names
+    return names + [m for m in REFEREE_METRICS if m in present and m not in names]
 
 
 def build_tables(store: Store, experiment: str) -> dict[str, Any]:

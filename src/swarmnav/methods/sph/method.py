@@ -85,7 +85,7 @@ class Sph:
         self.geom = scenario.geometry
         n = scenario.n
         self.esdf = Esdf.build(self.geom, scenario.bounds, p.esdf_resolution)
-        self.maps = OccupancyMaps(scenario.obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.R,
+        self.maps = OccupancyMaps(scenario.solid_obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.R,
                                   margin=p.d_thr, wide=p.plan_clearance, wide_cost=p.plan_clearance_cost,
                                   weight_3d=p.search_weight_3d, field_3d=p.search_3d == "field")
         x = np.asarray(positions, dtype=float)
