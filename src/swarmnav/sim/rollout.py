@@ -110,6 +110,10 @@ def run(
         vlift = lambda x: np.column_stack([x, np.zeros(len(x))])  # noqa: E731
     P[0], V[0] = lift(pos), vlift(vel)
     C[0] = clear(P[0])  # against the scene's own (3-D) obstacles
+    walled = scn.boundary == "wall"  # beyond the walls' far side an agent is still outside the world
+    w_lo, w_hi = scn.lower, scn.upper
+    if walled:
+        _inside_walls(P[0], w_lo, w_hi, C[0])
     events: list[dict] = []
     bar = _progress(progress, steps)
     t0 = time.perf_counter()
@@ -143,6 +147,8 @@ def run(
             C[k + 1] = clear(P[k + 1])
         else:  # written in place (a row of C is a contiguous float64 buffer): the same values
             distance_into(P[k + 1], C[k + 1])
+        if walled:
+            _inside_walls(P[k + 1], w_lo, w_hi, C[k + 1])
         labels = info.get("labels")
         lab[k + 1] = lab[k] if labels is None else labels
         r = info.get("roles")
@@ -288,6 +294,20 @@ def _finite_into(pos, vel, p_row, v_row):
             p_row[i, c] = pos[i, c]
             v_row[i, c] = vel[i, c]
     return True
+
+
+@njit(cache=True)
+def _inside_walls(P, lo, hi, clearance):
+    """Lower each agent's clearance to its signed distance to the outside of the world's box
+    (negative beyond the bounds). Inside the bounds the walls give the same distance; beyond the
+    walls' far side this keeps an agent that left the world from reading as clear."""
+    n, d = P.shape
+    for i in range(n):
+        m = np.inf
+        for c in range(d):
+            m = min(m, P[i, c] - lo[c], hi[c] - P[i, c])
+        if m < clearance[i]:
+            clearance[i] = m
 
 
 @njit(cache=True)
