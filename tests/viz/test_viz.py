@@ -129,7 +129,11 @@ def test_draw_scene_sets_bounds_aspect_and_one_patch_per_obstacle():
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [m]", "y [m]")
     (obstacles,) = [c for c in ax.collections if isinstance(c, PatchCollection)]
     assert len(obstacles.get_paths()) == 3
-    assert {h.get_label() for h in handles} == {"obstacle", "spawn region", "path", "goal"}
+    assert {h.get_label() for h in handles} == {"obstacle", "spawn region", "path", "goal", "world wall"}
+    (frame,) = [h for h in handles if h.get_label() == "world wall"]  # the closed world's walls, on the bounds
+    assert frame.get_xy() == (-5.0, -5.0) and (frame.get_width(), frame.get_height()) == (30.0, 15.0)
+    opened = draw_scene(Figure().add_subplot(), from_dict({**SCENE, "world": {**SCENE["world"], "boundary": "open"}}))
+    assert "world wall" not in {h.get_label() for h in opened}
 
 
 def test_spawn_rectangle_is_the_region_agents_are_drawn_from():

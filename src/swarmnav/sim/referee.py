@@ -89,10 +89,13 @@ class Referee:
             pos[self.crashed] = self.where[self.crashed]
             vel[self.crashed] = 0.0
 
-    def judge(self, k: int, pos: np.ndarray, clearance: np.ndarray) -> list[dict]:
+    def judge(self, k: int, pos: np.ndarray, clearance: np.ndarray, state: np.ndarray | None = None) -> list[dict]:
         """Crash every agent still flying that touches an obstacle, a wall or another agent at
-        recorded step ``k`` (positions ``pos`` (N, d), clearance (N,) [m]); returns one event per
-        new crash."""
+        recorded step ``k`` (recorded positions ``pos`` (N, d), clearance (N,) [m]); returns one
+        event per new crash. ``state``: the positions as the method's dynamics hold them, where
+        :meth:`hold` keeps a crashed agent (a planar method on a 3-D scene: its (N, 2) slice
+        state); default ``pos``."""
+        state = pos if state is None else state
         hit_obstacle = clearance < self.body_radius
         P = np.ascontiguousarray(pos, dtype=np.float64)
         contact = 2.0 * self.body_radius
@@ -107,9 +110,9 @@ class Referee:
         new = (hit_obstacle | hit_agent) & ~self.crashed
         if not new.any():
             return []
-        if self.where.shape[1] != P.shape[1]:
-            self.where = np.zeros_like(P)
-        self.where[new] = P[new]
+        if self.where.shape[1] != state.shape[1]:
+            self.where = np.zeros(state.shape)
+        self.where[new] = state[new]
         self.crashed |= new
         self.crash_step[new] = k
         return [{"step": int(k), "action": "crash", "agent": int(i), "source": "referee",

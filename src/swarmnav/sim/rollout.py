@@ -126,7 +126,7 @@ def run(
     referee = Referee(N, rules.body_radius, period, bounds=world.bounds if scn.boundary == "wall" else None) \
         if scn.contact == "crash" else None
     if referee is not None:
-        events += referee.judge(0, P[0], C[0])
+        events += referee.judge(0, P[0], C[0], pos)
     for k in range(steps):
         cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
         pos, vel = m.dynamics.step(pos, vel, cmd, dt)
@@ -163,7 +163,7 @@ def run(
             for ev in evs:
                 events.append({"step": k, **ev})
         if referee is not None:
-            events += referee.judge(k + 1, P[k + 1], C[k + 1])
+            events += referee.judge(k + 1, P[k + 1], C[k + 1], pos)
         if bar is not None and (k % 10 == 9 or k == steps - 1):
             bar(k + 1)
         if info.get("done") or (referee is not None and referee.crashed.all()):  # the method's task is complete: record this state and stop
@@ -253,15 +253,16 @@ def with_rules(scn: Scenario, *, boundary: Any = None, contact: Any = None, goal
 
 def goal_reached(scn: Scenario, final: np.ndarray, crashed: np.ndarray) -> np.ndarray:
     """(N,) whether each agent ended at the goal: within ``rules.goal_radius`` of it, in line of
-    sight of it (no obstacle or wall between), inside the world's bounds (in a walled or open
-    world) and not crashed. ``final`` is the last recorded (N, d) state."""
+    sight of it (no obstacle or wall between), inside the bounds of a walled world and not
+    crashed. ``final`` is the last recorded (N, d) state."""
     from swarmnav.sensing import segments_blocked
 
     goal = scn.goal_array
     x = np.asarray(final, dtype=np.float64)
     near = np.linalg.norm(x - goal, axis=1) <= scn.rules.goal_radius
-    inside = np.all((x >= scn.lower) & (x <= scn.upper), axis=1)
-    ok = near & inside & ~np.asarray(crashed, dtype=bool)
+    ok = near & ~np.asarray(crashed, dtype=bool)
+    if scn.boundary == "wall":
+        ok &= np.all((x >= scn.lower) & (x <= scn.upper), axis=1)
     if ok.any() and not scn.geometry.is_empty:
         idx = np.flatnonzero(ok)
         ok[idx] = ~segments_blocked(scn.geometry, x[idx], np.broadcast_to(goal, (len(idx), len(goal))))

@@ -326,7 +326,9 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     periodic = world.get("periodic", False)
     if not isinstance(periodic, bool):
         raise ctx.err("world.periodic", "must be true or false")
-    boundary = world.get("boundary", "periodic" if periodic else "wall")
+    # a scene that declares its world is closed by default; without bounds there is no declared
+    # world to close (its bounds are only the padded extent of what it holds): open
+    boundary = world.get("boundary", "periodic" if periodic else "wall" if "bounds" in world else "open")
     if not isinstance(boundary, str) or boundary not in BOUNDARIES:
         raise ctx.err("world.boundary", f"must be one of {', '.join(repr(b) for b in BOUNDARIES)}, got {boundary!r}")
     if periodic and boundary != "periodic":

@@ -47,8 +47,8 @@ def test_safety_stack_off_keeps_the_waypoint_leash_when_asked():
     v_s = Hes().params.core.v_s
     speed = {}
     for leash in (False, True):
-        res = swarmnav.run("hes", "default_corridor", seed=1, steps=150,
-                           **{"ablation.safety_stack_off": True, "ablation.keep_leash": leash})
+        res = swarmnav.run("hes", "default_corridor", seed=1, steps=150, contact="count",  # the controller's
+                           **{"ablation.safety_stack_off": True, "ablation.keep_leash": leash})  # speed, uncrashed
         speed[leash] = float(np.linalg.norm(res.velocities, axis=2).mean())  # over the first 15 s
     assert speed[False] > 1.5 * v_s
     assert speed[True] < 1.3 * v_s
@@ -76,7 +76,7 @@ def test_post_update_projection_keeps_unbounded_agents_out_of_the_wall():
     # through the wall in one step; with it every step ends core.projection short of the returns
     crossed, inside = {}, {}
     for m in (0.0, 0.1):
-        res = swarmnav.run("hes", WALL, seed=1, steps=200, **{"ablation.safety_stack_off": True,
+        res = swarmnav.run("hes", WALL, seed=1, steps=200, contact="count", **{"ablation.safety_stack_off": True,
                                                             "ablation.a_max_relaxed": 1e6, "core.projection": m})
         x, y = res.positions[..., 0], res.positions[..., 1]
         span = (np.abs(y[:-1]) < 30.0) & (np.abs(y[1:]) < 30.0)
