@@ -29,7 +29,7 @@ from swarmnav.errors import ConfigError
 from swarmnav.methods import registry
 from swarmnav.methods.base import Observation
 from swarmnav.metrics.flight import FlightParams, flight_metrics
-from swarmnav.metrics.navigation import MetricParams, navigation_metrics
+from swarmnav.metrics.navigation import MetricParams, goal_reached, navigation_metrics
 from swarmnav.params import as_dict
 from swarmnav.sim.result import RunResult
 from swarmnav.world.scenario import Scenario
@@ -228,7 +228,8 @@ def _episode(env: SwarmParallelEnv, policy: Any, seed: int, label: str) -> RunRe
     )
     mp = MetricParams(r_succ=o.goal_radius, d_safe=o.d_safe, body_radius=o.body_radius)
     n_struct = sum(1 for e in events if e.get("action") in ("split", "merge"))
-    m = navigation_metrics(P, C, env.world.goal_array, result.n_subswarms, n_struct, mp)
+    m = navigation_metrics(P, C, env.world.goal_array, result.n_subswarms, n_struct, mp,
+                           reached=goal_reached(env.world, P[-1], goal_radius=o.goal_radius))
     m.update(flight_metrics(P, V, C, env.world.goal_array, o.dt, FlightParams(body_radius=o.body_radius),
                             min_pair=m["min_inter_agent_distance"]))
     m["return_mean"] = float(ret.mean())

@@ -1,5 +1,5 @@
 """Run metrics: pure functions of recorded trajectories."""
 
-from swarmnav.metrics.navigation import MetricParams, navigation_metrics
+from swarmnav.metrics.navigation import MetricParams, goal_reached, navigation_metrics
 
-__all__ = ["MetricParams", "navigation_metrics"]
+__all__ = ["MetricParams", "goal_reached", "navigation_metrics"]

@@ -8,10 +8,14 @@ sums ``||p(k) - p(k-1)||`` over ``k = 1 .. K-1``. Statistics over agents are pop
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from swarmnav.metrics._pairs import inter_agent
+
+if TYPE_CHECKING:
+    from swarmnav.world.scenario import Scenario
 
 
 def norms(a: np.ndarray) -> np.ndarray:
@@ -56,7 +60,7 @@ def navigation_metrics(
         n_events: number of structural (split / merge) events.
         reached: (N,) whether each agent ended at the goal, as the referee judges it (within the
             goal radius, in line of sight of the goal, inside the world, not crashed: see
-            :func:`swarmnav.sim.rollout.goal_reached`); None: within ``r_succ`` of the goal.
+            :func:`goal_reached`); None: within ``r_succ`` of the goal.
     """
     K = positions.shape[0] - 1
     N = positions.shape[1]
@@ -123,3 +127,25 @@ def _rising_edges(flags: np.ndarray) -> int:
         return 0
     prev = np.vstack([np.zeros((1, flags.shape[1]), dtype=bool), flags[:-1]])
     return int(np.count_nonzero(flags & ~prev))
+
+
+def goal_reached(scn: Scenario, final: np.ndarray, crashed: np.ndarray | None = None,
+                 goal_radius: float | None = None) -> np.ndarray:
+    """(N,) whether each agent ended at the goal: within ``rules.goal_radius`` of it, in line of
+    sight of it (no obstacle or wall between), inside the bounds of a walled world and not
+    crashed. ``final`` is the last recorded (N, d) state; ``crashed`` (N,) bool (None: none);
+    ``goal_radius`` [m] overrides the scene's."""
+    from swarmnav.sensing import segments_blocked
+
+    goal = scn.goal_array
+    x = np.asarray(final, dtype=np.float64)
+    r = scn.rules.goal_radius if goal_radius is None else float(goal_radius)
+    ok = np.linalg.norm(x - goal, axis=1) <= r
+    if crashed is not None:
+        ok &= ~np.asarray(crashed, dtype=bool)
+    if scn.boundary == "wall":
+        ok &= np.all((x >= scn.lower) & (x <= scn.upper), axis=1)
+    if ok.any() and not scn.geometry.is_empty:
+        idx = np.flatnonzero(ok)
+        ok[idx] = ~segments_blocked(scn.geometry, x[idx], np.repeat(goal[None, :], len(idx), axis=0))
+    return ok

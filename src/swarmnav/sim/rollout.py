@@ -13,7 +13,7 @@ from swarmnav.errors import ConfigError, DivergedError, ScenarioError
 from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
 from swarmnav.metrics.flight import FlightParams, flight_metrics
-from swarmnav.metrics.navigation import MetricParams, navigation_metrics
+from swarmnav.metrics.navigation import MetricParams, goal_reached, navigation_metrics
 from swarmnav.params import as_dict
 from swarmnav.sensing import PreparedGeometry
 from swarmnav.sim.referee import Referee
@@ -249,24 +249,6 @@ def with_rules(scn: Scenario, *, boundary: Any = None, contact: Any = None, goal
         except ScenarioError as e:
             raise ConfigError(str(e)) from None
     return scn
-
-
-def goal_reached(scn: Scenario, final: np.ndarray, crashed: np.ndarray) -> np.ndarray:
-    """(N,) whether each agent ended at the goal: within ``rules.goal_radius`` of it, in line of
-    sight of it (no obstacle or wall between), inside the bounds of a walled world and not
-    crashed. ``final`` is the last recorded (N, d) state."""
-    from swarmnav.sensing import segments_blocked
-
-    goal = scn.goal_array
-    x = np.asarray(final, dtype=np.float64)
-    near = np.linalg.norm(x - goal, axis=1) <= scn.rules.goal_radius
-    ok = near & ~np.asarray(crashed, dtype=bool)
-    if scn.boundary == "wall":
-        ok &= np.all((x >= scn.lower) & (x <= scn.upper), axis=1)
-    if ok.any() and not scn.geometry.is_empty:
-        idx = np.flatnonzero(ok)
-        ok[idx] = ~segments_blocked(scn.geometry, x[idx], np.broadcast_to(goal, (len(idx), len(goal))))
-    return ok
 
 
 def _all_finite(pos: np.ndarray, vel: np.ndarray) -> bool:

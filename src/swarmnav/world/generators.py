@@ -432,7 +432,9 @@ def hwvem_mission_family(tiny_offset: float = 1.45, rect_offset: float = 1.3, pa
         "name": spec,
         "description": "HWVEM Sec. 3.2 mission family: narrow passages, tiny and huge circles, rectangles, "
                        "diamonds, triangles.",
-        "world": {"bounds": [-6.0, min(-10.0, lo - 4.0), 70.0, max(12.0, hi + 7.0)]},
+        # the paper's open plane of point agents: no walls, contacts counted (hwvem_mission.toml says why)
+        "world": {"bounds": [-6.0, min(-10.0, lo - 4.0), 70.0, max(12.0, hi + 7.0)], "boundary": "open"},
+        "rules": {"contact": "count"},
         "swarm": {"n": n, "spawn": [0.0, 0.0, 0.0, 0.0], "density": 3.265, "min_spacing": 0.0, "clearance": 0.3},
         "goal": {"position": [66.0, 0.0], "path": [[0.0, 0.0], [24.0, 0.0], [28.0, hi], [36.0, hi], [40.0, 0.0],
                                                    [48.0, lo], [56.0, lo], [60.0, 0.0], [66.0, 0.0]]},
