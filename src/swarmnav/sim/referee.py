@@ -41,6 +41,21 @@ def _touching_all(P, contact, box, out):
 
 
 @njit(cache=True)
+def _any_new_contact(P, clearance, body_radius, box, crashed, near):
+    """:func:`_touching_all` into ``near`` (2 body radii), and whether an agent not yet crashed is
+    in contact with an obstacle or another agent."""
+    if P.shape[0] >= 2 and body_radius > 0.0:
+        _touching_all(P, 2.0 * body_radius, box, near)
+    else:
+        for i in range(P.shape[0]):
+            near[i] = False
+    for i in range(P.shape[0]):
+        if not crashed[i] and (near[i] or clearance[i] < body_radius):
+            return True
+    return False
+
+
+@njit(cache=True)
 def _touching_cells(P, contact, box, out, idx, d2):
     """:func:`_touching_all` on the shared cell list (many agents); returns the buffers, grown
     if they were too short."""
@@ -96,17 +111,15 @@ class Referee:
         :meth:`hold` keeps a crashed agent (a planar method on a 3-D scene: its (N, 2) slice
         state); default ``pos``."""
         state = pos if state is None else state
-        hit_obstacle = clearance < self.body_radius
         P = np.ascontiguousarray(pos, dtype=np.float64)
         contact = 2.0 * self.body_radius
-        if len(P) >= 2 and contact > 0.0:
-            if len(P) < ALL_PAIRS_BELOW:
-                _touching_all(P, contact, self.box, self._near)
-            else:
-                self._idx, self._d2 = _touching_cells(P, contact, self.box, self._near, self._idx, self._d2)
-            hit_agent = self._near
+        if len(P) < ALL_PAIRS_BELOW:  # the usual case: one compiled pass, nothing allocated
+            if not _any_new_contact(P, clearance, self.body_radius, self.box, self.crashed, self._near):
+                return []
         else:
-            hit_agent = np.zeros(len(P), dtype=bool)
+            self._idx, self._d2 = _touching_cells(P, contact, self.box, self._near, self._idx, self._d2)
+        hit_obstacle = clearance < self.body_radius
+        hit_agent = self._near if len(P) >= 2 and contact > 0.0 else np.zeros(len(P), dtype=bool)
         new = (hit_obstacle | hit_agent) & ~self.crashed
         if not new.any():
             return []
