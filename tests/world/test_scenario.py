@@ -38,7 +38,7 @@ def test_issue_example_loads():
     assert s.name == "my_scene" and s.n == 20 and s.goal == (60.0, 0.0)
     assert [type(o) for o in s.obstacles] == [Box, Circle, Polygon]
     assert s.geometry.n_polygons == 2 + 4 and s.geometry.n_circles == 1  # + the four boundary walls
-    assert len(s.geometry.seg_a) == 4 + 3
+    assert len(s.geometry.seg_a) == 4 + 3 + 4 * 4  # + the four boundary walls
 
 
 def test_bounds_optional():
