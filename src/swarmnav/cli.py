@@ -86,6 +86,42 @@ def _writable_file(path, flag: str) -> Path:
     return Path(path)
 
 
+def _run_outputs() -> tuple[str, ...]:
+    """The file names a run directory gets from swarmnav: the run's own files, the LLM
+    transcript, and the figures and viewer ``run --plot/--view``, ``plot`` and ``view`` write."""
+    from swarmnav.llm.decider import TRANSCRIPT
+    from swarmnav.sim.result import RUN_FILES
+
+    return (*RUN_FILES, TRANSCRIPT, "trajectory.png", "perspective.png", "viewer.html")
+
+
+def _claim_run_dir(d: Path, force: bool) -> list[Path]:
+    """Check ``run --out DIR`` before the run: a directory that already holds a run (any of
+    :func:`_run_outputs`, or its half-written ``.tmp``) is refused unless ``force``, since the
+    new run would keep the old one's figure, viewer or transcript beside its own files. With
+    ``force``, returns those files for the caller to remove; other files are never touched."""
+    names = [n for name in _run_outputs() for n in (name, name + ".tmp")]
+    blocked = [n for n in names if (d / n).exists() and not (d / n).is_file()]
+    if blocked:
+        raise ConfigError(f"run: --out {d}: {d / blocked[0]} is a directory, where a run writes a file")
+    found = [n for n in names if (d / n).is_file()]
+    if found and not force:
+        raise ConfigError(f"run: --out {d} already holds a run ({', '.join(found[:4])}"
+                          f"{', ...' if len(found) > 4 else ''}); --force replaces it, or choose another directory")
+    return [d / n for n in found]
+
+
+def _clear_run(d: Path, old: list[Path]) -> None:
+    """Remove the previous run's files (``run --force``) and name on stderr what is kept."""
+    for f in old:
+        f.unlink(missing_ok=True)
+    others = sorted(p.name for p in d.iterdir() if p.name not in
+                    {n for name in _run_outputs() for n in (name, name + ".tmp")})
+    if others:
+        print(f"swarmnav: --force replaced the run in {d}; kept files that are not a run's: {', '.join(others)}",
+              file=sys.stderr)
+
+
 def _cmd_scenarios(args) -> int:
     from swarmnav.world.catalog import load_scenario
     from swarmnav.world.generators import GENERATORS
@@ -179,9 +215,11 @@ def _cmd_run(args) -> int:
     n = params.pop("n", None)
     n = None if n is None else coerce(n, int, "--set n")
     scn = load_scenario(Path(args.scenario_file) if args.scenario_file else args.scenario, n=n)
-    _writable_dir(args.out, "--out")
+    old_run = _claim_run_dir(_writable_dir(args.out, "--out"), args.force)
     progress = sys.stderr.isatty() and not args.quiet
     res = run(args.method, scn, seed=args.seed, steps=steps, horizon=horizon, progress=progress, **params)
+    if old_run:  # only now: a run that fails keeps the previous one in place
+        _clear_run(Path(args.out), old_run)
     out = res.save(args.out)
     m = res.metrics
     steps = res.config["steps"]
@@ -356,6 +394,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", action="store_true", help="also draw DIR/trajectory.png")
     s.add_argument("--view", action="store_true", help="also write DIR/viewer.html, the replay viewer")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.add_argument("--force", action="store_true",
+                   help="DIR already holds a run: replace it (removes only the files a run writes there)")
     _add_llm_flags(s)
     s.set_defaults(fn=_cmd_run)
 
