@@ -333,7 +333,7 @@ def _cmd_experiment(args) -> int:
     _writable_dir(args.out, "--out")
     rows, summary = run_experiment(exp, args.out, workers=args.workers, backend=args.backend,
                                    ray_address=args.ray_address, save_trajectories=not args.no_trajectories,
-                                   progress=not args.quiet)
+                                   progress=not args.quiet, force=args.force)
     failed = sum(r["status"] != "done" for r in rows)
     print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/results.sqlite, runs.csv, summary.csv")
     for s in summary:
@@ -431,6 +431,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--backend", choices=["local", "ray"], default="local")
     s.add_argument("--ray-address", metavar="ADDR", help="join an existing Ray cluster (default: start a local one)")
     s.add_argument("--no-trajectories", action="store_true", help="store metrics only, no trajectory files")
+    s.add_argument("--force", action="store_true",
+                   help="DIR holds another sweep (other --set values or spec, or another experiment): "
+                        "record this one there anyway; stored runs are kept")
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(fn=_cmd_experiment)
 
