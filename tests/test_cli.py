@@ -281,11 +281,35 @@ def test_first_run_says_it_compiles_and_a_warm_run_does_not(tmp_path):
     cold = subprocess.run([sys.executable, "-m", "swarmnav.cli", *args, str(tmp_path / "a")], env=env,
                           capture_output=True, text=True, timeout=600)
     assert cold.returncode == 0, cold.stderr
-    assert cold.stderr.count("compiling numerical kernels, first run only") == 1
+    assert cold.stderr.count("compiling numerical kernels, saved for later runs") == 1
     warm = subprocess.run([sys.executable, "-m", "swarmnav.cli", *args, str(tmp_path / "b")], env=env,
                           capture_output=True, text=True, timeout=600)
     assert warm.returncode == 0 and "compiling" not in warm.stderr, warm.stderr
     assert os.listdir(tmp_path / "cache")
+
+
+def test_the_compile_notice_waits_for_a_compile_that_takes_time(monkeypatch, capsys):
+    """A compile shorter than COMPILE_NOTICE_AFTER (one small kernel) says nothing; the notice
+    comes once compiling has taken that long, and only once."""
+    import numba
+
+    from swarmnav import cli
+
+    numba.njit(lambda x: x - 1)(1)  # Numba's own one-off start-up is not what is timed below
+    listener = cli._notify_compiling()
+    try:
+        numba.njit(lambda x: x + 1)(1)  # ~0.05 s of compiling, far below 2 s
+        assert capsys.readouterr().err == ""
+    finally:
+        cli._stop_notice(listener)
+    monkeypatch.setattr(cli, "COMPILE_NOTICE_AFTER", 0.0)
+    listener = cli._notify_compiling()
+    try:
+        numba.njit(lambda x: x * 2)(1)
+        numba.njit(lambda x: x * 3)(1)
+        assert capsys.readouterr().err == cli.COMPILE_NOTICE + "\n"
+    finally:
+        cli._stop_notice(listener)
 
 
 def test_a_directory_in_place_of_the_trajectory_is_one_line_and_leaves_nothing(tmp_path):

@@ -459,31 +459,73 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-#: Printed once when Numba compiles a kernel (it caches them: only the first run pays).
-COMPILE_NOTICE = "swarmnav: compiling numerical kernels, first run only: ~30 s (cached for later runs)"
+#: Printed once when a run has spent COMPILE_NOTICE_AFTER seconds compiling. Numba compiles
+#: only on a cache miss: the first run of a method or of a kind of scene (2-D, 3-D), the first
+#: after swarmnav's code changed, each worker process of a cold sweep. Cold figures measured by
+#: ``benchmarks/bench_compile.py`` on the 2-core machine (whole command, start-up included):
+#: apf 4.6 s, vem 6.9 s, sph 9.0 s (3-D 12.4 s), hes 18.8 s (3-D 20.7 s); all eight cases in a
+#: row 49 s, a cold ``experiment cross-method`` 48 s; a warm run starts in ~1.4 s.
+COMPILE_NOTICE = ("swarmnav: compiling numerical kernels, saved for later runs: ~5 s (apf) to ~20 s (hes) per "
+                  "method on 2 cores, ~50 s for every method at once")
+#: [s] of compiling before the notice: a small compile (one new signature, one edited module)
+#: passes unannounced, so the notice appears only where the wait is the one it describes.
+COMPILE_NOTICE_AFTER = 2.0
 
 
 def _notify_compiling():
-    """Print :data:`COMPILE_NOTICE` on stderr the first time Numba starts compiling (a cache
-    hit compiles nothing and prints nothing). Returns the listener to unregister."""
+    """Print :data:`COMPILE_NOTICE` on stderr once the run has spent
+    :data:`COMPILE_NOTICE_AFTER` seconds in Numba compiles. Numba's ``numba:compile`` event
+    fires only on a cache miss (a warm run has none), so this is the signal that kernels are
+    compiled, not an assumption. Returns the listener to pass to :func:`_stop_notice`."""
+    import threading
+    import time
+
     from numba.core import event
+    from tqdm import tqdm
 
     class Notice(event.Listener):
-        shown = False
+        def __init__(self):
+            self.depth, self.spent, self.since = 0, 0.0, 0.0  # nesting, seconds compiled, start
+            self.shown, self.timer, self.lock = False, None, threading.Lock()
 
-        def on_start(self, ev):
-            if not self.shown:
+        def show(self):  # from the timer's thread while a compile runs, or when one ends
+            with self.lock:
+                if self.shown:
+                    return
                 self.shown = True
-                from tqdm import tqdm
+            tqdm.write(COMPILE_NOTICE, file=sys.stderr)  # above a progress bar, not through it
 
-                tqdm.write(COMPILE_NOTICE, file=sys.stderr)  # above a progress bar, not through it
+        def on_start(self, ev):  # a kernel's compile may compile the kernels it calls: count the outer one
+            self.depth += 1
+            if self.depth == 1 and not self.shown:
+                self.since = time.perf_counter()
+                self.timer = threading.Timer(max(0.0, COMPILE_NOTICE_AFTER - self.spent), self.show)
+                self.timer.daemon = True
+                self.timer.start()
 
         def on_end(self, ev):
-            pass
+            self.depth -= 1
+            if self.depth == 0 and self.timer is not None:
+                self.cancel()
+                self.spent += time.perf_counter() - self.since
+                if self.spent >= COMPILE_NOTICE_AFTER:  # short compiles that add up
+                    self.show()
+
+        def cancel(self):
+            if self.timer is not None:
+                self.timer.cancel()
+                self.timer = None
 
     listener = Notice()
     event.register("numba:compile", listener)
     return listener
+
+
+def _stop_notice(listener) -> None:
+    from numba.core import event
+
+    listener.cancel()
+    event.unregister("numba:compile", listener)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -511,9 +553,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     finally:
         if listener is not None:
-            from numba.core import event
-
-            event.unregister("numba:compile", listener)
+            _stop_notice(listener)
 
 
 def _stdout_closed() -> bool:
