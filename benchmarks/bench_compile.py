@@ -6,7 +6,8 @@ temporary directory: the same as deleting the ``__pycache__/*.nbi``/``*.nbc`` fi
 more against the cache that run wrote, and prints both wall times (the whole command: start-up,
 imports and a short run included) and whether the compile notice was shown. The last rows run
 every case in sequence into one cache, as a new machine meets them (shared kernels are compiled
-once), and a cold ``experiment cross-method`` (every method and scene kind in one process).
+once), and a cold ``experiment cross-method`` (every method and scene kind in one process). One
+row is the README's main job (``hes``, 1000 steps), whose first and warm runs the README quotes.
 
 The notice's estimate (``swarmnav.cli.COMPILE_NOTICE``) quotes these figures.
 """
@@ -57,6 +58,11 @@ def main() -> None:
             cold, e1 = swarmnav(cache, tmp / "out", *run)
             warm, e2 = swarmnav(cache, tmp / "out", *run)
             print(f"{method + ' on ' + scene:34s} {cold:9.1f} {warm:9.1f}  {noticed(e1)}/{noticed(e2)}")
+        main_job = ["run", "--method", "hes", "--scenario", "default_corridor", "--seed", "1", "--steps", "1000",
+                    "--quiet", "--force"]  # the README's main job
+        cold, e1 = swarmnav(tmp / "main", tmp / "out", *main_job)
+        warm, e2 = swarmnav(tmp / "main", tmp / "out", *main_job)
+        print(f"{'hes, 1000 steps (README main job)':34s} {cold:9.1f} {warm:9.1f}  {noticed(e1)}/{noticed(e2)}")
         shared = tmp / "shared"
         total = 0.0
         for method, scene in CASES:
