@@ -212,3 +212,7 @@ def test_a_store_from_before_variant_keys_still_resumes_and_refuses(tmp_path):
     store.set_meta("experiment:apf-scenes", meta)
     with pytest.raises(ConfigError, match=r"every variant configured differently\); --force"):
         run_experiment(_apf("6"), tmp_path, progress=False)
+    from swarmnav.experiments.report import write_report
+
+    md = write_report(tmp_path)[0].read_text()
+    assert "Seeds: 1. Overrides (`--set`): not recorded (a store written before swarmnav kept them)." in md
