@@ -281,8 +281,106 @@ def test_first_run_says_it_compiles_and_a_warm_run_does_not(tmp_path):
     cold = subprocess.run([sys.executable, "-m", "swarmnav.cli", *args, str(tmp_path / "a")], env=env,
                           capture_output=True, text=True, timeout=600)
     assert cold.returncode == 0, cold.stderr
-    assert cold.stderr.count("compiling numerical kernels, first run only") == 1
+    assert cold.stderr.count("compiling numerical kernels, saved for later runs") == 1
     warm = subprocess.run([sys.executable, "-m", "swarmnav.cli", *args, str(tmp_path / "b")], env=env,
                           capture_output=True, text=True, timeout=600)
     assert warm.returncode == 0 and "compiling" not in warm.stderr, warm.stderr
     assert os.listdir(tmp_path / "cache")
+
+
+def test_the_compile_notice_waits_for_a_compile_that_takes_time(monkeypatch, capsys):
+    """A compile shorter than COMPILE_NOTICE_AFTER (one small kernel) says nothing; the notice
+    comes once compiling has taken that long, and only once."""
+    import numba
+
+    from swarmnav import cli
+
+    numba.njit(lambda x: x - 1)(1)  # Numba's own one-off start-up is not what is timed below
+    listener = cli._notify_compiling()
+    try:
+        numba.njit(lambda x: x + 1)(1)  # ~0.05 s of compiling, far below 2 s
+        assert capsys.readouterr().err == ""
+    finally:
+        cli._stop_notice(listener)
+    monkeypatch.setattr(cli, "COMPILE_NOTICE_AFTER", 0.0)
+    listener = cli._notify_compiling()
+    try:
+        numba.njit(lambda x: x * 2)(1)
+        numba.njit(lambda x: x * 3)(1)
+        assert capsys.readouterr().err == cli.COMPILE_NOTICE + "\n"
+    finally:
+        cli._stop_notice(listener)
+
+
+def test_a_directory_in_place_of_the_trajectory_is_one_line_and_leaves_nothing(tmp_path):
+    out = tmp_path / "o"
+    (out / "trajectory.npz").mkdir(parents=True)
+    p = _run("run", "--method", "apf", "--scenario", "default_corridor", "--steps", "5", "--out", str(out), "--quiet")
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"{out / 'trajectory.npz'} is a directory" in lines[0], p.stderr
+    assert sorted(x.name for x in out.iterdir()) == ["trajectory.npz"]  # no .tmp, no half-written run
+    assert list((out / "trajectory.npz").iterdir()) == []
+
+
+def test_save_never_leaves_a_temporary_file(tmp_path, monkeypatch):
+    """RunResult.save (the library, under the CLI's check): a directory in the way and a write
+    that fails half-way (a full disk) are one-line SwarmnavErrors, and no .tmp stays behind."""
+    import errno
+    import os
+
+    from swarmnav import run
+    from swarmnav.errors import SwarmnavError
+    from swarmnav.world.catalog import load_scenario
+
+    res = run("apf", load_scenario("default_corridor"), seed=1, steps=3)
+    (tmp_path / "a" / "config.json").mkdir(parents=True)
+    with pytest.raises(SwarmnavError, match="cannot write .*config.json: a directory"):
+        res.save(tmp_path / "a")
+    assert sorted(x.name for x in (tmp_path / "a").iterdir()) == ["config.json"]  # checked before writing
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(SwarmnavError, match="cannot write .*trajectory.npz: No space left on device"):
+        res.save(tmp_path / "b")
+    assert list((tmp_path / "b").iterdir()) == []
+
+
+def _run_into(out, *extra, method="apf", scene="default_corridor"):
+    return main(["run", "--method", method, "--scenario", scene, "--steps", "10", "--out", str(out), "--quiet", *extra])
+
+
+def test_run_refuses_a_directory_that_holds_a_run_unless_forced(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert _run_into(out, "--plot", "--view", method="hes") == 0
+    first = json.loads((out / "config.json").read_text())
+    (out / "notes.txt").write_text("the user's own file")
+    capsys.readouterr()
+    assert _run_into(out, method="apf", scene="off_axis_goal") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--out {out} already holds a run" in err[0] and "--force" in err[0], err
+    assert json.loads((out / "config.json").read_text()) == first  # untouched
+    assert _run_into(out, "--force", method="apf", scene="off_axis_goal") == 0
+    cfg = json.loads((out / "config.json").read_text())
+    assert cfg["method"] == "apf" and cfg["scenario"]["name"] == "off_axis_goal"
+    # the first run's figure and viewer are gone; the user's file is kept and named
+    assert sorted(x.name for x in out.iterdir()) == ["config.json", "events.jsonl", "metrics.json", "notes.txt",
+                                                     "trajectory.npz"]
+    assert "kept files that are not a run's: notes.txt" in capsys.readouterr().err
+
+
+def test_a_forced_run_that_fails_keeps_the_previous_run(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert _run_into(out) == 0
+    before = (out / "trajectory.npz").read_bytes()
+    assert _run_into(out, "--force", "--set", "k_att=-1") == 2  # rejected: nothing was replaced
+    assert (out / "trajectory.npz").read_bytes() == before
+
+
+def test_run_into_a_directory_of_other_files_needs_no_force(tmp_path):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "notes.txt").write_text("not a run")
+    assert _run_into(out) == 0 and (out / "notes.txt").read_text() == "not a run"

@@ -53,7 +53,7 @@ def _cli(*args: str) -> tuple[int, str]:
 
 def _run(method: str, key: str, value: str, steps: int = 1) -> tuple[int, str]:
     return _cli("run", "--method", method, "--scenario-file", str(_DIR / "tiny.toml"), "--steps", str(steps),
-                "--out", str(_DIR / "out"), "--quiet", "--set", f"{key}={value}")
+                "--out", str(_DIR / "out"), "--quiet", "--force", "--set", f"{key}={value}")  # one dir, many runs
 
 
 # ------------------------------------------------------------------ declarations

@@ -86,6 +86,42 @@ def _writable_file(path, flag: str) -> Path:
     return Path(path)
 
 
+def _run_outputs() -> tuple[str, ...]:
+    """The file names a run directory gets from swarmnav: the run's own files, the LLM
+    transcript, and the figures and viewer ``run --plot/--view``, ``plot`` and ``view`` write."""
+    from swarmnav.llm.decider import TRANSCRIPT
+    from swarmnav.sim.result import RUN_FILES
+
+    return (*RUN_FILES, TRANSCRIPT, "trajectory.png", "perspective.png", "viewer.html")
+
+
+def _claim_run_dir(d: Path, force: bool) -> list[Path]:
+    """Check ``run --out DIR`` before the run: a directory that already holds a run (any of
+    :func:`_run_outputs`, or its half-written ``.tmp``) is refused unless ``force``, since the
+    new run would keep the old one's figure, viewer or transcript beside its own files. With
+    ``force``, returns those files for the caller to remove; other files are never touched."""
+    names = [n for name in _run_outputs() for n in (name, name + ".tmp")]
+    blocked = [n for n in names if (d / n).exists() and not (d / n).is_file()]
+    if blocked:
+        raise ConfigError(f"run: --out {d}: {d / blocked[0]} is a directory, where a run writes a file")
+    found = [n for n in names if (d / n).is_file()]
+    if found and not force:
+        raise ConfigError(f"run: --out {d} already holds a run ({', '.join(found[:4])}"
+                          f"{', ...' if len(found) > 4 else ''}); --force replaces it, or choose another directory")
+    return [d / n for n in found]
+
+
+def _clear_run(d: Path, old: list[Path]) -> None:
+    """Remove the previous run's files (``run --force``) and name on stderr what is kept."""
+    for f in old:
+        f.unlink(missing_ok=True)
+    others = sorted(p.name for p in d.iterdir() if p.name not in
+                    {n for name in _run_outputs() for n in (name, name + ".tmp")})
+    if others:
+        print(f"swarmnav: --force replaced the run in {d}; kept files that are not a run's: {', '.join(others)}",
+              file=sys.stderr)
+
+
 def _cmd_scenarios(args) -> int:
     from swarmnav.world.catalog import load_scenario
     from swarmnav.world.generators import GENERATORS
@@ -179,9 +215,11 @@ def _cmd_run(args) -> int:
     n = params.pop("n", None)
     n = None if n is None else coerce(n, int, "--set n")
     scn = load_scenario(Path(args.scenario_file) if args.scenario_file else args.scenario, n=n)
-    _writable_dir(args.out, "--out")
+    old_run = _claim_run_dir(_writable_dir(args.out, "--out"), args.force)
     progress = sys.stderr.isatty() and not args.quiet
     res = run(args.method, scn, seed=args.seed, steps=steps, horizon=horizon, progress=progress, **params)
+    if old_run:  # only now: a run that fails keeps the previous one in place
+        _clear_run(Path(args.out), old_run)
     out = res.save(args.out)
     m = res.metrics
     steps = res.config["steps"]
@@ -299,7 +337,7 @@ def _cmd_experiment(args) -> int:
     _writable_dir(args.out, "--out")
     rows, summary = run_experiment(exp, args.out, workers=args.workers, backend=args.backend,
                                    ray_address=args.ray_address, save_trajectories=not args.no_trajectories,
-                                   progress=not args.quiet)
+                                   progress=not args.quiet, force=args.force)
     failed = sum(r["status"] != "done" for r in rows)
     print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/results.sqlite, runs.csv, summary.csv")
     for s in summary:
@@ -361,6 +399,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", action="store_true", help="also draw DIR/trajectory.png")
     s.add_argument("--view", action="store_true", help="also write DIR/viewer.html, the replay viewer")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.add_argument("--force", action="store_true",
+                   help="DIR already holds a run: replace it (removes only the files a run writes there)")
     _add_llm_flags(s)
     s.set_defaults(fn=_cmd_run)
 
@@ -396,6 +436,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--backend", choices=["local", "ray"], default="local")
     s.add_argument("--ray-address", metavar="ADDR", help="join an existing Ray cluster (default: start a local one)")
     s.add_argument("--no-trajectories", action="store_true", help="store metrics only, no trajectory files")
+    s.add_argument("--force", action="store_true",
+                   help="DIR holds another sweep (other --set values or spec, or another experiment): "
+                        "record this one there anyway; stored runs are kept")
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(fn=_cmd_experiment)
 
@@ -421,31 +464,73 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-#: Printed once when Numba compiles a kernel (it caches them: only the first run pays).
-COMPILE_NOTICE = "swarmnav: compiling numerical kernels, first run only: ~30 s (cached for later runs)"
+#: Printed once when a run has spent COMPILE_NOTICE_AFTER seconds compiling. Numba compiles
+#: only on a cache miss: the first run of a method or of a kind of scene (2-D, 3-D), the first
+#: after swarmnav's code changed, each worker process of a cold sweep. Cold figures measured by
+#: ``benchmarks/bench_compile.py`` on the 2-core machine (whole command, start-up included):
+#: apf 4.6 s, vem 6.9 s, sph 9.0 s (3-D 12.4 s), hes 18.8 s (3-D 20.7 s); all eight cases in a
+#: row 49 s, a cold ``experiment cross-method`` 48 s; a warm run starts in ~1.4 s.
+COMPILE_NOTICE = ("swarmnav: compiling numerical kernels, saved for later runs: ~5 s (apf) to ~20 s (hes) per "
+                  "method on 2 cores, ~50 s for every method at once")
+#: [s] of compiling before the notice: a small compile (one new signature, one edited module)
+#: passes unannounced, so the notice appears only where the wait is the one it describes.
+COMPILE_NOTICE_AFTER = 2.0
 
 
 def _notify_compiling():
-    """Print :data:`COMPILE_NOTICE` on stderr the first time Numba starts compiling (a cache
-    hit compiles nothing and prints nothing). Returns the listener to unregister."""
+    """Print :data:`COMPILE_NOTICE` on stderr once the run has spent
+    :data:`COMPILE_NOTICE_AFTER` seconds in Numba compiles. Numba's ``numba:compile`` event
+    fires only on a cache miss (a warm run has none), so this is the signal that kernels are
+    compiled, not an assumption. Returns the listener to pass to :func:`_stop_notice`."""
+    import threading
+    import time
+
     from numba.core import event
+    from tqdm import tqdm
 
     class Notice(event.Listener):
-        shown = False
+        def __init__(self):
+            self.depth, self.spent, self.since = 0, 0.0, 0.0  # nesting, seconds compiled, start
+            self.shown, self.timer, self.lock = False, None, threading.Lock()
 
-        def on_start(self, ev):
-            if not self.shown:
+        def show(self):  # from the timer's thread while a compile runs, or when one ends
+            with self.lock:
+                if self.shown:
+                    return
                 self.shown = True
-                from tqdm import tqdm
+            tqdm.write(COMPILE_NOTICE, file=sys.stderr)  # above a progress bar, not through it
 
-                tqdm.write(COMPILE_NOTICE, file=sys.stderr)  # above a progress bar, not through it
+        def on_start(self, ev):  # a kernel's compile may compile the kernels it calls: count the outer one
+            self.depth += 1
+            if self.depth == 1 and not self.shown:
+                self.since = time.perf_counter()
+                self.timer = threading.Timer(max(0.0, COMPILE_NOTICE_AFTER - self.spent), self.show)
+                self.timer.daemon = True
+                self.timer.start()
 
         def on_end(self, ev):
-            pass
+            self.depth -= 1
+            if self.depth == 0 and self.timer is not None:
+                self.cancel()
+                self.spent += time.perf_counter() - self.since
+                if self.spent >= COMPILE_NOTICE_AFTER:  # short compiles that add up
+                    self.show()
+
+        def cancel(self):
+            if self.timer is not None:
+                self.timer.cancel()
+                self.timer = None
 
     listener = Notice()
     event.register("numba:compile", listener)
     return listener
+
+
+def _stop_notice(listener) -> None:
+    from numba.core import event
+
+    listener.cancel()
+    event.unregister("numba:compile", listener)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -473,9 +558,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     finally:
         if listener is not None:
-            from numba.core import event
-
-            event.unregister("numba:compile", listener)
+            _stop_notice(listener)
 
 
 def _stdout_closed() -> bool:

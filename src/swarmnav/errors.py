@@ -20,6 +20,11 @@ class ConfigError(SwarmnavError):
     """A method parameter, experiment spec or command-line value is invalid."""
 
 
+class StoreError(SwarmnavError):
+    """A results store (``results.sqlite``) cannot be used: damaged, not a database, locked or
+    unreadable. The message names the file."""
+
+
 class DivergedError(SwarmnavError):
     """The simulated state stopped being finite: the parameters (gains, step) make the method
     numerically unstable. Valid values can still combine into an unstable run."""

@@ -151,3 +151,68 @@ def test_driver_kill_leaves_no_orphan_workers(tmp_path):
     time.sleep(1.0)
     alive = [k for k in kids if Path(f"/proc/{k}").exists() and "Z" not in Path(f"/proc/{k}/stat").read_text().split()[2]]
     assert alive == []
+
+
+def _apf(steps="5", seeds="1", **sets):
+    return load_experiment("apf-scenes", overrides={"steps": steps, **sets}, seeds=seeds)
+
+
+def test_a_different_sweep_into_the_same_store_is_refused_unless_forced(tmp_path):
+    from swarmnav.errors import ConfigError
+
+    run_experiment(_apf(), tmp_path, progress=False)
+    first = Store(tmp_path).meta("experiment:apf-scenes")
+    seen = []
+    with pytest.raises(ConfigError, match=r"holds a different sweep of 'apf-scenes' \(every variant configured "
+                                          r"differently: --set steps=5 then, steps=6 now\); --force"):
+        run_experiment(_apf("6"), tmp_path, progress=False, on_row=seen.append)
+    with pytest.raises(ConfigError, match=r"other variants: 4 stored, 8 now"):
+        run_experiment(_apf(k_att="1|2"), tmp_path, progress=False, on_row=seen.append)
+    assert seen == [] and Store(tmp_path).meta("experiment:apf-scenes") == first  # refused before anything ran
+    # more seeds of the same variants is the same sweep; so is resuming it
+    run_experiment(_apf(seeds="1-2"), tmp_path, progress=False, on_row=seen.append)
+    assert sorted({r["seed"] for r in seen}) == [2]
+    # forced: the new spec is the store's record; the old runs stay stored but out of the CSVs
+    runs, _ = run_experiment(_apf("6"), tmp_path, progress=False, force=True)
+    assert {r["steps"] for r in runs} == {6} and len(runs) == 4
+    assert len(Store(tmp_path).rows()) == 12
+
+
+def test_another_experiment_into_a_store_is_refused_unless_forced(tmp_path, capsys):
+    from swarmnav.cli import main
+
+    run_experiment(_apf(), tmp_path, progress=False)
+    spec = tmp_path / "other.toml"
+    spec.write_text('name = "other"\nmethod = "apf"\nscenario = "off_axis_goal"\nsteps = 5\nseeds = "1"\n')
+    args = ["experiment", "--spec", str(spec), "--out", str(tmp_path), "--quiet"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"swarmnav: error: {tmp_path} holds the results of experiment 'apf-scenes'; --force adds 'other' "
+                   f"beside it (swarmnav report --experiment NAME picks one), or choose another --out"]
+    assert main([*args, "--force"]) == 0
+    assert main(["report", str(tmp_path), "--no-viewers", "--experiment", "apf-scenes"]) == 0
+    assert "| off_axis_goal | 1/1 |" in (tmp_path / "report.md").read_text()
+    assert main(["report", str(tmp_path), "--no-viewers"]) == 0  # the last one run
+    assert "| default | 1/1 |" in (tmp_path / "report.md").read_text()
+
+
+def test_a_store_from_before_variant_keys_still_resumes_and_refuses(tmp_path):
+    from swarmnav.errors import ConfigError
+
+    run_experiment(_apf(), tmp_path, progress=False)
+    store = Store(tmp_path)
+    meta = store.meta("experiment:apf-scenes")
+    for v in meta["variants"]:
+        del v["config"]
+    del meta["overrides"]
+    store.set_meta("experiment:apf-scenes", meta)
+    seen = []
+    run_experiment(_apf(), tmp_path, progress=False, on_row=seen.append)  # the same sweep: resumes, runs nothing
+    assert seen == []
+    store.set_meta("experiment:apf-scenes", meta)
+    with pytest.raises(ConfigError, match=r"every variant configured differently\); --force"):
+        run_experiment(_apf("6"), tmp_path, progress=False)
+    from swarmnav.experiments.report import write_report
+
+    md = write_report(tmp_path)[0].read_text()
+    assert "Seeds: 1. Overrides (`--set`): not recorded (a store written before swarmnav kept them)." in md

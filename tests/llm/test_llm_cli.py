@@ -47,3 +47,42 @@ def test_sim1_llm_report_sets_the_papers_qwen_row_beside_the_llm_variant(fake_se
     assert main(["report", str(out), "--no-viewers"]) == 0
     llm_rows = [ln for ln in (out / "report.md").read_text().splitlines() if ln.startswith("| llm |")]
     assert llm_rows and any("6.206" in ln for ln in llm_rows) and any("228.33" in ln for ln in llm_rows), llm_rows
+
+
+def _closed_port() -> int:
+    import socket
+
+    with socket.socket() as sock:  # bound, never listening: a connection is refused
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def _llm_run(out, *flags):
+    return main(["run", "--method", "hes", "--scenario", "default_corridor", "--steps", "200", "--out", str(out),
+                 "--quiet", "--llm-timeout", "2", *flags])
+
+
+@pytest.mark.parametrize("server", ["closed port", "http500", "drop"])
+def test_an_unusable_back_end_warns_once_per_run_and_counts_its_fallbacks(fake_server, tmp_path, capsys, server):
+    import json
+
+    url = f"http://127.0.0.1:{_closed_port()}" if server == "closed port" else fake_server(server).url
+    assert _llm_run(tmp_path / "r", "--decision", "ollama", "--llm-url", url) == 0
+    err = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]  # (not a compile notice)
+    assert len(err) == 1 and err[0].startswith("swarmnav: warning: the LLM back end (ollama) failed at step 0: ")
+    assert "the rule decides wherever a call fails" in err[0]
+    m = json.loads((tmp_path / "r" / "metrics.json").read_text())
+    assert m["llm_calls"] == 4 and m["llm_fallback_used"] == 4  # k = 0, 50, 100, 150: all answered by the rule
+    # replaying that run re-enacts its failures on purpose: no warning
+    assert _llm_run(tmp_path / "p", "--decision", "replay", "--llm-replay", str(tmp_path / "r")) == 0
+    assert "warning" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("mode", ["rules", "garbage"])
+def test_a_back_end_that_answers_gives_no_warning(fake_server, tmp_path, capsys, mode):
+    import json
+
+    assert _llm_run(tmp_path / "r", "--decision", "openai", "--llm-url", fake_server(mode).url + "/v1") == 0
+    assert "warning" not in capsys.readouterr().err
+    m = json.loads((tmp_path / "r" / "metrics.json").read_text())
+    assert m["llm_fallback_used"] == (4 if mode == "garbage" else 0)  # unparsable answers still count

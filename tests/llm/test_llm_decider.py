@@ -118,3 +118,18 @@ def test_transcript_records_every_call_and_replay_reproduces_it(scripted, tmp_pa
     r3 = LlmDecider(ReplayBackend(str(tmp_path)), interval=4, latency="real")
     with pytest.raises(ReplayMismatch, match="avg_goal_distance"):
         drive(r3, 1, lambda k: replace(OPEN, d_goal_avg=49.0))
+
+
+def test_a_failing_back_end_warns_once_and_a_bad_answer_does_not_warn(scripted):
+    lines = []
+    d = LlmDecider(scripted([LlmError("connection", "cannot connect to http://x"), SPLIT,
+                             LlmError("timeout", "no answer")]), interval=5, warn=lines.append)
+    drive(d, 15)
+    assert d.summary()["llm_fallback_used"] == 2  # every failed call falls back; one line says so
+    assert lines == ["swarmnav: warning: the LLM back end (scripted) failed at step 0: connection: cannot connect "
+                     "to http://x; the rule decides wherever a call fails (this run's count: llm_fallback_used in "
+                     "its metrics)"]
+    quiet = []
+    d = LlmDecider(scripted(["lorem ipsum", ""]), interval=5, warn=quiet.append)
+    drive(d, 10)  # the model answered, unusably: counted as fallbacks, but the back end works
+    assert d.summary()["llm_fallback_used"] == 2 and quiet == []

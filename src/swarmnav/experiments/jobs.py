@@ -63,6 +63,15 @@ def plan(exp: Experiment) -> list[Job]:
     return jobs
 
 
+def variant_key(job: Job) -> str:
+    """sha256 of a job's configuration without its seed: the same for every seed of a variant
+    (a scene that names ``{seed}`` is identified by its template), so two sweeps of the same
+    variants agree on it whatever seeds each ran."""
+    config = {k: v for k, v in job.config.items() if k != "seed"}
+    config["scene"] = _scene_identity(job.variant.scenario)
+    return config_key(config)
+
+
 def _scene_identity(scenario: str) -> str:
     """A file's or built-in scene's content hash; a generator spec is its own identity."""
     from swarmnav.world.scenario import builtin_names

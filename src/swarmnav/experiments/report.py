@@ -143,6 +143,9 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
     metric_names = report_metrics(meta, rows)
     ref_root = _lookup(paper_results(), spec["reference"]) if spec.get("reference") else None
     vmap = spec.get("variant_map") or {}
+    planned: dict[str, int] = {}  # runs the stored spec plans per variant: its (variant, seed) jobs
+    for _, name, _ in meta["jobs"]:
+        planned[name] = planned.get(name, 0) + 1
     variants = []
     for v in meta["variants"]:
         mine = [r for r in rows if r["variant"] == v["name"]]
@@ -154,10 +157,57 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
             per_metric[m] = vals
         ref = _lookup(ref_root, vmap.get(v["name"], v["name"])) if isinstance(ref_root, dict) else None
         variants.append({"name": v["name"], "runs": len(mine), "done": len(done), "values": per_metric,
+                         "planned": planned.get(v["name"], 0), "failed": len(mine) - len(done),
                          "seeds": [r["seed"] for r in done], "reference": ref if isinstance(ref, dict) else None})
     return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
             "variants": variants, "reference": spec.get("reference"), "reference_index": spec.get("reference_index"),
-            "title": spec.get("title") or experiment, "n_runs": len(rows), "compare": spec.get("compare")}
+            "title": spec.get("title") or experiment, "n_runs": len(rows), "compare": spec.get("compare"),
+            "planned": len(meta["jobs"]), "seed_list": list(meta.get("seeds") or []),
+            "overrides": meta.get("overrides")}
+
+
+def completeness(t: dict) -> str:
+    """The report's line on how much of the sweep is done: runs done of planned overall, and for
+    an incomplete sweep (a sweep interrupted, or with failed runs) each variant's seeds done of
+    planned, e.g. ``incomplete: 6 of 10 seeds in every variant``."""
+    done, planned = sum(v["done"] for v in t["variants"]), sum(v["planned"] for v in t["variants"])
+    line = f"{done} of {planned} planned runs done"
+    if done >= planned:
+        return line + "."
+    short = [v for v in t["variants"] if v["done"] < v["planned"]]
+    counts = {(v["done"], v["planned"]) for v in short}
+    if len(short) == len(t["variants"]) and len(counts) == 1:
+        (d, p), = counts
+        where = f"{d} of {p} seeds in every variant"
+    else:
+        where = "; ".join(f"{v['name']} {v['done']} of {v['planned']} seeds" for v in short[:6]) + \
+            (f"; {len(short) - 6} more variants" if len(short) > 6 else "")
+    failed = sum(v["failed"] for v in t["variants"])
+    missing = planned - done - failed
+    why = ", ".join(x for x in (f"{missing} not run" if missing else "", f"{failed} failed" if failed else "") if x)
+    return (f"{line} — **incomplete**: {where} ({why}; rerun the same `swarmnav experiment` command "
+            f"into this directory to finish it).")
+
+
+def settings(t: dict) -> str:
+    """The report's line on what the sweep ran with: its seeds and its ``--set`` overrides."""
+    seeds = _seed_ranges(t["seed_list"]) or "not recorded"
+    if t["overrides"] is None:
+        sets = "not recorded (a store written before swarmnav kept them)"
+    else:
+        sets = " ".join(f"`{k}={v}`" for k, v in t["overrides"].items()) or "none"
+    return f"Seeds: {seeds}. Overrides (`--set`): {sets}."
+
+
+def _seed_ranges(seeds: list[int]) -> str:
+    """``[1, 2, 3, 7]`` -> ``"1-3, 7"`` (the --seeds syntax, in the planned order)."""
+    out: list[list[int]] = []
+    for s in seeds:
+        if out and s == out[-1][1] + 1:
+            out[-1][1] = s
+        else:
+            out.append([s, s])
+    return ", ".join(f"{a}-{b}" if b > a else str(a) for a, b in out)
 
 
 def _cell(vals: np.ndarray) -> str:
@@ -203,8 +253,8 @@ def tables(t: dict) -> list[dict[str, Any]]:
             for c in columns:
                 if c["kind"] == "name":
                     row.append(v["name"])
-                elif c["kind"] == "runs":
-                    row.append(f"{v['done']}/{v['runs']}")
+                elif c["kind"] == "runs":  # done of planned: an interrupted sweep shows 6/10, not 6/6
+                    row.append(f"{v['done']}/{v['planned']}")
                 elif c["kind"] == "ours":
                     row.append(_cell(v["values"][c["metric"]]))
                 else:
@@ -354,8 +404,10 @@ def _html_table(tab: dict) -> str:
 
 
 def _inline_html(text: str) -> str:
-    """Markdown-ish prose as HTML: escaped, with `code` spans as <code> (no backticks leak through)."""
-    return re.sub(r"`([^`]+)`", r"<code>\1</code>", html.escape(text))
+    """Markdown-ish prose as HTML: escaped, with `code` spans as <code> and **bold** as <strong>
+    (no markup leaks through)."""
+    text = re.sub(r"`([^`]+)`", r"<code>\1</code>", html.escape(text))
+    return re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", text)
 
 
 def _png(fig) -> bytes:
@@ -441,7 +493,8 @@ def write_report(directory: str | Path, experiment: str | None = None,
                 f"(the papers' figures, copied as published), in a paper column beside ours where the paper "
                 f"gives the metric." if t["reference"] else "No published table to compare.")
     md = [f"# {t['title']}", "", t["description"], "",
-          f"Experiment `{experiment}`, {t['n_runs']} runs. Cells are mean ± population std over seeds.", ref_note]
+          f"Experiment `{experiment}`: {completeness(t)} Cells are mean ± population std over the seeds done.",
+          "", settings(t), "", ref_note]
     if pair_note:
         md += ["", pair_note]
     for tab in tabs:
@@ -475,12 +528,15 @@ th.num, th.group {{ text-align: center; }}
 tbody tr:nth-child(even) td {{ background: #fafafa; }}
 tbody tr td.paper, th.paper {{ background: #f5f1e4; color: #444; }}
 .sd {{ color: #666; }}
+.incomplete {{ background: #fff4d6; border-left: 4px solid #d9a400; padding: 0.4em 0.8em; }}
 img {{ max-width: 100%; }}
 </style></head><body>
 <h1>{e(t['title'])}</h1>
 <p>{_inline_html(t['description'])}</p>
-<p>Experiment <code>{e(experiment)}</code>, {t['n_runs']} runs. Cells are mean ± population std over seeds.
-{_inline_html(ref_note)}</p>
+<p{' class="incomplete"' if "**incomplete**" in completeness(t) else ""}>Experiment <code>{e(experiment)}</code>: \
+{_inline_html(completeness(t))} Cells are mean ± population std over the seeds done.</p>
+<p>{_inline_html(settings(t))}</p>
+<p>{_inline_html(ref_note)}</p>
 {f"<p>{_inline_html(pair_note)}</p>" if pair_note else ""}
 <section id="results">
 {"".join(_html_table(tab) for tab in tabs)}</section>

@@ -20,7 +20,7 @@ import numpy as np
 from swarmnav.errors import ConfigError, SwarmnavError
 from swarmnav.experiments import stats
 from swarmnav.experiments.backends import BACKENDS
-from swarmnav.experiments.jobs import Job, plan
+from swarmnav.experiments.jobs import Job, plan, variant_key
 from swarmnav.experiments.spec import Experiment
 from swarmnav.experiments.store import Store
 
@@ -69,8 +69,16 @@ def run_experiment(
     save_trajectories: bool = True,
     progress: bool = True,
     on_row: Callable[[dict], None] | None = None,
+    force: bool = False,
 ) -> tuple[list[dict], list[dict]]:
     """Run every missing (variant, seed) of ``exp`` into the store in ``out``.
+
+    A store that holds another sweep is refused (ConfigError, before anything runs) unless
+    ``force``: the same experiment with variants configured differently (another ``--set``
+    value, an edited spec), or a store of another experiment. The seeds may differ: more or
+    fewer seeds of the same variants is the same sweep. ``force`` makes ``exp`` the store's
+    record of its name; stored runs are never deleted (a run's key is its whole configuration,
+    so the report and CSVs show only the runs of the recorded spec).
 
     Returns the exported ``runs.csv`` and ``summary.csv`` rows (also written to ``out``).
     """
@@ -80,7 +88,10 @@ def run_experiment(
         raise ConfigError(f"--workers must be >= 1, got {workers}")
     jobs = plan(exp)
     store = Store(out)
-    store.set_meta(f"experiment:{exp.name}", _spec_meta(exp, jobs))
+    meta = _spec_meta(exp, jobs)
+    if not force:
+        _check_same_sweep(store, meta)
+    store.set_meta(f"experiment:{exp.name}", meta)
     store.set_meta("last_experiment", exp.name)
     done = store.done_keys()
     # Two variants may declare the identical configuration: it is run once and reported under both.
@@ -117,11 +128,59 @@ def export(store: Store, experiment: str) -> tuple[list[dict], list[dict]]:
 
 
 def _spec_meta(exp: Experiment, jobs: list[Job]) -> dict:
+    first = {}
+    for j in jobs:
+        first.setdefault(j.variant.name, j)
     return {
         "name": exp.name, "description": exp.description, "seeds": list(exp.seeds),
-        "variants": [{"name": v.name, "columns": v.columns()} for v in exp.variants],
+        "overrides": dict(exp.overrides),
+        "variants": [{"name": v.name, "columns": v.columns(), "config": variant_key(first[v.name])}
+                     for v in exp.variants],
         "keys": [j.key for j in jobs], "jobs": [[j.key, j.variant.name, j.seed] for j in jobs], "report": exp.report,
     }
+
+
+def _check_same_sweep(store: Store, new: dict) -> None:
+    """Refuse (one-line ConfigError) to run the sweep ``new`` into a store holding another one."""
+    name = new["name"]
+    old = store.meta(f"experiment:{name}")
+    if old is None:
+        last = store.meta("last_experiment")
+        if last is not None and last != name:
+            raise ConfigError(f"{store.root} holds the results of experiment '{last}'; --force adds '{name}' beside "
+                              f"it (swarmnav report --experiment NAME picks one), or choose another --out")
+        return
+    why = _difference(old, new)
+    if why:
+        raise ConfigError(f"{store.root} holds a different sweep of '{name}' ({why}); --force makes this one the "
+                          f"store's '{name}' (stored runs are kept), or choose another --out")
+
+
+def _difference(old: dict, new: dict) -> str:
+    """How two records of one experiment differ in their variants ("" if they do not): their
+    names, or a variant's configuration. Seeds are free to differ."""
+    before, now = [v["name"] for v in old["variants"]], [v["name"] for v in new["variants"]]
+    if before != now:
+        what = f"other variants: {len(before)} stored, {len(now)} now"
+    else:
+        if all("config" in v for v in old["variants"]):
+            changed = [v["name"] for v, w in zip(old["variants"], new["variants"]) if v["config"] != w["config"]]
+        else:  # a store written before variants had a key: compare the runs of the seeds both plan
+            keys = {(variant, seed): key for key, variant, seed in old["jobs"]}
+            changed = list(dict.fromkeys(variant for key, variant, seed in new["jobs"]
+                                         if keys.get((variant, seed), key) != key))
+        if not changed:
+            return ""
+        what = ("every variant" if len(changed) == len(now) else
+                f"variant{'s' if len(changed) > 1 else ''} {', '.join(changed[:3])}{' ...' if len(changed) > 3 else ''}") \
+            + " configured differently"
+    if old.get("overrides") is not None and old["overrides"] != new["overrides"]:
+        what += f": --set {_sets(old['overrides'])} then, {_sets(new['overrides'])} now"
+    return what
+
+
+def _sets(overrides: dict) -> str:
+    return " ".join(f"{k}={v}" for k, v in overrides.items()) or "nothing"
 
 
 def job_rows(store: Store, meta: dict) -> list[dict]:

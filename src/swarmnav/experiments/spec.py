@@ -82,6 +82,7 @@ class Experiment:
     variants: tuple[Variant, ...]
     seeds: tuple[int, ...]
     report: dict[str, Any] = field(default_factory=dict)
+    overrides: dict[str, str] = field(default_factory=dict)  # the --set KEY=VALUE it was loaded with
 
 
 def builtin_names() -> list[str]:
@@ -166,7 +167,7 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
     if len(set(names)) != len(names):
         raise ConfigError(f"{source}: variant names must be unique, got {names}")
     return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants),
-                      seeds=seed_list, report=dict(report))
+                      seeds=seed_list, report=dict(report), overrides=dict(overrides))
 
 
 def _params(table: Any, where: str) -> dict[str, Any]:

@@ -13,9 +13,11 @@ import hashlib
 import json
 import sqlite3
 import time
-from contextlib import closing
+from contextlib import closing, contextmanager
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Iterator
+
+from swarmnav.errors import StoreError
 
 DB_NAME = "results.sqlite"
 
@@ -58,7 +60,7 @@ class Store:
         self.root = Path(root)
         self.root.mkdir(parents=True, exist_ok=True)
         self.path = self.root / DB_NAME
-        with closing(self._connect()) as db:
+        with self._db() as db:
             db.executescript(_SCHEMA)
             cols = {r[1] for r in db.execute("PRAGMA table_info(runs)")}
             if "artifacts" not in cols:  # a store written before artifacts were kept
@@ -70,6 +72,23 @@ class Store:
         db.execute("PRAGMA synchronous=FULL")  # a committed row survives a crash of the machine too
         return db
 
+    @contextmanager
+    def _db(self, transaction: bool = False) -> Iterator[sqlite3.Connection]:
+        """A connection, closed after use (one transaction if ``transaction``). A file that SQLite
+        cannot use (random bytes, a truncated or damaged database, a lock held past the timeout,
+        a directory in its place) raises :class:`StoreError` naming it: bad input, not a bug."""
+        try:
+            with closing(self._connect()) as db:
+                if transaction:
+                    with db:
+                        yield db
+                else:
+                    yield db
+        except (sqlite3.IntegrityError, sqlite3.ProgrammingError, sqlite3.InterfaceError):
+            raise  # our own SQL or rows are wrong: a bug, keep the traceback
+        except sqlite3.DatabaseError as e:  # OperationalError too: locked, unable to open, disk I/O
+            raise StoreError(f"{self.path}: not a usable results store (SQLite: {e})") from None
+
     # ------------------------------------------------------------------ writing
     def put(self, row: dict[str, Any]) -> None:
         """Insert or replace one run row in its own transaction."""
@@ -79,22 +98,25 @@ class Store:
         """Insert or replace rows, all in one transaction (all or none of them land)."""
         encoded = (_encode(r) for r in rows)
         values = [[e.get(c) for c in _COLUMNS] for e in encoded]
-        with closing(self._connect()) as db, db:
+        with self._db(transaction=True) as db:
             db.executemany(f"INSERT OR REPLACE INTO runs ({', '.join(_COLUMNS)}) "
                            f"VALUES ({', '.join('?' * len(_COLUMNS))})", values)
 
     def set_meta(self, key: str, value: Any) -> None:
-        with closing(self._connect()) as db, db:
+        with self._db(transaction=True) as db:
             db.execute("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)", (key, json.dumps(value)))
 
     # ------------------------------------------------------------------ reading
     def meta(self, key: str, default: Any = None) -> Any:
-        with closing(self._connect()) as db:
+        with self._db() as db:
             r = db.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
-        return json.loads(r[0]) if r else default
+        try:
+            return json.loads(r[0]) if r else default
+        except json.JSONDecodeError:
+            raise StoreError(f"{self.path}: not a usable results store (meta '{key}' is not JSON)") from None
 
     def done_keys(self) -> set[str]:
-        with closing(self._connect()) as db:
+        with self._db() as db:
             return {k for (k,) in db.execute("SELECT key FROM runs WHERE status = 'done'")}
 
     def rows(self, keys: Iterable[str] | None = None, experiment: str | None = None) -> list[dict[str, Any]]:
@@ -102,7 +124,7 @@ class Store:
         q, args = "SELECT * FROM runs", []
         if experiment is not None:
             q, args = q + " WHERE experiment = ?", [experiment]
-        with closing(self._connect()) as db:
+        with self._db() as db:
             db.row_factory = sqlite3.Row
             found = [dict(r) for r in db.execute(q, args)]
         if keys is not None:
@@ -115,7 +137,7 @@ class Store:
         return found
 
     def count(self) -> dict[str, int]:
-        with closing(self._connect()) as db:
+        with self._db() as db:
             return dict(db.execute("SELECT status, COUNT(*) FROM runs GROUP BY status").fetchall())
 
 

@@ -13,6 +13,8 @@ its own, so an LLM and the rule cannot disagree about what is feasible. The deci
   a fallback;
 - falls back to the rule action on any failure of the model (connection refused, timeout,
   HTTP error, dropped connection, empty or unparsable answer), counted in llm_fallback_used;
+  the first call the back end itself fails (not an unparsable answer, and not a replayed
+  failure) also writes one warning line on stderr, once per decider, i.e. once per run;
 - records every call in a transcript (state, prompt, raw answer, parsed and executed action,
   latency, fallback reason).
 
@@ -25,6 +27,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import time
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
@@ -37,6 +40,12 @@ from swarmnav.llm.parse import parse_answer
 from swarmnav.llm.prompt import build_prompt, jsonable
 
 TRANSCRIPT = "llm_transcript.jsonl"
+
+
+def _warn_stderr(line: str) -> None:
+    from tqdm import tqdm
+
+    tqdm.write(line, file=sys.stderr)  # above a progress bar, not through it
 
 
 def feasible_in(action: str, state: Mapping[str, Any]) -> bool:
@@ -59,10 +68,13 @@ class Decision:
 class LlmDecider:
     """Trigger, call, parse, project, fall back and record (see module docstring)."""
 
-    def __init__(self, backend: Backend, interval: int = 50, latency: LatencyMode | str = "blocking"):
+    def __init__(self, backend: Backend, interval: int = 50, latency: LatencyMode | str = "blocking",
+                 warn: Callable[[str], None] | None = None):
         self.backend = backend
         self.interval = int(interval)
         self.latency = latency if isinstance(latency, LatencyMode) else LatencyMode.parse(latency)
+        self.warn = warn or _warn_stderr  # where the one warning of a run whose back end fails goes
+        self._warned = False
         self.records: list[dict[str, Any]] = []
         self._k_llm: int | None = None
         self._pending: tuple[int, dict] | None = None  # (apply step, record) of a delayed answer
@@ -119,8 +131,10 @@ class LlmDecider:
             raise
         except LlmError as e:
             rec.update(latency_s=e.latency if e.latency is not None else time.perf_counter() - t0, fallback=str(e))
+            self._warn_once(step, rec["fallback"])
         except Exception as e:  # a model must never crash the simulation
             rec.update(latency_s=time.perf_counter() - t0, fallback=f"error: {type(e).__name__}: {e}")
+            self._warn_once(step, rec["fallback"])
         else:
             parsed = parse_answer(reply.text)
             rec.update(raw=reply.text, latency_s=reply.latency, parsed=parsed.action, parse=parsed.how or None,
@@ -129,6 +143,17 @@ class LlmDecider:
                 rec["fallback"] = f"parse: {parsed.error}"
         self.records.append(rec)
         return rec
+
+    def _warn_once(self, step: int, why: str) -> None:
+        """The run's one warning that its back end failed and the rule decides instead: without
+        it a run against a server that is down would end with exit 0 and no word. A replay
+        re-enacts the recorded run's failures on purpose, so it stays silent."""
+        if self._warned or self.backend.name == "replay":
+            return
+        self._warned = True
+        self.warn(f"swarmnav: warning: the LLM back end ({self.backend.name}) failed at step {step}: "
+                  f"{' '.join(str(why).split())}; the rule decides wherever a call fails (this run's count: "
+                  f"llm_fallback_used in its metrics)")
 
     def _apply(self, rec: dict[str, Any], step: int, proj: Callable[[str], str]) -> Decision:
         action = proj(rec["parsed"])

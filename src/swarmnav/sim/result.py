@@ -65,10 +65,17 @@ class RunResult:
         every artifact under its own name.
 
         Files are written to a temporary name and renamed, so a killed process never leaves a
-        half-written file under the final name.
+        half-written file under the final name. A name that is taken by a directory, or a file
+        that cannot be written, raises SwarmnavError naming it and leaves no temporary file.
         """
         d = Path(out)
         d.mkdir(parents=True, exist_ok=True)
+        for name in self.artifacts:
+            if Path(name).name != name or name.startswith(".") or name in RUN_FILES:
+                raise SwarmnavError(f"artifact name must be a plain file name of its own, got {name!r}")
+        for name in (*RUN_FILES, *self.artifacts):  # checked before anything is written
+            if (d / name).exists() and not (d / name).is_file():
+                raise SwarmnavError(f"cannot write {d / name}: a directory (or other non-file) is in the way")
         extra = {} if self.roles is None else {"roles": self.roles}  # a run without roles keeps its old file
         _atomic(d / "trajectory.npz", lambda f: np.savez_compressed(
             f, positions=self.positions, velocities=self.velocities, clearance=self.clearance,
@@ -78,8 +85,6 @@ class RunResult:
         metrics = dict(self.metrics, wall_time_s=self.wall_time)
         _atomic(d / "metrics.json", lambda f: f.write(json.dumps(_jsonable(metrics), indent=2).encode()))
         for name, content in self.artifacts.items():
-            if Path(name).name != name or name.startswith(".") or name in _RUN_FILES:
-                raise SwarmnavError(f"artifact name must be a plain file name of its own, got {name!r}")
             data = content.encode() if isinstance(content, str) else bytes(content)
             _atomic(d / name, lambda f, data=data: f.write(data))
         return d
@@ -115,16 +120,27 @@ class RunResult:
         return cls(config=config, events=events, metrics=metrics, wall_time=wall, **arrays)
 
 
-_RUN_FILES = ("metrics.json", "trajectory.npz", "config.json", "events.jsonl")
+#: The files :meth:`RunResult.save` always writes (artifacts come on top, under their own names).
+RUN_FILES = ("metrics.json", "trajectory.npz", "config.json", "events.jsonl")
 
 
 def _atomic(path: Path, write) -> None:
+    """``write(f)`` into ``path`` through a temporary file, removed again if anything fails."""
     tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        write(f)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException as e:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass  # e.g. the temporary name itself is a directory: nothing of ours to remove
+        if isinstance(e, OSError):  # disk full, permissions, a directory in the way: one line
+            raise SwarmnavError(f"cannot write {path}: {e.strerror or e}") from None
+        raise
 
 
 def _jsonable(d: dict) -> dict:
