@@ -106,8 +106,9 @@ class SphParams:
     end_state: Literal["moving", "rest"] = param("moving", "", None, "ours",
         "end state of a local plan short of the goal: moving at the planner's speed along the path "
         "(ours), or at rest (released terminal_state)")
-    ctrl_spacing: float = param(0.5, "m", "(0, inf)", "ours",
-        "control-point spacing along the initial path (released dist_p)")
+    ctrl_spacing: float = param(0.5, "m", "[0.05, 10]", "ours",
+        "control-point spacing along the initial path (released dist_p); from 0.05 m (half the "
+        "0.1 m map: finer points resolve nothing, and 1e-12 m asked for 1e13 of them)")
     ctrl_seed: Literal["knots", "released"] = param("knots", "", None, "ours",
         "initial interior control points: the path points at the knot times after C_2 (ours, "
         "reference at v_max), or path[1..-2] as the released code (repeats the points C_2 and "
