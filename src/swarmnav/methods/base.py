@@ -80,5 +80,6 @@ def format_bytes(n: float) -> str:
 
 
 def format_extent(lo, hi) -> str:
-    """The extent of a box as ``2000000 m x 2000000 m``."""
-    return " x ".join(f"{b - a:.10g} m" for a, b in zip(lo, hi))
+    """The extent of a box as ``2000000 m x 42.5 m`` (0.1 m; beyond 10 000 km, 4 digits)."""
+    sides = (float(b - a) for a, b in zip(lo, hi))
+    return " x ".join((f"{s:.4g}" if s >= 1e7 else f"{s:.1f}".removesuffix(".0")) + " m" for s in sides)
