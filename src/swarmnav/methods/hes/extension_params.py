@@ -200,7 +200,8 @@ class StallParams:
         "the map covers the box of the start and the goal plus this margin (R_L)")
     max_map_bytes: int = param(2 * 2**30, "B", "[1, inf)", "ours",
         "largest memory the map and its fields may take (stall.py: 180 B a cell while engaged); a start-goal "
-        "box that needs more at stall.cell is refused at reset (2 GiB: ~90 times the HES scenes' 23 MB)")
+        "box that needs more at stall.cell is refused at reset (2 GiB: ~70 times the 24-31 MB of the HES "
+        "Simulation 3 scenes)")
 
 
 @dataclass(frozen=True, slots=True)
