@@ -24,7 +24,7 @@ def test_reaches_goal_in_open_space():
 
 def test_wall_repulsion_points_away_and_saturates():
     scn = from_dict({**OPEN, "obstacles": [{"type": "box", "min": [-5.0, 1.0], "max": [40.0, 2.0]}],
-                     "swarm": {"n": 1, "spawn": [0.0, 0.0, 0.0, 0.0]}})
+                     "swarm": {"n": 1, "spawn": [-0.01, -0.01, 0.01, 0.01]}})
     m = Apf(k_att=0.0)
     m.reset(scn, None, None, None)
     a, _ = m.act(Observation(0, 0.0, np.array([[0.0, 0.5]]), np.zeros((1, 2))), None)

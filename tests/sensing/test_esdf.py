@@ -105,3 +105,28 @@ def test_build_rejects_bad_bounds():
         Esdf.build(geom, bounds=(1, 0, 0, 1))
     with pytest.raises(ValueError):
         Esdf.build(geom, bounds=(0, 0, 1, 1), resolution=0.0)
+
+
+def test_planar_build_takes_little_more_memory_than_the_field_and_counts_its_nodes(scene):
+    """The planar build computes the exact distance a block of rows at a time: its peak memory is
+    the field plus a bounded block (the whole-grid build took ~6x the field: query points, their
+    coordinates and distances for every node at once). ``grid_nodes`` counts what it samples."""
+    import tracemalloc
+
+    from swarmnav.sensing.esdf import grid_nodes
+
+    geom, _ = scene
+    bounds = (-3.0, -5.0, 397.0, 195.0)  # 4001 x 2001 nodes, a 64 MB field
+    Esdf.build(geom, bounds=(0.0, 0.0, 1.0, 1.0), resolution=0.1)  # kernels loaded before measuring
+    tracemalloc.start()
+    try:
+        esdf = Esdf.build(geom, bounds=bounds, resolution=0.1)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert esdf.values.size == grid_nodes(bounds, 0.1) == 4001 * 2001
+    assert peak < esdf.values.nbytes + 32 * 2**20  # the field + one block of ~0.5 M nodes (~48 B each)
+    i = np.random.default_rng(0).integers(0, esdf.values.size, 500)
+    nodes = esdf.origin + 0.1 * np.column_stack([i % 4001, i // 4001])
+    np.testing.assert_array_equal(esdf.values.ravel()[i], signed_distance(geom, nodes))
+    assert grid_nodes((-1e6, -1e6, 1e6, 1e6), 0.1) == 20_000_001**2 and grid_nodes((0.0, 0.0, 1e308, 1.0), 0.01) == np.inf

@@ -90,7 +90,7 @@ def _wall_push(dim: int, d: float) -> float:
 bounds = [-50.0, -50.0, 50.0, 50.0]
 [swarm]
 n = 1
-spawn = [0.0, -1.0, 0.0, -1.0]
+spawn = [-0.01, -1.01, 0.01, -0.99]  # a small box around the agent placed below
 clearance = 0.0
 [goal]
 position = [0.0, -20.0]
@@ -106,7 +106,7 @@ max = [40.0, {d}]
 bounds = [-50.0, -50.0, -50.0, 50.0, 50.0, 50.0]
 [swarm]
 n = 1
-spawn = [0.0, -1.0, 0.0, 0.0, -1.0, 0.0]
+spawn = [-0.01, -1.01, -0.01, 0.01, -0.99, 0.01]
 clearance = 0.0
 [goal]
 position = [0.0, -20.0, 0.0]

@@ -292,7 +292,9 @@ def test_spawn_sampler_matches_the_plain_reference(base, n, side):
     d["swarm"]["n"] = n
     d["swarm"]["spawn"] = [-1.0 - side, -side / 2, 1.0 - side / 2, -1.0, side / 2, 1.0 + side / 2] \
         if len(d["swarm"]["spawn"]) == 6 else [-1.0 - side, -side / 2, -1.0, side / 2]
-    d["world"]["bounds"] = [-20.0] + d["world"]["bounds"][1:]
+    h = side / 2 + 1.0  # bounds that hold the spawn region (and the obstacles and goal)
+    d["world"]["bounds"] = [-20.0, -max(h, 6.0), 1.0 - h, 12.0, max(h, 6.0), 1.0 + max(h, 3.0)] \
+        if len(d["swarm"]["spawn"]) == 6 else [-20.0, -max(h, 6.0), 12.0, max(h, 6.0)]
     d["goal"].pop("path", None)
     scn = from_dict(d)
     np.testing.assert_array_equal(scn.spawn_positions(np.random.default_rng(3)),

@@ -240,5 +240,5 @@ def test_extruded_forest_is_the_planar_forest_as_full_height_trunks():
     assert tall.goal_array[:2].tolist() == flat.goal_array.tolist()
     with pytest.raises(ScenarioError, match="altitude must be in"):
         load_scenario(spec + ",height=6,altitude=5.5")
-    with pytest.raises(ScenarioError, match="height must be 0"):
+    with pytest.raises(ScenarioError, match=r"height must be in \[0, 100\] m \(0: the planar forest\)"):
         load_scenario(spec + ",height=-6")

@@ -16,11 +16,13 @@ in ``RunResult.artifacts`` and written into the run directory (e.g. an LLM trans
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 
+from swarmnav.errors import ConfigError
 from swarmnav.world.scenario import Scenario
 
 
@@ -52,3 +54,32 @@ class Method(Protocol):
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]: ...
 
     def summary(self) -> dict[str, float]: ...
+
+
+def check_map_bytes(method: str, what: str, need: float, limit: int, key: str, hint: str) -> None:
+    """Refuse (ConfigError) a run whose maps would take ``need`` bytes, more than ``limit``.
+
+    Maps a method sizes by the world (grids over the bounds or the start-goal box) are checked
+    before they are allocated: a world kilometres wide at a 0.1 m resolution would otherwise end
+    in a MemoryError (or take the machine's memory) instead of one line naming the parameter.
+    """
+    if not need <= limit:
+        raise ConfigError(f"{method}: {what} needs {format_bytes(need)} of maps (limit {format_bytes(limit)}: "
+                          f"{key}); {hint}")
+
+
+def format_bytes(n: float) -> str:
+    """``n`` bytes in binary units, three significant digits: ``2 GiB``, ``2.84 PiB``."""
+    if not math.isfinite(n):
+        return "over 1e308 B"
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB"):
+        if n < 1024:
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} YiB"
+
+
+def format_extent(lo, hi) -> str:
+    """The extent of a box as ``2000000 m x 42.5 m`` (0.1 m; beyond 10 000 km, 4 digits)."""
+    sides = (float(b - a) for a, b in zip(lo, hi))
+    return " x ".join((f"{s:.4g}" if s >= 1e7 else f"{s:.1f}".removesuffix(".0")) + " m" for s in sides)

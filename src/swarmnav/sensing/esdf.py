@@ -25,10 +25,26 @@ if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
 
 
+#: Nodes whose exact distance a planar build computes at once: their coordinates, query points
+#: and distances take ~48 B a node, so a build's working memory stays near 25 MB beside the field
+_BUILD_CHUNK = 1 << 19
+
+
 def _nodes(lo: float, hi: float, resolution: float) -> int:
     # The 1e-9 slack keeps an extent that is a whole number of cells from gaining a node
     # through rounding (e.g. 10 / 0.1 = 100.00000000000001).
     return max(int(math.ceil((hi - lo) / resolution - 1e-9)) + 1, 2)
+
+
+def grid_nodes(bounds: tuple[float, ...], resolution: float) -> float:
+    """The number of nodes :meth:`Esdf.build` samples over ``bounds`` at ``resolution`` [m], as a
+    float (``inf`` for a grid too large to count): the field holds 8 B a node."""
+    d = len(bounds) // 2
+    total = 1.0
+    for a in range(d):
+        cells = (bounds[d + a] - bounds[a]) / resolution
+        total *= _nodes(bounds[a], bounds[d + a], resolution) if math.isfinite(cells) else math.inf
+    return total
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -85,9 +101,12 @@ class Esdf:
             ny = _nodes(ymin, ymax, resolution)
             xs = xmin + resolution * np.arange(nx)
             ys = ymin + resolution * np.arange(ny)
-            gx, gy = np.meshgrid(xs, ys)  # (ny, nx), row = y
-            nodes = np.stack([gx.ravel(), gy.ravel()], axis=1)
-            values = signed_distance(geom, nodes).reshape(ny, nx)
+            values = np.empty((ny, nx))
+            rows = max(1, _BUILD_CHUNK // nx)  # a block of rows at a time: the field is the memory it takes
+            for r in range(0, ny, rows):
+                gx, gy = np.meshgrid(xs, ys[r : r + rows])  # (rows, nx), row = y
+                nodes = np.stack([gx.ravel(), gy.ravel()], axis=1)
+                values[r : r + rows] = signed_distance(geom, nodes).reshape(-1, nx)
         else:
             n = [_nodes(lo[a], hi[a], resolution) for a in range(3)]
             values = np.empty((n[2], n[1], n[0]))

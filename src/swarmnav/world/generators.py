@@ -8,6 +8,7 @@ give the same scene.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from typing import Any, Callable
 
@@ -15,8 +16,9 @@ import numpy as np
 from scipy import ndimage
 
 from swarmnav.errors import ScenarioError
+from swarmnav.params import Range
 from swarmnav.world.obstacles import Box, Circle, Cylinder
-from swarmnav.world.scenario import Scenario, Swarm, from_dict, validate
+from swarmnav.world.scenario import MAX_AGENTS, Scenario, Swarm, from_dict, validate
 
 
 def random_forest(
@@ -60,14 +62,15 @@ def random_forest(
     of the floor at every altitude, so ``V_obs / V_total`` is ``density`` exactly, and a forest
     crossable in 2-D is crossable at every altitude. 0 (the default): the planar scene.
     """
-    if not 0.0 <= density < 0.55:
-        raise ScenarioError(f"random_forest: density must be in [0, 0.55), got {density}")
+    _check_options("random_forest", locals())
     if not (0 < r_min <= r_max):
         raise ScenarioError(f"random_forest: need 0 < r_min <= r_max, got {r_min}, {r_max}")
-    if not 0.0 < spawn_length <= 8.0:
-        raise ScenarioError(f"random_forest: spawn_length must be in (0, 8] m, got {spawn_length}")
-    if not (height >= 0.0 and math.isfinite(height)):
-        raise ScenarioError(f"random_forest: height must be 0 (a planar forest) or > 0 m, got {height}")
+    if not 2.0 * r_max <= min(length, width):
+        raise ScenarioError(f"random_forest: need 2 r_max <= length and width (a disc fits in the forest), "
+                            f"got r_max={r_max}, length={length}, width={width}")
+    if not min_passage < width:
+        raise ScenarioError(f"random_forest: min_passage must be < width (a corridor inside the forest), "
+                            f"got min_passage={min_passage}, width={width}")
     if height and not 1.0 <= altitude <= height - 1.0:
         raise ScenarioError(f"random_forest: with a height, altitude must be in [1, height - 1] m (the 1 m spawn "
                             f"layer keeps 0.5 m from ground and ceiling), got altitude={altitude}, height={height}")
@@ -226,18 +229,12 @@ def random_forest_3d(
     space then clusters in the gaps the random draw leaves, instead of spreading into the even
     gaps of the non-overlapping packing, and densities up to ~(h_min + height) / (2 height) fit.
     """
-    for key, v in (("length", length), ("width", width), ("height", height)):
-        if not (v > 0 and math.isfinite(v)):
-            raise ScenarioError(f"random_forest_3d: {key} must be finite and > 0, got {v}")
+    _check_options("random_forest_3d", locals())
     if not (0 < d_min <= d_max < min(length, width)):
         raise ScenarioError(f"random_forest_3d: need 0 < d_min <= d_max < the forest's length and width, "
                             f"got {d_min}, {d_max}")
     if not (0 < h_min <= height):
         raise ScenarioError(f"random_forest_3d: need 0 < h_min <= height, got h_min={h_min}, height={height}")
-    if not 0.0 <= box_share <= 1.0:
-        raise ScenarioError(f"random_forest_3d: box_share must be in [0, 1], got {box_share}")
-    if not min_gap >= 0.0:
-        raise ScenarioError(f"random_forest_3d: min_gap must be >= 0, got {min_gap}")
     if not 1.0 <= altitude <= height - 1.0:
         raise ScenarioError(f"random_forest_3d: altitude must be in [1, height - 1] = [1, {height - 1:g}] m "
                             f"(the 1 m spawn box keeps 0.5 m from ground and ceiling), got {altitude}")
@@ -371,8 +368,7 @@ def periodic_box(n: int = 100, rho: float = 4.102, seed: int = 0) -> Scenario:
     at the box centre. ``seed`` is accepted for a uniform spec grammar; the box has no random
     geometry.
     """
-    if n < 1 or rho <= 0:
-        raise ScenarioError(f"periodic_box: need n >= 1 and rho > 0, got n={n}, rho={rho}")
+    _check_options("periodic_box", locals())
     side = math.sqrt(n / rho)
     scn = Scenario(
         name=f"periodic_box:n={n},rho={rho:g}",
@@ -406,6 +402,7 @@ def hwvem_mission_family(tiny_offset: float = 1.45, rect_offset: float = 1.3, pa
             beside a leg move with it, so their distance to that leg is kept.
         n: swarm size.
     """
+    _check_options("hwvem_mission_family", locals())
     s, h, g = turn_scale, passage_width / 2, (passage_width + 0.2) / 2
     hi, lo = 3.0 * s, -3.5 * s  # [m] y of the high and the low leg
     dy = -2.1875 * (s - 1.0)  # [m] shift of the descending leg at x = 45 (the triangle moves with it)
@@ -451,40 +448,134 @@ GENERATORS: dict[str, Callable[..., Scenario]] = {
 }
 
 
+#: Every option of every generator, as ``(type, valid values, unit, why those values)``: ``from_spec`` reads a spec's
+#: values with these types, and each generator checks its arguments against them on entry, so a
+#: spec and a Python call are refused alike, with the generator, the option and its valid values.
+#: Relations between options (``r_min <= r_max``, an altitude under the ceiling) are checked by the
+#: generator itself. Upper bounds that are ours: forest sides up to 200 m (five times the SPH
+#: paper's 40 m forest; random sequential addition is quadratic in the number of discs, and a
+#: 200 m x 200 m forest at density 0.5 already takes ~30 s), heights up to 100 m, up to 10 000
+#: redraws for ``min_passage``.
+OPTIONS: dict[str, dict[str, tuple[type, Range | None, str, str]]] = {
+    "random_forest": {
+        "density": (float, Range.parse("[0, 0.55)"), "", "random sequential addition jams at ~0.547"),
+        "seed": (int, Range.parse("[0, inf)"), "", ""),
+        "n": (int, Range.parse(f"[1, {MAX_AGENTS}]"), "", ""),
+        "length": (float, Range.parse("(0, 200]"), "m", ""),
+        "width": (float, Range.parse("[8, 200]"), "m", "the 8 m wide spawn area lies between the side walls"),
+        "r_min": (float, Range.parse("(0, inf)"), "m", ""),
+        "r_max": (float, Range.parse("(0, inf)"), "m", ""),
+        "min_gap": (float, Range.parse("[0, inf)"), "m", ""),
+        "min_passage": (float, Range.parse("[0, inf)"), "m", ""),
+        "max_forests": (int, Range.parse("[1, 10000]"), "", ""),
+        "spawn_length": (float, Range.parse("(0, 8]"), "m", "at most 8 m, for swarms of up to 100 robots"),
+        "height": (float, Range.parse("[0, 100]"), "m", "0: the planar forest"),
+        "altitude": (float, Range.parse("[1, 99]"), "m", "the 1 m spawn layer keeps 0.5 m from ground and ceiling"),
+    },
+    "random_forest_3d": {
+        "density": (float, Range.parse("[0, 1)"), "", ""),  # what is reachable depends on h_min and overlap
+        "seed": (int, Range.parse("[0, inf)"), "", ""),
+        "n": (int, Range.parse(f"[1, {MAX_AGENTS}]"), "", ""),
+        "length": (float, Range.parse("(0, 200]"), "m", ""),
+        "width": (float, Range.parse("[6, 200]"), "m", "the 6 m wide spawn box lies between the side walls"),
+        "height": (float, Range.parse("[2, 100]"), "m", "the 1 m spawn layer keeps 0.5 m from ground and ceiling"),
+        "d_min": (float, Range.parse("(0, inf)"), "m", ""),
+        "d_max": (float, Range.parse("(0, inf)"), "m", ""),
+        "h_min": (float, Range.parse("(0, inf)"), "m", ""),
+        "box_share": (float, Range.parse("[0, 1]"), "", "a probability"),
+        "min_gap": (float, Range.parse("[0, inf)"), "m", ""),
+        "altitude": (float, Range.parse("[1, 99]"), "m", "the 1 m spawn layer keeps 0.5 m from ground and ceiling"),
+        "overlap": (bool, None, "", ""),
+    },
+    "periodic_box": {
+        "n": (int, Range.parse(f"[1, {MAX_AGENTS}]"), "", ""),
+        "rho": (float, Range.parse("(0, inf)"), "1/m^2", ""),
+        "seed": (int, Range.parse("[0, inf)"), "", ""),
+    },
+    "hwvem_mission_family": {
+        "tiny_offset": (float, Range.parse("[0, 9.75]"), "m", "the r = 0.25 m circles stay inside y >= -10 m"),
+        "rect_offset": (float, Range.parse("[0, 10]"), "m", ""),
+        "passage_width": (float, Range.parse("(0, 6.8)"), "m",
+                          "the second passage's triangle keeps its apex, y = -(w + 0.2) / 2, above its base at -3.5 m"),
+        "turn_scale": (float, Range.parse("[0, 10]"), "", ""),
+        "n": (int, Range.parse(f"[1, {MAX_AGENTS}]"), "", ""),
+    },
+}
+
+
+def _check_options(name: str, values: dict[str, Any]) -> None:
+    """Raise ScenarioError unless every option of generator ``name`` in ``values`` (its arguments)
+    has the type and lies in the range ``OPTIONS`` declares."""
+    for key, option in OPTIONS[name].items():
+        if key in values:
+            _option(name, key, values[key], *option)
+
+
+def _option(name: str, key: str, value: Any, kind: type, valid: Range | None, unit: str, why: str) -> Any:
+    """``value`` (a Python value) as option ``key`` of generator ``name``, or ScenarioError."""
+    if kind is bool:
+        if isinstance(value, (bool, np.bool_)):
+            return bool(value)
+        raise ScenarioError(f"{name}: {key} must be true or false, got {value!r}")
+    if kind is int:
+        lo, hi = (f"{v:.0f}" if math.isfinite(v) else "inf" for v in (valid.lo, valid.hi))
+        shown = f"{'[' if valid.lo_closed else '('}{lo}, {hi}{']' if valid.hi_closed else ')'}"
+    else:
+        shown = f"{valid}{' ' + unit if unit else ''}"
+    why = f" ({why})" if why else ""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or (kind is int and not isinstance(value, (int, np.integer))):
+        raise ScenarioError(f"{name}: {key} must be {'an integer' if kind is int else 'a number'} in {shown}{why}, "
+                            f"got {value!r}")
+    try:
+        x = int(value) if kind is int else float(value)
+    except OverflowError:  # an integer beyond the float range
+        x = math.inf
+    if x not in valid:  # NaN and infinities lie in no range
+        raise ScenarioError(f"{name}: {key} must be in {shown}{why}, got {x!r}")
+    return x
+
+
+def _read(name: str, key: str, text: str) -> Any:
+    """The text of option ``key`` in a spec as the option's type (an integer may be written as a
+    float: ``1e3``, ``15.0``), checked by :func:`_option`."""
+    kind = OPTIONS[name][key][0]
+    value: Any = text
+    if kind is bool:
+        value = {"true": True, "false": False}.get(text.lower(), text)
+    else:
+        try:
+            value = int(text) if kind is int else float(text)
+        except ValueError:
+            with contextlib.suppress(ValueError):
+                x = float(text)
+                value = int(x) if kind is int and x.is_integer() else text
+    return _option(name, key, value, *OPTIONS[name][key])
+
+
 def from_spec(spec: str, n: int | None = None) -> Scenario:
-    """Build a generated scene from ``NAME:key=value,...`` (values parsed as int, float or bool).
+    """Build a generated scene from ``NAME:key=value,...``, each value read as its option's type
+    (``OPTIONS``: integer, number or true/false) and checked against its range.
 
     ``n`` (if given) overrides the generator's swarm size, so a generator that sizes its world
     by ``n`` (``periodic_box``: side ``sqrt(n / rho)``) keeps its density when resized.
     """
     name, _, rest = spec.partition(":")
+    where = spec if spec.isprintable() else repr(spec)[1:-1]  # the message stays one line
     if name not in GENERATORS:
-        raise ScenarioError(f"{spec}: unknown generator '{name}' (known: {', '.join(GENERATORS)})")
-    fn = GENERATORS[name]
+        raise ScenarioError(f"{where}: unknown generator {name!r} (known: {', '.join(GENERATORS)})")
+    fn, options = GENERATORS[name], OPTIONS[name]
     kwargs: dict[str, Any] = {}
     for item in filter(None, (s.strip() for s in rest.split(","))):
         key, eq, val = item.partition("=")
+        key = key.strip()
         if not eq:
-            raise ScenarioError(f"{spec}: expected key=value, got '{item}'")
-        kwargs[key.strip()] = _parse_value(val.strip())
-    allowed = set(fn.__code__.co_varnames[: fn.__code__.co_argcount]) - {"max_tries"}
-    unknown = set(kwargs) - allowed
-    if unknown:
-        raise ScenarioError(f"{spec}: unknown parameter(s) {sorted(unknown)} for {name} (allowed: {sorted(allowed)})")
-    if n is not None and "n" in allowed:
+            raise ScenarioError(f"{where}: expected key=value, got {item!r}")
+        if key not in options:
+            raise ScenarioError(f"{where}: unknown parameter {key!r} for {name} (allowed: {', '.join(options)})")
+        if key in kwargs:
+            raise ScenarioError(f"{where}: {name} option {key!r} is given twice")
+        kwargs[key] = _read(name, key, val.strip())
+    if n is not None and "n" in options:
         kwargs["n"] = n
-    try:
-        return fn(**kwargs)
-    except TypeError as e:
-        raise ScenarioError(f"{spec}: {e}") from None
-
-
-def _parse_value(v: str) -> Any:
-    if v.lower() in ("true", "false"):
-        return v.lower() == "true"
-    for cast in (int, float):
-        try:
-            return cast(v)
-        except ValueError:
-            pass
-    return v
+    return fn(**kwargs)

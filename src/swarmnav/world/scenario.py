@@ -395,7 +395,7 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     if "bounds" in world:
         bounds = ctx.rect(world["bounds"], "world.bounds", dim)
     else:
-        bounds = _default_bounds(spawn, goal, obstacles)
+        bounds = _default_bounds(Swarm(n=n, spawn=spawn, density=density).region, goal, obstacles)
 
     scn = Scenario(
         name=name,
@@ -426,6 +426,9 @@ def validate(scn: Scenario) -> Scenario:
             raise ScenarioError(f"{src}: world.bounds of a periodic world must be a square")
     if scn.n > MAX_AGENTS:
         raise ScenarioError(f"{src}: swarm.n must be <= {MAX_AGENTS}, got {scn.n}")
+    if scn.n < 1:
+        raise ScenarioError(f"{src}: swarm.n must be >= 1, got {scn.n}")
+    _check_placement(scn)
     geom = scn.geometry
     goal = scn.goal_array[None, :]
     if not geom.is_empty and bool(points_inside(geom, goal)[0]):
@@ -436,6 +439,29 @@ def validate(scn: Scenario) -> Scenario:
             f"{scn.swarm.min_spacing} m apart and {scn.swarm.clearance} m clear of obstacles"
         )
     return scn
+
+
+def _check_placement(scn: Scenario) -> None:
+    """The spawn region has extent on every axis, and it and the goal lie in ``world.bounds``.
+
+    A spawn point (or line) is allowed only with ``swarm.density``, where it is the centre of
+    the square the agents spawn in (the HWVEM mission scenes); that square must lie in bounds.
+    """
+    src, d = scn.source, scn.dim
+    spawn = scn.swarm.spawn
+    if scn.swarm.density is None and any(spawn[d + a] <= spawn[a] for a in range(d)):
+        axes = "xmax > xmin and ymax > ymin" + (" and zmax > zmin" if d == 3 else "")
+        raise ScenarioError(f"{src}: swarm.spawn {list(spawn)} has no extent: a spawn region needs {axes} "
+                            "(a point is a spawn region only with swarm.density, as the centre of its square)")
+    lo, hi = scn.bounds[:d], scn.bounds[d:]
+    region = scn.swarm.region
+    if any(region[a] < lo[a] or region[d + a] > hi[a] for a in range(d)):
+        what = (f"{list(spawn)}" if region == spawn else
+                f"{list(spawn)} (the square of n={scn.n} agents at density {scn.swarm.density:g} /m^2, "
+                f"[{', '.join(f'{c:.4g}' for c in region)}])")
+        raise ScenarioError(f"{src}: swarm.spawn {what} reaches outside world.bounds {list(scn.bounds)}")
+    if any(not lo[a] <= scn.goal[a] <= hi[a] for a in range(d)):
+        raise ScenarioError(f"{src}: goal.position {list(scn.goal)} lies outside world.bounds {list(scn.bounds)}")
 
 
 def _may_hold(scn: Scenario) -> bool:

@@ -11,7 +11,7 @@ from swarmnav.sensing.esdf import Esdf
 from swarmnav.world import from_dict
 
 GAP = 1.1  # [m] < 2 d_thr + 2 body radii = 1.4 m: two robots abreast in it are in both obstacle bands
-WALL = {"name": "wall_gap", "swarm": {"n": 2, "spawn": [0.0, -0.5, 0.0, 0.5]}, "goal": {"position": [10.0, 0.0]},
+WALL = {"name": "wall_gap", "swarm": {"n": 2, "spawn": [-0.001, -0.5, 0.001, 0.5]}, "goal": {"position": [10.0, 0.0]},
         "world": {"bounds": [-3.0, -5.0, 14.0, 5.0]},
         "obstacles": [{"type": "box", "min": [3.0, -5.0], "max": [4.0, -GAP / 2]},
                       {"type": "box", "min": [3.0, GAP / 2], "max": [4.0, 5.0]}]}

@@ -93,7 +93,7 @@ def test_info_uav_flies_the_reference_and_sits_at_the_lower_left_corner():
 
 def test_attraction_repulsion_and_the_speed_cap():
     """Eq. (25)-(26): two close agents repel, the velocity is capped at v_max, the IU is deaf."""
-    scn = from_dict({"swarm": {"n": 3, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+    scn = from_dict({"swarm": {"n": 3, "spawn": [-0.01, -0.01, 0.01, 0.01], "min_spacing": 0.0, "clearance": 0.0},
                      "goal": {"position": [50.0, 0.0]}})
     m = VicsekFamily("vem-a", eta=0.0, c_rep=1.0, c_att=0.0)
     x = np.array([[0.0, 0.0], [0.0, 0.2], [0.0, -0.2]])  # agent 0 is the IU (nearest the spawn centre)
@@ -108,7 +108,7 @@ def test_attraction_repulsion_and_the_speed_cap():
 # ----------------------------------------------------------------------------- avoidance
 
 def scene_with(obstacle):
-    return from_dict({"swarm": {"n": 1, "spawn": [-9, -9, -9, -9], "min_spacing": 0.0, "clearance": 0.0},
+    return from_dict({"swarm": {"n": 1, "spawn": [-9.01, -9.01, -8.99, -8.99], "min_spacing": 0.0, "clearance": 0.0},
                       "goal": {"position": [20.0, 0.0]}, "obstacles": [obstacle]})
 
 
@@ -375,7 +375,7 @@ def test_polyline_projection_and_pursuit():
 
 
 def test_information_uav_follows_the_path():
-    scn = from_dict({"swarm": {"n": 1, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+    scn = from_dict({"swarm": {"n": 1, "spawn": [-0.01, -0.01, 0.01, 0.01], "min_spacing": 0.0, "clearance": 0.0},
                      "goal": {"position": [6.0, 6.0], "path": [[0.0, 0.0], [6.0, 0.0], [6.0, 6.0]]}})
     res = swarmnav.run("hwvem", scn, seed=0, steps=130)
     p = res.positions[:, 0]
@@ -387,7 +387,7 @@ def test_information_uav_follows_the_path():
 
 
 def test_mission_success_counts_agents_that_never_join():
-    scn = from_dict({"swarm": {"n": 6, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+    scn = from_dict({"swarm": {"n": 6, "spawn": [-0.01, -0.01, 0.01, 0.01], "min_spacing": 0.0, "clearance": 0.0},
                      "goal": {"position": [30.0, 0.0], "path": [[0.0, 0.0], [30.0, 0.0]]},
                      "obstacles": [{"type": "circle", "center": [15.0, 8.0], "radius": 1.0}]})
     m = VicsekFamily("hwvem", eta=0.0)
@@ -453,7 +453,7 @@ def test_experiment_specs_resize_the_periodic_box():
 def test_avoidance_trigger_tests_the_chosen_genuine_direction(reading, expect):
     """Eq. (21) with theta^g(k + 1) (just computed, "new") or theta^g(k) ("previous"): agent 0
     last wanted to fly away from the circle (pi), its only neighbour now pulls it toward it (0)."""
-    scn = from_dict({"swarm": {"n": 2, "spawn": [0, 0, 0, 0], "min_spacing": 0.0, "clearance": 0.0},
+    scn = from_dict({"swarm": {"n": 2, "spawn": [-0.01, -0.01, 0.01, 0.01], "min_spacing": 0.0, "clearance": 0.0},
                      "goal": {"position": [20.0, 0.0]},
                      "obstacles": [{"type": "circle", "center": [2.0, 0.0], "radius": 1.0}]})
     m = VicsekFamily("vem", eta=0.0, trigger_heading=reading)

@@ -198,6 +198,10 @@ class StallParams:
         "steps between two updates of the map of returns (0.5 s; every step while engaged)")
     margin: float = param(20.0, "m", "[0, 200]", "ours",
         "the map covers the box of the start and the goal plus this margin (R_L)")
+    max_map_bytes: int = param(2 * 2**30, "B", "[1, inf)", "ours",
+        "largest memory the map and its fields may take (stall.py: 180 B a cell while engaged); a start-goal "
+        "box that needs more at stall.cell is refused at reset (2 GiB: ~70 times the 24-31 MB of the HES "
+        "Simulation 3 scenes)")
 
 
 @dataclass(frozen=True, slots=True)

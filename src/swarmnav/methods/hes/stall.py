@@ -25,12 +25,25 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from swarmnav.methods.base import check_map_bytes, format_extent
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.forces import SIG_CENT, SIG_SL, SIG_SLOT
 from swarmnav.methods.hes.part import Part
 from swarmnav.methods.hes.passage import throat_dsafe
 from swarmnav.methods.hes.plan import clearance, cost_to_go, descend, lookahead, mark_hits, nearest_reachable
 from swarmnav.methods.hes.step import NEVER
+
+
+#: Bytes a cell of the map takes while the planner is engaged: the map (1), its clearance (8) and
+#: the distance transform computing it (feature indices 8, mask 1, distances 8), the cell costs
+#: (8), the cost-to-go and the previous one (8 + 8), Dijkstra's flags (2) and its heap (8 entries
+#: of 16 B a cell, allocated whole by plan.cost_to_go)
+BYTES_PER_CELL = 1 + 8 + 17 + 8 + 16 + 2 + 128
+
+
+def map_bytes(lo: np.ndarray, hi: np.ndarray, cell: float) -> float:
+    """Memory [B] the stall planner's map of the box ``lo``-``hi`` [m] takes at ``cell`` [m]."""
+    return float(np.prod(np.ceil((np.asarray(hi) - lo) / cell))) * BYTES_PER_CELL
 
 
 @dataclass(slots=True)
@@ -66,6 +79,9 @@ class StallPlanner(Part):
         # the map of the returns every ring has seen, over the start/goal box + margin
         lo = np.minimum(positions.min(axis=0), goal) - p.stall.margin
         hi = np.maximum(positions.max(axis=0), goal) + p.stall.margin
+        check_map_bytes("hes", f"the stall planner's map of the {format_extent(lo, hi)} box round start and goal "
+                        f"at {p.stall.cell:g} m cells", map_bytes(lo, hi, p.stall.cell), p.stall.max_map_bytes,
+                        "stall.max_map_bytes", "use a coarser stall.cell, a nearer goal or stall.on=false")
         shape = np.ceil((hi - lo) / p.stall.cell).astype(int)
         self.map0 = lo
         self.occ = np.zeros((int(shape[1]), int(shape[0])), dtype=np.bool_)

@@ -45,6 +45,28 @@ _STEPS3 = np.array([(dz, dy, dx) for dz in (-1, 0, 1) for dy in (-1, 0, 1) for d
                     if (dz, dy, dx) != (0, 0, 0)], dtype=np.int64)
 
 
+def grid_cells(bounds, resolution: float) -> float:
+    """The number of cells of an :class:`OccupancyMaps` grid over ``bounds`` at ``resolution`` [m],
+    as a float (``inf`` for a grid too large to count)."""
+    dim = len(bounds) // 2
+    total = 1.0
+    for k in range(dim):
+        c = (bounds[dim + k] - bounds[k]) / resolution
+        total *= max(math.ceil(c), 2) if math.isfinite(c) else math.inf
+    return total
+
+
+def bytes_per_cell(dim: int, n_robots: int, field_3d: bool, marked: bool) -> int:
+    """Bytes an :class:`OccupancyMaps` holds per grid cell, searches included: a uint8 class per
+    robot; planar A*: its cost, parent and closed arrays (17 B), a copy of the map when neighbours
+    are marked; 3-D: the search work arrays kept between searches (24 B), and either the kept
+    cost-to-go fields with the one being built (``field_3d``: 6 x 8 + 9 B) or the kept component
+    labels with the passable mask being labelled (6 x 4 + 1 B)."""
+    if dim == 2:
+        return n_robots + 17 + int(marked)
+    return n_robots + 24 + int(marked) + (_FIELDS_KEPT * 8 + 9 if field_3d else _FIELDS_KEPT * 4 + 1)
+
+
 class OccupancyMaps:
     """Per-robot occupancy grids over the scene bounds, grown from what each robot has seen.
 

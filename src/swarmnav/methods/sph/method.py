@@ -27,16 +27,36 @@ from typing import Any
 import numpy as np
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator
-from swarmnav.methods.base import Observation
+from swarmnav.methods.base import Observation, check_map_bytes, format_extent
 from swarmnav.methods.sph.bspline import SplineCosts, evaluate, optimize
-from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
+from swarmnav.methods.sph.gridsearch import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.methods.sph.kernel import band_guard, environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
-from swarmnav.sensing.esdf import Esdf
+from swarmnav.sensing.esdf import Esdf, grid_nodes
 from swarmnav.world.scenario import Scenario
+
+
+#: Peak bytes per node of building the yield field (yielding.goal_distance_field: the node graph
+#: and its Dijkstra; measured with tracemalloc on 0.5-5 M nodes), 8 of which stay as the field
+_YIELD_BYTES = {2: 330, 3: 970}
+
+
+def map_bytes(scenario: Scenario, p: SphParams) -> float:
+    """Memory [B] the maps of an SPH run on ``scenario`` take at once: the ESDF (8 B a node at
+    ``esdf_resolution``), the robots' occupancy grids with their searches
+    (:func:`~swarmnav.methods.sph.gridsearch.bytes_per_cell` at ``grid_resolution``) and, with
+    yielding on, the yield field being built (at ``yield_resolution``)."""
+    b, d = scenario.bounds, scenario.dim
+    need = 8.0 * grid_nodes(b, p.esdf_resolution)
+    need += grid_cells(b, p.grid_resolution) * bytes_per_cell(d, scenario.n, p.search_3d == "field",
+                                                              p.plan_neighbours > 0)
+    if p.yield_range > 0:
+        step = max(1, int(round(p.yield_resolution / p.esdf_resolution)))
+        need += _YIELD_BYTES[d] * grid_nodes(b, p.esdf_resolution * step)
+    return need
 
 
 class AxisClampedDoubleIntegrator:
@@ -84,6 +104,11 @@ class Sph:
         self.scenario = scenario
         self.geom = scenario.geometry
         n = scenario.n
+        res = (f"{p.esdf_resolution:g} m" if p.esdf_resolution == p.grid_resolution else
+               f"{p.esdf_resolution:g} m (ESDF) and {p.grid_resolution:g} m (grid)")
+        check_map_bytes("sph", f"a {format_extent(scenario.lower, scenario.upper)} world at {res} resolution",
+                        map_bytes(scenario, p), p.max_map_bytes, "max_map_bytes",
+                        "use a coarser resolution or a smaller world")
         self.esdf = Esdf.build(self.geom, scenario.bounds, p.esdf_resolution)
         self.maps = OccupancyMaps(scenario.solid_obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.R,
                                   margin=p.d_thr, wide=p.plan_clearance, wide_cost=p.plan_clearance_cost,

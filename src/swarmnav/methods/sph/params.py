@@ -86,6 +86,11 @@ class SphParams:
     r_floor: float = param(0.05, "m", "(0, inf)", "ours", "distance floor in the 1/r repulsion (finite force)")
     esdf_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "ESDF grid, as the released sdf_map")
     grid_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "grid-search cell, as the released A*")
+    max_map_bytes: int = param(2 * 2**30, "B", "[1, inf)", "ours",
+        "largest memory the maps of a run may take (ESDF, the robots' occupancy grids and their searches, "
+        "the yield field); a world that needs more at its resolutions is refused before they are allocated "
+        "(2 GiB: twice the largest shipped run, sph_cluttered_3d with 30 robots, preset retime and the field "
+        "search: 1.05 GiB)")
     inflation: float = param(0.3, "m", "[0, inf)", "ours",
         "grid-search body clearance: body radius 0.2 m + one cell (last tier)")
     plan_clearance: float = param(0.9, "m", "[0, inf)", "ours",
