@@ -61,7 +61,12 @@ def test_spawn_and_goal_outside_bounds_or_a_flat_spawn_are_refused(base, table, 
 
 def test_spawn_and_goal_on_the_bounds_are_inside():
     assert _load(PLANAR, "swarm", "spawn", [-6.0, -6.0, -3.0, 6.0]).n == 4
-    assert _load(PLANAR, "goal", "position", [12.0, 6.0]).goal == (12.0, 6.0)
+    opened = copy.deepcopy(PLANAR)
+    opened["world"]["boundary"] = "open"
+    assert _load(opened, "goal", "position", [12.0, 6.0]).goal == (12.0, 6.0)
+    # in a closed world (the default with bounds) the bounds are walls: a goal on them is in the wall
+    with pytest.raises(ScenarioError, match=r"goal.position \[12.0, 6.0\] lies inside the world's boundary wall"):
+        _load(PLANAR, "goal", "position", [12.0, 6.0])
 
 
 def test_a_point_spawns_only_as_the_centre_of_a_density_square():

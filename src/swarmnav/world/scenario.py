@@ -432,7 +432,10 @@ def validate(scn: Scenario) -> Scenario:
     geom = scn.geometry
     goal = scn.goal_array[None, :]
     if not geom.is_empty and bool(points_inside(geom, goal)[0]):
-        raise ScenarioError(f"{src}: goal.position {list(scn.goal)} lies inside an obstacle")
+        in_obstacle = bool(points_inside(Geometry.from_obstacles(scn.obstacles, dim=scn.dim), goal)[0]) \
+            if scn.obstacles else False
+        where = "an obstacle" if in_obstacle else "the world's boundary wall (world.boundary = \"wall\")"
+        raise ScenarioError(f"{src}: goal.position {list(scn.goal)} lies inside {where}")
     if not _may_hold(scn) or _sample_spawn(scn, np.random.default_rng(0)) is None:
         raise ScenarioError(
             f"{src}: swarm.spawn {list(scn.swarm.spawn)} cannot hold n={scn.n} agents "
