@@ -175,7 +175,7 @@ def _openblas() -> list[tuple[str, str | None, int | None]]:
 
 
 def _openblas_problems() -> list[str]:
-    return [f"OpenBLAS {f} runs the {name} kernels on {threads} threads (loaded before swarmnav)"
+    return [f"OpenBLAS {f} runs the {name} kernels, {threads} thread(s) (loaded before swarmnav)"
             for f, name, threads in _openblas()
             if (name or "").lower() not in _PRESCOTT_NAMES or threads != 1]
 
