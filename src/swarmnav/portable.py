@@ -56,7 +56,8 @@ LIBM_MASK = ("-FMA", "-FMA4")
 # OpenBLAS builds without DYNAMIC_OLDER serve the pre-Core2 names from the Prescott table and
 # report the first alias, Katmai (measured with scipy-openblas 0.3.31).
 _PRESCOTT_NAMES = {"prescott", "katmai"}
-_RESTARTED = "SWARMNAV_PORTABLE_RESTARTED"  # set across the command's one restart, then removed
+# Set by the one restart; children inherit it with the mask, so none of them restarts again.
+_RESTARTED = "SWARMNAV_PORTABLE_RESTARTED"
 _warned = False
 
 
@@ -98,7 +99,6 @@ def apply() -> None:
     started without the mask. Runs before NumPy loads (first thing in ``swarmnav/__init__``)."""
     if not requested() or _unsupported():
         return
-    restarted = os.environ.pop(_RESTARTED, None)
     for name in UNSET:
         os.environ.pop(name, None)
     os.environ.update(environment())
@@ -106,13 +106,26 @@ def apply() -> None:
         from numba.core import config
 
         config.reload_config()
-    if _libm_problem() and not restarted and _is_command():
-        # glibc applies GLIBC_TUNABLES only at process start, and nothing is loaded yet but the
-        # interpreter: start it again, same arguments, now with the mask in its environment.
-        os.environ[_RESTARTED] = "1"
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os.execv(sys.executable, [sys.executable, *sys.orig_argv[1:]])
+    if _is_command():  # nothing is loaded yet but the interpreter: the restart is cheap here
+        restart()
+
+
+def restart() -> None:
+    """Start this program again, same interpreter and arguments, if glibc runs CPU-specific libm
+    code here: glibc reads ``GLIBC_TUNABLES`` only when a process starts. At most once, and only
+    when portable mode is asked for; never in an interactive session or a Jupyter kernel.
+
+    The ``swarmnav`` command does this before it loads anything; a script that wants portable
+    runs can call it right after ``import swarmnav`` (what ran before the call runs again).
+    """
+    if (not requested() or _unsupported() or os.environ.get(_RESTARTED) or not _libm_problem()
+            or hasattr(sys, "ps1") or sys.flags.interactive or "ipykernel" in sys.modules):
+        return
+    os.environ.update(environment())
+    os.environ[_RESTARTED] = "1"
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.execv(sys.executable, [sys.executable, *sys.orig_argv[1:]])
 
 
 def _is_command() -> bool:
