@@ -11,7 +11,11 @@ Public API::
 
 from __future__ import annotations
 
-import numpy as np
+from swarmnav import portable
+
+portable.apply()  # before NumPy, OpenBLAS and numba load: docs/determinism.md
+
+import numpy as np  # noqa: E402
 
 from swarmnav._version import __version__
 from swarmnav.errors import ConfigError, ScenarioError, SwarmnavError

@@ -1,9 +1,16 @@
 """Stored reference runs: every registered method on a few scenes, hashed array by array.
 
-``python tests/data/reference_runs.py`` rewrites ``reference_runs.json`` from the current code;
-``tests/sim/test_reference_runs.py`` reruns every case and demands identical arrays (SHA-256 of
-the raw bytes of positions, velocities, clearance and labels) and identical metrics. The file
-was written before the world learnt a third dimension, so it proves that 2-D runs did not move.
+Re-record them from the current code, from the repository root (one command, any x86-64 Linux):
+
+    python tests/data/reference_runs.py
+
+It records in portable mode (docs/determinism.md), so the file holds on any x86-64 machine: it
+restarts itself once with glibc's setting if needed, and refuses to write from a process whose
+numerics are native. ``tests/sim/test_reference_runs.py`` reruns every case in a fresh portable
+process (``--cases -``: cases as JSON on stdin, records as JSON on stdout) and demands identical
+arrays (SHA-256 of the raw bytes of positions, velocities, clearance and labels) and identical
+metrics. The file was first written before the world learnt a third dimension, so it proves that
+2-D runs did not move.
 """
 
 from __future__ import annotations
@@ -14,10 +21,14 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
+if __name__ == "__main__":  # record this checkout's code, whatever swarmnav is installed
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "src"))
 
-import swarmnav
-from swarmnav.methods import registry
+import numpy as np  # noqa: E402
+
+import swarmnav  # noqa: E402
+from swarmnav import portable  # noqa: E402
+from swarmnav.methods import registry  # noqa: E402
 
 HERE = Path(__file__).parent
 FILE = HERE / "reference_runs.json"
@@ -52,7 +63,23 @@ def record(method: str, scene: str, seed: int, steps: int) -> dict:
     }
 
 
+def portable_or_exit() -> None:
+    """Make this process portable (one restart if glibc needs it), or exit saying why not."""
+    portable.restart()
+    r = portable.report()
+    if r["numerics"] != "portable":
+        why = "; ".join(r["problems"]) or f"{portable.SWITCH}=0"
+        sys.exit(f"reference runs are recorded and checked with portable numerics, but this process "
+                 f"is native: {why}")
+
+
 if __name__ == "__main__":
-    rows = [record(*c) for c in cases()]
-    FILE.write_text(json.dumps(rows, indent=1) + "\n")
-    print(f"wrote {len(rows)} reference runs to {FILE}", file=sys.stderr)
+    portable_or_exit()
+    if sys.argv[1:] == ["--cases", "-"]:
+        json.dump([record(*c) for c in json.load(sys.stdin)], sys.stdout)
+    elif sys.argv[1:]:
+        sys.exit(f"usage: python {sys.argv[0]} [--cases -]")
+    else:
+        rows = [record(*c) for c in cases()]
+        FILE.write_text(json.dumps(rows, indent=1) + "\n")
+        print(f"wrote {len(rows)} reference runs to {FILE}", file=sys.stderr)

@@ -2,7 +2,8 @@
 
 A back end calls ``on_result(row)`` in the driver for every job, exactly once, in any order.
 Each run seeds its own ``numpy.random.Generator`` from its seed and shares no state, so the
-rows are identical whatever the back end or worker count.
+rows are identical whatever the back end or worker count; Ray workers start with the driver's
+numerics (portable or native, docs/determinism.md), so a cluster of mixed CPUs agrees too.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Callable
 
+from swarmnav import portable
 from swarmnav.errors import ConfigError
 from swarmnav.experiments.jobs import Job, execute, failed_row
 
@@ -129,9 +131,19 @@ def local(jobs: list[Job], *, workers: int, on_result: Callable[[dict], None], k
             s.stop()
 
 
+def _numerics_env() -> dict[str, str]:
+    """What a worker process must start with to run the driver's numerics: portable mode's
+    variables (glibc reads its own only at process start), or the switch set to native."""
+    return {**portable.environment(), portable.SWITCH: "1"} if portable.requested() else {portable.SWITCH: "0"}
+
+
 def ray(jobs: list[Job], *, workers: int, on_result: Callable[[dict], None], keep_trajectory: bool = True,
         ray_address: str | None = None) -> None:
-    """Run on Ray: join ``ray_address`` if given, else start a local Ray with ``workers`` CPUs."""
+    """Run on Ray: join ``ray_address`` if given, else start a local Ray with ``workers`` CPUs.
+
+    Each job's ``runtime_env`` gives its worker the driver's numerics, whoever started Ray: a
+    worker imports NumPy before it runs a job, too late for swarmnav to pin it, and glibc reads
+    its setting only at process start (docs/determinism.md)."""
     try:
         import ray as ray_mod
     except ImportError:
@@ -149,7 +161,7 @@ def ray(jobs: list[Job], *, workers: int, on_result: Callable[[dict], None], kee
             ray_mod.init(num_cpus=workers, _node_ip_address="127.0.0.1",
                          runtime_env={"env_vars": {"PYTHONPATH": path}}, **kwargs)
     try:
-        remote = ray_mod.remote(num_cpus=1, max_retries=2)(execute)
+        remote = ray_mod.remote(num_cpus=1, max_retries=2, runtime_env={"env_vars": _numerics_env()})(execute)
         refs = {remote.remote(j, keep_trajectory): j for j in jobs}
         pending = list(refs)
         while pending:

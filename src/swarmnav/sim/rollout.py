@@ -15,6 +15,7 @@ from swarmnav.methods.base import Method, Observation
 from swarmnav.metrics.flight import FlightParams, flight_metrics
 from swarmnav.metrics.navigation import MetricParams, goal_reached, navigation_metrics
 from swarmnav.params import as_dict
+from swarmnav.portable import numerics
 from swarmnav.sensing import PreparedGeometry
 from swarmnav.sim.referee import Referee
 from swarmnav.sim.result import RunResult
@@ -179,6 +180,7 @@ def run(
     result = RunResult(
         config={
             "swarmnav_version": __version__,
+            "numerics": numerics(),  # "portable": identical on any x86-64 machine (docs/determinism.md)
             "method": m.name,
             "params": as_dict(m.params),
             "scenario": scn.to_dict(),
