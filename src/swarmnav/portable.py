@@ -111,15 +111,18 @@ def apply() -> None:
 
 
 def restart() -> None:
-    """Start this program again, same interpreter and arguments, if glibc runs CPU-specific libm
-    code here: glibc reads ``GLIBC_TUNABLES`` only when a process starts. At most once, and only
-    when portable mode is asked for; never in an interactive session or a Jupyter kernel.
+    """Start this program again, same interpreter and arguments, with portable mode's
+    environment if this process does not run portably: glibc reads ``GLIBC_TUNABLES`` only when
+    a process starts, NumPy its variable only when it loads. At most once, and only when
+    portable mode is asked for; never in an interactive session or a Jupyter kernel.
 
     The ``swarmnav`` command does this before it loads anything; a script that wants portable
     runs can call it right after ``import swarmnav`` (what ran before the call runs again).
     """
-    if (not requested() or _unsupported() or os.environ.get(_RESTARTED) or not _libm_problem()
+    if (not requested() or _unsupported() or os.environ.get(_RESTARTED)
             or hasattr(sys, "ps1") or sys.flags.interactive or "ipykernel" in sys.modules):
+        return
+    if not _libm_problem() and ("numpy" not in sys.modules or report()["numerics"] == "portable"):
         return
     os.environ.update(environment())
     os.environ[_RESTARTED] = "1"
@@ -188,9 +191,11 @@ def _openblas() -> list[tuple[str, str | None, int | None]]:
 
 
 def _openblas_problems() -> list[str]:
+    loaded = _openblas()
+    if not loaded:  # NumPy links its BLAS, so it is loaded by now: this one is not OpenBLAS
+        return ["NumPy's BLAS is not OpenBLAS, whose kernel portable mode pins"]
     return [f"OpenBLAS {f} runs the {name} kernels, {threads} thread(s) (loaded before swarmnav)"
-            for f, name, threads in _openblas()
-            if (name or "").lower() not in _PRESCOTT_NAMES or threads != 1]
+            for f, name, threads in loaded if (name or "").lower() not in _PRESCOTT_NAMES or threads != 1]
 
 
 def _numba_problem() -> str | None:
