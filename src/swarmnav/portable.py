@@ -202,9 +202,13 @@ def _numba_problem() -> str | None:
     from numba.core import config
     from numba.core.registry import cpu_target
 
+    # The CPU name is read from the config on each call; the features are those numba's target
+    # machine was made with, when it first compiled.
     _, cpu, features = cpu_target.target_context.codegen().magic_tuple()
-    if cpu != "generic" or features:
-        return f"numba compiles for the {cpu} CPU (it compiled before swarmnav was imported)"
+    if features:
+        return "numba compiles with the host CPU's features (it compiled before swarmnav was imported)"
+    if cpu != "generic":
+        return f"numba compiles for the {cpu} CPU"
     return "numba uses Intel SVML" if config.USING_SVML else None
 
 
