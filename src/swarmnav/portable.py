@@ -14,7 +14,8 @@ Portable mode, the default, exports :data:`PINS` before those libraries load (``
 calls :func:`apply` before it imports NumPy), so each runs the code every x86-64 CPU has.
 glibc reads its setting only when a process starts: the ``swarmnav`` command restarts itself
 once with it, a Python program that imports swarmnav must be started with it
-(``GLIBC_TUNABLES=glibc.cpu.hwcaps=-FMA,-FMA4``), and child processes inherit it. What is
+(``GLIBC_TUNABLES=glibc.cpu.hwcaps=-FMA,-FMA4``) or call :func:`restart`, and child processes
+inherit it. What is
 actually in force is checked, not assumed: :func:`numerics` says ``"portable"`` only if every
 library runs its pinned code, and warns once when portable mode was asked for but is not in
 force (NumPy imported before swarmnav, a process started without the glibc setting).
@@ -24,6 +25,7 @@ force (NumPy imported before swarmnav, a process started without the glibc setti
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import platform
 import sys
@@ -124,6 +126,8 @@ def restart() -> None:
         return
     if not _libm_problem() and ("numpy" not in sys.modules or report()["numerics"] == "portable"):
         return
+    for name in UNSET:
+        os.environ.pop(name, None)
     os.environ.update(environment())
     os.environ[_RESTARTED] = "1"
     sys.stdout.flush()
@@ -170,24 +174,36 @@ def _numpy_problem() -> str | None:
 
 def _openblas() -> list[tuple[str, str | None, int | None]]:
     """(file, kernel name, threads) of every OpenBLAS loaded in this process."""
-    out = []
-    paths = sorted({line.split(None, 5)[5].strip() for line in Path("/proc/self/maps").read_text().splitlines()
-                    if "openblas" in line.lower() and len(line.split(None, 5)) == 6})
-    for path in paths:
-        lib = ctypes.CDLL(path)  # already loaded: the same handle
+    return [(Path(p).name, *(f() if f else None for f in _openblas_calls(p))) for p in _openblas_paths(len(sys.modules))]
 
-        def call(base: str, restype):
-            for pre in ("", "scipy_"):
-                for suf in ("", "64_", "_64"):
-                    fn = getattr(lib, f"{pre}{base}{suf}", None)
-                    if fn is not None:
-                        fn.restype, fn.argtypes = restype, []
-                        return fn()
-            return None
 
-        name = call("openblas_get_corename", ctypes.c_char_p)
-        out.append((Path(path).name, name.decode() if name else None, call("openblas_get_num_threads", ctypes.c_int)))
-    return out
+@functools.lru_cache(maxsize=1)
+def _openblas_paths(n_modules: int) -> list[str]:
+    """Files of the loaded OpenBLAS libraries. Reading /proc/self/maps takes a millisecond, so it
+    is read again only when modules were imported: an OpenBLAS arrives with the extension module
+    that links it (NumPy's at import, SciPy's with scipy.linalg)."""
+    maps = Path("/proc/self/maps").read_text()
+    return sorted({line.split(None, 5)[5] for line in maps.splitlines()
+                   if "openblas" in line.lower() and len(line.split(None, 5)) == 6})
+
+
+@functools.cache
+def _openblas_calls(path: str) -> tuple:
+    """The kernel-name and thread-count functions of the OpenBLAS at ``path`` (None if absent);
+    their names carry the build's prefix and suffix (``scipy_openblas_get_corename64_``)."""
+    lib = ctypes.CDLL(path)  # already loaded: the same handle
+
+    def find(base: str, restype):
+        for pre in ("", "scipy_"):
+            for suf in ("", "64_", "_64"):
+                fn = getattr(lib, f"{pre}{base}{suf}", None)
+                if fn is not None:
+                    fn.restype, fn.argtypes = restype, []
+                    return fn
+        return None
+
+    name = find("openblas_get_corename", ctypes.c_char_p)
+    return (lambda: (name() or b"").decode() or None) if name else None, find("openblas_get_num_threads", ctypes.c_int)
 
 
 def _openblas_problems() -> list[str]:
