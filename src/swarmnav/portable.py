@@ -14,7 +14,8 @@ Portable mode, the default, exports :data:`PINS` before those libraries load (``
 calls :func:`apply` before it imports NumPy), so each runs the code every x86-64 CPU has.
 glibc reads its setting only when a process starts: the ``swarmnav`` command restarts itself
 once with it, a Python program that imports swarmnav must be started with it
-(``GLIBC_TUNABLES=glibc.cpu.hwcaps=-FMA,-FMA4``), and child processes inherit it. What is
+(``GLIBC_TUNABLES=glibc.cpu.hwcaps=-FMA,-FMA4``) or call :func:`restart`, and child processes
+inherit it. What is
 actually in force is checked, not assumed: :func:`numerics` says ``"portable"`` only if every
 library runs its pinned code, and warns once when portable mode was asked for but is not in
 force (NumPy imported before swarmnav, a process started without the glibc setting).
@@ -24,6 +25,7 @@ force (NumPy imported before swarmnav, a process started without the glibc setti
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import platform
 import sys
@@ -111,16 +113,21 @@ def apply() -> None:
 
 
 def restart() -> None:
-    """Start this program again, same interpreter and arguments, if glibc runs CPU-specific libm
-    code here: glibc reads ``GLIBC_TUNABLES`` only when a process starts. At most once, and only
-    when portable mode is asked for; never in an interactive session or a Jupyter kernel.
+    """Start this program again, same interpreter and arguments, with portable mode's
+    environment if this process does not run portably: glibc reads ``GLIBC_TUNABLES`` only when
+    a process starts, NumPy its variable only when it loads. At most once, and only when
+    portable mode is asked for; never in an interactive session or a Jupyter kernel.
 
     The ``swarmnav`` command does this before it loads anything; a script that wants portable
     runs can call it right after ``import swarmnav`` (what ran before the call runs again).
     """
-    if (not requested() or _unsupported() or os.environ.get(_RESTARTED) or not _libm_problem()
+    if (not requested() or _unsupported() or os.environ.get(_RESTARTED)
             or hasattr(sys, "ps1") or sys.flags.interactive or "ipykernel" in sys.modules):
         return
+    if not _libm_problem() and ("numpy" not in sys.modules or report()["numerics"] == "portable"):
+        return
+    for name in UNSET:
+        os.environ.pop(name, None)
     os.environ.update(environment())
     os.environ[_RESTARTED] = "1"
     sys.stdout.flush()
@@ -167,39 +174,57 @@ def _numpy_problem() -> str | None:
 
 def _openblas() -> list[tuple[str, str | None, int | None]]:
     """(file, kernel name, threads) of every OpenBLAS loaded in this process."""
-    out = []
-    paths = sorted({line.split(None, 5)[5].strip() for line in Path("/proc/self/maps").read_text().splitlines()
-                    if "openblas" in line.lower() and len(line.split(None, 5)) == 6})
-    for path in paths:
-        lib = ctypes.CDLL(path)  # already loaded: the same handle
+    return [(Path(p).name, *(f() if f else None for f in _openblas_calls(p))) for p in _openblas_paths(len(sys.modules))]
 
-        def call(base: str, restype):
-            for pre in ("", "scipy_"):
-                for suf in ("", "64_", "_64"):
-                    fn = getattr(lib, f"{pre}{base}{suf}", None)
-                    if fn is not None:
-                        fn.restype, fn.argtypes = restype, []
-                        return fn()
-            return None
 
-        name = call("openblas_get_corename", ctypes.c_char_p)
-        out.append((Path(path).name, name.decode() if name else None, call("openblas_get_num_threads", ctypes.c_int)))
-    return out
+@functools.lru_cache(maxsize=1)
+def _openblas_paths(n_modules: int) -> list[str]:
+    """Files of the loaded OpenBLAS libraries. Reading /proc/self/maps takes a millisecond, so it
+    is read again only when modules were imported: an OpenBLAS arrives with the extension module
+    that links it (NumPy's at import, SciPy's with scipy.linalg)."""
+    maps = Path("/proc/self/maps").read_text()
+    return sorted({line.split(None, 5)[5] for line in maps.splitlines()
+                   if "openblas" in line.lower() and len(line.split(None, 5)) == 6})
+
+
+@functools.cache
+def _openblas_calls(path: str) -> tuple:
+    """The kernel-name and thread-count functions of the OpenBLAS at ``path`` (None if absent);
+    their names carry the build's prefix and suffix (``scipy_openblas_get_corename64_``)."""
+    lib = ctypes.CDLL(path)  # already loaded: the same handle
+
+    def find(base: str, restype):
+        for pre in ("", "scipy_"):
+            for suf in ("", "64_", "_64"):
+                fn = getattr(lib, f"{pre}{base}{suf}", None)
+                if fn is not None:
+                    fn.restype, fn.argtypes = restype, []
+                    return fn
+        return None
+
+    name = find("openblas_get_corename", ctypes.c_char_p)
+    return (lambda: (name() or b"").decode() or None) if name else None, find("openblas_get_num_threads", ctypes.c_int)
 
 
 def _openblas_problems() -> list[str]:
+    loaded = _openblas()
+    if not loaded:  # NumPy links its BLAS, so it is loaded by now: this one is not OpenBLAS
+        return ["NumPy's BLAS is not OpenBLAS, whose kernel portable mode pins"]
     return [f"OpenBLAS {f} runs the {name} kernels, {threads} thread(s) (loaded before swarmnav)"
-            for f, name, threads in _openblas()
-            if (name or "").lower() not in _PRESCOTT_NAMES or threads != 1]
+            for f, name, threads in loaded if (name or "").lower() not in _PRESCOTT_NAMES or threads != 1]
 
 
 def _numba_problem() -> str | None:
     from numba.core import config
     from numba.core.registry import cpu_target
 
+    # The CPU name is read from the config on each call; the features are those numba's target
+    # machine was made with, when it first compiled.
     _, cpu, features = cpu_target.target_context.codegen().magic_tuple()
-    if cpu != "generic" or features:
-        return f"numba compiles for the {cpu} CPU (it compiled before swarmnav was imported)"
+    if features:
+        return "numba compiles with the host CPU's features (it compiled before swarmnav was imported)"
+    if cpu != "generic":
+        return f"numba compiles for the {cpu} CPU"
     return "numba uses Intel SVML" if config.USING_SVML else None
 
 

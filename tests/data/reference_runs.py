@@ -24,9 +24,8 @@ from pathlib import Path
 if __name__ == "__main__":  # record this checkout's code, whatever swarmnav is installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "src"))
 
+import swarmnav  # noqa: E402  (before NumPy: swarmnav pins it as it loads)
 import numpy as np  # noqa: E402
-
-import swarmnav  # noqa: E402
 from swarmnav import portable  # noqa: E402
 from swarmnav.methods import registry  # noqa: E402
 

@@ -99,6 +99,15 @@ def test_numpy_imported_before_swarmnav_is_recorded_native_with_one_warning():
     assert got["numba_cpu"] == "generic"  # numba loaded after swarmnav: still pinned
 
 
+def test_numba_loaded_before_swarmnav_is_pinned_unless_it_already_compiled():
+    env = clean_env(**{k: v for k, v in portable.environment().items() if not k.startswith("NUMBA_")})
+    loaded = probe(env, first="import numba")
+    assert loaded["numerics"] == ["portable", "portable"] and loaded["numba_cpu"] == "generic"
+    compiled = probe(env, first="import numba; numba.njit(lambda x: x + 1)(1)")
+    assert compiled["numerics"] == ["native", "native"] and len(compiled["warnings"]) == 1
+    assert [p for p in compiled["problems"] if "numba" in p] == compiled["problems"] != []
+
+
 @pytest.mark.skipif(not has_fma(), reason="without FMA, glibc's libm runs its SSE2 code anyway")
 def test_a_program_started_without_glibcs_setting_says_so():
     got = probe(clean_env())
