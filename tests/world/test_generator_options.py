@@ -6,16 +6,12 @@ import contextlib
 import inspect
 import io
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
+from _helpers.cli import run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import swarmnav
 from swarmnav.cli import main
 from swarmnav.errors import ScenarioError
 from swarmnav.world.catalog import load_scenario
@@ -108,10 +104,7 @@ def test_every_generator_at_its_defaults_keeps_spawn_and_goal_in_bounds(name):
 
 
 def test_cli_generator_error_is_one_line_exit_2_without_traceback(tmp_path):
-    src = str(Path(swarmnav.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    p = subprocess.run([sys.executable, "-m", "swarmnav.cli", "run", "--method", "apf", "--scenario",
-                        "random_forest:n=2.5", "--out", str(tmp_path / "o")], capture_output=True, text=True, env=env)
+    p = run_cli("run", "--method", "apf", "--scenario", "random_forest:n=2.5", "--out", tmp_path / "o")
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert p.stderr.splitlines() == ["swarmnav: error: random_forest: n must be an integer in [1, 1000000], got '2.5'"]
 

@@ -4,16 +4,12 @@ naming the key, exit 2 in the CLI. Every built-in scene and every scene of a shi
 keeps to it."""
 
 import copy
-import os
-import subprocess
-import sys
 import tomllib
 from importlib import resources
-from pathlib import Path
 
 import pytest
+from _helpers.cli import run_cli
 
-import swarmnav
 from swarmnav.errors import ScenarioError
 from swarmnav.experiments.spec import builtin_names as experiment_names
 from swarmnav.world.catalog import load_scenario
@@ -114,10 +110,7 @@ def test_cli_spawn_outside_bounds_is_one_line_exit_2(tmp_path):
     f = tmp_path / "out.toml"
     f.write_text("[world]\nbounds = [0.0, 0.0, 10.0, 10.0]\n[swarm]\nn = 2\nspawn = [-4.0, 1.0, -1.0, 4.0]\n"
                  "[goal]\nposition = [8.0, 5.0]\n")
-    src = str(Path(swarmnav.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    p = subprocess.run([sys.executable, "-m", "swarmnav.cli", "run", "--method", "apf", "--scenario-file", str(f),
-                        "--out", str(tmp_path / "o")], capture_output=True, text=True, env=env)
+    p = run_cli("run", "--method", "apf", "--scenario-file", f, "--out", tmp_path / "o")
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert p.stderr.splitlines() == [f"swarmnav: error: {f}: swarm.spawn [-4.0, 1.0, -1.0, 4.0] reaches outside "
                                      "world.bounds [0.0, 0.0, 10.0, 10.0]"]

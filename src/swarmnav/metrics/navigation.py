@@ -140,7 +140,7 @@ def goal_reached(scn: Scenario, final: np.ndarray, crashed: np.ndarray | None = 
     goal = scn.goal_array
     x = np.asarray(final, dtype=np.float64)
     r = scn.rules.goal_radius if goal_radius is None else float(goal_radius)
-    ok = np.linalg.norm(x - goal, axis=1) <= r
+    ok = norms(x - goal) <= r
     if crashed is not None:
         ok &= ~np.asarray(crashed, dtype=bool)
     if scn.boundary == "wall":

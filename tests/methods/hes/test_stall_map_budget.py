@@ -2,15 +2,11 @@
 too large for that map at ``stall.cell`` is refused at reset (ConfigError, one line giving the
 size and the limit ``stall.max_map_bytes``) instead of a MemoryError once the planner engages."""
 
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers.cli import run_cli
 
-import swarmnav
 from swarmnav.errors import ConfigError
 from swarmnav.methods import registry
 from swarmnav.methods.hes.stall import BYTES_PER_CELL
@@ -52,10 +48,7 @@ def test_cli_far_goal_is_one_line_exit_2(tmp_path):
     f = tmp_path / "far.toml"
     f.write_text("[world]\nbounds = [-1000000.0, -1000000.0, 1000000.0, 1000000.0]\n[swarm]\nn = 4\n"
                  "spawn = [0.0, 0.0, 4.0, 4.0]\n[goal]\nposition = [900000.0, 2.0]\n")
-    src = str(Path(swarmnav.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    p = subprocess.run([sys.executable, "-m", "swarmnav.cli", "run", "--method", "hes", "--scenario-file", str(f),
-                        "--steps", "2", "--out", str(tmp_path / "o")], capture_output=True, text=True, env=env)
+    p = run_cli("run", "--method", "hes", "--scenario-file", f, "--steps", "2", "--out", tmp_path / "o")
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     lines = p.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith("swarmnav: error: hes: the stall planner's map of the ")

@@ -5,15 +5,11 @@ anything is allocated (ConfigError, one line giving the size it would need and t
 import contextlib
 import copy
 import io
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers.cli import run_cli
 
-import swarmnav
 from swarmnav.cli import main
 from swarmnav.errors import ConfigError
 from swarmnav.methods import registry
@@ -42,10 +38,7 @@ def test_cli_huge_world_exits_2_with_one_line(tmp_path):
     f = tmp_path / "big.toml"
     f.write_text("[world]\nbounds = [-1000000.0, -1000000.0, 1000000.0, 1000000.0]\n[swarm]\nn = 5\n"
                  "spawn = [0.0, 0.0, 4.0, 4.0]\n[goal]\nposition = [20.0, 2.0]\n")
-    src = str(Path(swarmnav.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    p = subprocess.run([sys.executable, "-m", "swarmnav.cli", "run", "--method", "sph", "--scenario-file", str(f),
-                        "--out", str(tmp_path / "o")], capture_output=True, text=True, env=env)
+    p = run_cli("run", "--method", "sph", "--scenario-file", f, "--out", tmp_path / "o")
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert p.stderr.splitlines() == ["swarmnav: error: " + HUGE_LINE]
     err = io.StringIO()  # a coarser map and a larger limit say so in the message
