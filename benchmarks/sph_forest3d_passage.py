@@ -25,7 +25,7 @@ import time
 import numpy as np
 
 from swarmnav.experiments.spec import parse_seeds
-from swarmnav.methods.sph.gridsearch import OccupancyMaps
+from swarmnav.planning.maps import OccupancyMaps
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.world import Scenario, load_scenario
 from swarmnav.sensing import signed_distance

@@ -23,7 +23,7 @@ def cruise_reference_speed(**params):
     def spy(step, x, v, *rest):
         orig(step, x, v, *rest)
         if 4.0 <= step * m.dt <= 8.0:
-            speeds.append(np.linalg.norm(m._ref_v[0], axis=1).mean())
+            speeds.append(np.linalg.norm(m.references.v[0], axis=1).mean())
 
     m._replan = spy
     res = swarmnav.run(m, from_dict(LONE), seed=1, steps=round(9.0 / m.dt))

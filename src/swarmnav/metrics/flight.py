@@ -13,7 +13,9 @@ within ``r_goal`` of the goal (the horizon K if it never is). Then
 - ``jerk_energy``: mean over robots of ``int_0^T ||d^3 q / dt^3||^2 dt`` up to ``a_i``, with the
   jerk as the third finite difference of the recorded positions at the method's step [m^2/s^5];
 - ``comm_mbps``: aggregate load of every robot broadcasting its position at ``broadcast_hz``
-  in ``msg_bytes`` messages [Mbit/s];
+  in ``msg_bytes`` messages [Mbit/s]: the figure for a method that does not count its messages.
+  The planners (SPH and the Table II peers) count what they actually send
+  (``swarmnav.planning.messages``) and their own ``comm_mbps`` replaces this one;
 - ``min_inter_robot_distance``, ``min_robot_obstacle_distance``: over the whole run [m]
   (Fig. 3 F, G); the obstacle distance is the signed clearance (negative inside);
 - ``sph_arrived_fraction``: share of robots within ``r_goal`` of the goal at the last step;
@@ -48,7 +50,7 @@ class FlightParams:
     body_radius: float = MetricParams().body_radius  # [m], the same contact rule as navigation.py
     broadcast_hz: float = 10.0  # position broadcast rate [Hz], SPH paper Section IV-A
     msg_bytes: int = 64  # position message [B]: 3 x float64 position, float64 stamp, uint32 id,
-    #                      UDP (8) + IPv4 (20) headers, 4 B padding (our choice; the paper gives none)
+    #                      UDP (8) + IPv4 (20) headers (our choice; the paper gives none; planning/messages.py)
     phi_coord: float = 0.8  # coordinated once the swarm's centre moves at this fraction of its
     #                         median flight speed [-] (our choice; the paper does not define it)
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from swarmnav.methods.sph.gridsearch import OccupancyMaps, resample
+from swarmnav.planning.maps import OccupancyMaps, resample
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.world import Box, Circle, Geometry
 

@@ -78,7 +78,7 @@ def test_reference_lag_is_bounded_at_each_replan():
 
     def spy(step, x, v, *rest):
         orig(step, x, v, *rest)
-        lags.append(float(np.linalg.norm(m._ref_q[0, 0] - x[0])))
+        lags.append(float(np.linalg.norm(m.references.q[0, 0] - x[0])))
 
     m._replan = spy
     swarmnav.run(m, from_dict(LONE), seed=1, steps=round(6.0 / m.dt))
@@ -110,9 +110,9 @@ def test_lag_reset_with_velocity_restarts_at_the_robot_at_rest():
         orig = m._replan
 
         def spy(step, x, v, *rest):
-            lag_before = None if m._ref_q is None else float(np.linalg.norm(m._reference(step)[0][0] - x[0]))
+            lag_before = None if m.references.q is None else float(np.linalg.norm(m._reference(step)[0][0] - x[0]))
             orig(step, x, v, *rest)
-            out.append((lag_before, float(np.linalg.norm(m._ref_q[0, 0] - x[0])), float(np.linalg.norm(m._ref_v[0, 0]))))
+            out.append((lag_before, float(np.linalg.norm(m.references.q[0, 0] - x[0])), float(np.linalg.norm(m.references.v[0, 0]))))
 
         m._replan = spy
         swarmnav.run(m, from_dict(LONE), seed=1, steps=round(4.0 / m.dt))

@@ -28,13 +28,18 @@ import numpy as np
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.methods.base import Observation, check_map_bytes, format_extent
-from swarmnav.methods.sph.bspline import SplineCosts, evaluate, optimize
-from swarmnav.methods.sph.gridsearch import OccupancyMaps, bytes_per_cell, grid_cells, resample
+from swarmnav.planning.bspline import SplineCosts, evaluate, optimize
+from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.methods.sph.kernel import band_guard, environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
+from swarmnav.planning.bspline import SplineCosts, evaluate, optimize
+from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
+from swarmnav.planning.messages import POSITION_BYTES, CommLog
+from swarmnav.planning.schedule import ReplanSchedule
+from swarmnav.planning.tracker import References, track
 from swarmnav.sensing.esdf import Esdf, grid_nodes
 from swarmnav.world.scenario import Scenario
 
@@ -47,7 +52,7 @@ _YIELD_BYTES = {2: 330, 3: 970}
 def map_bytes(scenario: Scenario, p: SphParams) -> float:
     """Memory [B] the maps of an SPH run on ``scenario`` take at once: the ESDF (8 B a node at
     ``esdf_resolution``), the robots' occupancy grids with their searches
-    (:func:`~swarmnav.methods.sph.gridsearch.bytes_per_cell` at ``grid_resolution``) and, with
+    (:func:`~swarmnav.planning.maps.bytes_per_cell` at ``grid_resolution``) and, with
     yielding on, the yield field being built (at ``yield_resolution``)."""
     b, d = scenario.bounds, scenario.dim
     need = 8.0 * grid_nodes(b, p.esdf_resolution)
@@ -115,12 +120,12 @@ class Sph:
                                   weight_3d=p.search_weight_3d, field_3d=p.search_3d == "field")
         x = np.asarray(positions, dtype=float)
         self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
-        self._replan_every = max(1, int(round(p.T_p / p.dt)))
+        self._schedule = ReplanSchedule(p.T_p, p.dt)
         if p.yield_range > 0:  # the order of yielding: the way to the goal through free space
             self._to_goal = goal_distance_field(self.esdf, scenario.goal_array, p.inflation,
                                                 p.yield_resolution)
-        self._ref_q = self._ref_v = self._ref_a = None  # (N, L, D) sampled references
-        self._ref_k = 0  # step at which the references were sampled
+        self.references = References()  # every robot's plan sampled at the control rate (public: tests read it)
+        self._comm = CommLog()  # every robot broadcasts its position at broadcast_hz (Section IV-A)
         self._final = np.zeros(n, dtype=bool)  # each robot's last local plan ended at its goal
         self._hold = np.zeros(n)  # steps each robot's reference clock stood still (since the last plan)
         self._yield_steps = 0.0  # robot-steps with a slowed reference clock
@@ -168,8 +173,9 @@ class Sph:
         self._coord_ms.append(1e3 * (time.perf_counter() - t0))
         self._neighbours += 2.0 * len(vi) / max(n, 1)
         self._steps += 1
+        self._comm.periodic(obs.step, p.dt, p.broadcast_hz, n, POSITION_BYTES)
         # trajectory planning every T_p (or once, Fig. 3B protocol)
-        if self._ref_q is None or (not p.plan_once and obs.step - self._ref_k >= self._replan_every):
+        if self.references.empty or (not p.plan_once and self._schedule.due(obs.step)):
             self._visible = (vi, vj)
             self._replan(obs.step, x, v, d)
         q_ref, v_ref, a_ref = self._reference(obs.step)
@@ -199,9 +205,9 @@ class Sph:
             q_ref[far] = x[far] + (q_ref[far] - x[far]) * (hold / lag[far])[:, None]
         # eq. (13)
         if p.band_guard:
-            a = force / p.m + band_guard(p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref, d, grad, p.d_thr)
+            a = force / p.m + band_guard(track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v), d, grad, p.d_thr)
         else:
-            a = force / p.m + p.k_p * (q_ref - x) + p.k_v * (v_ref - v) + a_ref
+            a = track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v, feedforward=force / p.m)
         return a, {"labels": labels, "events": events}
 
     def summary(self) -> dict[str, float]:
@@ -215,6 +221,7 @@ class Sph:
             "sph_link_splits": float(self._link_splits),
             "sph_visible_neighbours_mean": self._neighbours / max(self._steps, 1),
             "sph_waiting_fraction": self._yield_steps / max(self._steps * len(self._hold), 1),
+            **self._comm.summary(self._steps * self.params.dt),
         }
 
     def timings(self) -> dict[str, float]:
@@ -234,15 +241,12 @@ class Sph:
 
     def _reference(self, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Reference samples ``tau_j = t_k + j dt`` (eq. 13) for the current step."""
-        n, length = self._ref_q.shape[:2]
-        k = np.clip(step - self._ref_k - np.round(self._hold).astype(np.int64), 0, length - 1)
-        r = np.arange(n)
-        return self._ref_q[r, k], self._ref_v[r, k], self._ref_a[r, k]
+        return self.references.at(step, np.round(self._hold).astype(np.int64))
 
     def _replan(self, step: int, x: np.ndarray, v: np.ndarray, clearance: np.ndarray) -> None:
         p = self.params
         n, dim = x.shape
-        if self._ref_q is None:
+        if self.references.empty:
             start_q, start_v, start_a = x.copy(), v.copy(), np.zeros_like(x)
         else:
             start_q, start_v, start_a = (r.copy() for r in self._reference(step))
@@ -279,14 +283,9 @@ class Sph:
         if p.plan_once:
             length = int(np.ceil(max(pl.duration for pl in plans) / p.dt)) + 1
         else:
-            length = self._replan_every
-        tau = p.dt * np.arange(length)
-        self._ref_q = np.empty((n, length, dim))
-        self._ref_v = np.empty((n, length, dim))
-        self._ref_a = np.empty((n, length, dim))
-        for r, pl in enumerate(plans):
-            self._ref_q[r], self._ref_v[r], self._ref_a[r] = evaluate(pl.ctrl, pl.dt_knot, tau)
-        self._ref_k = step
+            length = self._schedule.every
+        self.references.load([pl.sample for pl in plans], step, length, p.dt, dim)
+        self._schedule.done(step)
         if not p.plan_once:
             self._hold[:] = 0.0  # the new reference starts at this step
 

@@ -56,6 +56,8 @@ class SphParams:
         "density sensitivity (\"gamma = 7\")")
     # --- planning (Table I) ---
     T_p: float = param(0.2, "s", "(0, inf)", "Table I", "replanning interval")
+    broadcast_hz: float = param(10.0, "Hz", "[0, 1000]", "Section IV-A",
+                                "position broadcast rate (counted in comm_mbps; 64 B messages, planning/messages.py)")
     lambda_s: float = param(5.0, "", "[0, inf)", "eq. (8), Table I", "smoothness weight")
     lambda_c: float = param(1000.0, "", "[0, inf)", "eq. (8), Table I", "collision weight")
     lambda_f: float = param(1.0, "", "[0, inf)", "eq. (8), Table I", "feasibility weight")

@@ -1,4 +1,5 @@
-"""Uniform cubic B-spline trajectory optimisation of the SPH paper (Section III-B), eqs. (7)-(12).
+"""Uniform cubic B-splines, and the ESDF-based spline optimisation of the SPH paper (Section III-B),
+eqs. (7)-(12).
 
 A trajectory is ``K + 1`` control points ``C_0 .. C_K`` (rows of a (K + 1, D) array) with knot
 span ``dt_knot`` [s] (``beta = 1 / dt_knot`` in eq. 12). The first and last three control points
@@ -151,6 +152,10 @@ class SplinePlan:
     @property
     def duration(self) -> float:
         return (self.ctrl.shape[0] - 3) * self.dt_knot
+
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position, velocity and acceleration at times ``t`` [s] from the start (:func:`evaluate`)."""
+        return evaluate(self.ctrl, self.dt_knot, t)
 
 
 def optimize(

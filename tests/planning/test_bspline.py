@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from swarmnav.methods.sph.bspline import (
+from swarmnav.planning.bspline import (
     SplineCosts, _cost_grad, boundary_matrix, boundary_points, evaluate, optimize, total_cost,
 )
 from swarmnav.world import Circle, Geometry
