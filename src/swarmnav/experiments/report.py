@@ -81,6 +81,31 @@ def _split_dotted(s: str) -> list[str]:
     return out
 
 
+def _paper_cells(ref: dict, index: int | None, metrics: list[str], metric_map: dict) -> dict[str, Any]:
+    """A variant's published cells by our metric name: ``metric_map`` names the paper's key of a
+    metric (``{flight_distance = "dist_m"}``) or the key and the factor that brings the paper's unit
+    to ours (``{sph_success = ["success_rate", 0.01]}``: percent to a fraction); ``index`` picks the
+    entry of a per-scene list (a column of the published table)."""
+    out = {}
+    for m in metrics:
+        key, scale = metric_map.get(m, m), 1.0
+        if isinstance(key, list):
+            key, scale = key
+        cell = ref.get(key)
+        if index is not None:
+            cell = cell[index] if isinstance(cell, list) and index < len(cell) else None
+        out[m] = _scaled(cell, float(scale))
+    return out
+
+
+def _scaled(cell: Any, scale: float) -> Any:
+    if scale == 1.0 or cell is None or isinstance(cell, bool):
+        return cell
+    if isinstance(cell, list):
+        return [_scaled(c, scale) for c in cell]
+    return cell * scale if isinstance(cell, (int, float)) else cell
+
+
 def _fmt_ref(v: Any, index: int | None) -> str:
     if v is None:
         return ""
@@ -155,12 +180,17 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
             vals = np.array([float(r["metrics"][m]) for r in done if m in r["metrics"]
                              and r["metrics"][m] is not None], dtype=float)
             per_metric[m] = vals
-        ref = _lookup(ref_root, vmap.get(v["name"], v["name"])) if isinstance(ref_root, dict) else None
+        key, index = vmap.get(v["name"], v["name"]), spec.get("reference_index")
+        if isinstance(key, list):  # [reference key, entry of its per-scene lists]
+            key, index = key
+        ref = _lookup(ref_root, key) if isinstance(ref_root, dict) else None
         variants.append({"name": v["name"], "runs": len(mine), "done": len(done), "values": per_metric,
                          "planned": planned.get(v["name"], 0), "failed": len(mine) - len(done),
-                         "seeds": [r["seed"] for r in done], "reference": ref if isinstance(ref, dict) else None})
+                         "seeds": [r["seed"] for r in done],
+                         "reference": _paper_cells(ref, index, metric_names, spec.get("metric_map") or {})
+                         if isinstance(ref, dict) else None})
     return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
-            "variants": variants, "reference": spec.get("reference"), "reference_index": spec.get("reference_index"),
+            "variants": variants, "reference": spec.get("reference"), "reference_index": None,
             "title": spec.get("title") or experiment, "n_runs": len(rows), "compare": spec.get("compare"),
             "planned": len(meta["jobs"]), "seed_list": list(meta.get("seeds") or []),
             "overrides": meta.get("overrides")}

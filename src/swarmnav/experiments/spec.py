@@ -20,7 +20,10 @@ A ``[matrix]`` table crosses lists into variants named ``a/b``: ``matrix = {meth
 ``[[variants]]``). A ``[report]`` table tells ``swarmnav report`` which published table the
 experiment reproduces: ``reference = "hes.table3"`` (a table of the packaged
 ``paper_results.toml``), ``metrics = [...]`` (columns, in order), optional ``title`` and
-``variant_map = {variant = "reference_key"}`` when names differ, and ``compare = ["A", "B"]``,
+``variant_map = {variant = "reference_key"}`` when names differ (or ``["reference_key", i]``: entry
+``i`` of the key's per-scene lists), ``metric_map = {metric = "paper_key"}`` (or ``["paper_key",
+factor]``, the factor from the paper's unit to ours) when the paper names a metric otherwise, and
+``compare = ["A", "B"]``,
 the pair of variants whose paired-seed percent changes (B against A) the report draws.
 
 ``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
@@ -49,7 +52,7 @@ from swarmnav.params import coerce, flatten
 _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "seeds", "n", "params", "variants",
               "matrix",
               "report", "scenario_vars"}
-_REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "figures", "compare"}
+_REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "metric_map", "figures", "compare"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "horizon", "n", "params"}
 _RUN_KEYS = {"method", "scenario", "steps", "horizon", "n"}

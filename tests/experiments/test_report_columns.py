@@ -1,0 +1,37 @@
+"""A report sets each variant beside its own column of a published table (``variant_map`` to
+``[key, index]``) and reads the paper's metric names and units (``metric_map``)."""
+
+from swarmnav.experiments import load_experiment, run_experiment
+from swarmnav.experiments.report import write_report
+
+SPEC = """name = "cols"
+method = "apf"
+steps = 3
+seeds = "1"
+[[variants]]
+name = "a/0.15"
+scenario = "random_forest:density=0.15,seed={seed},length=12,r_min=1.0,r_max=2.0"
+[[variants]]
+name = "a/0.45"
+scenario = "random_forest:density=0.45,seed={seed},length=12,r_min=1.0,r_max=2.0"
+[report]
+reference = "sph.table2"
+metrics = ["flight_distance", "sph_success", "crashes"]
+metric_map = { flight_distance = "dist_m", sph_success = ["success_rate", 0.01] }
+variant_map = { "a/0.15" = ["ego_swarm", 0], "a/0.45" = ["ego_swarm", 3] }
+"""
+
+
+def test_each_variant_reads_its_density_column_in_our_units(tmp_path):
+    spec = tmp_path / "cols.toml"
+    spec.write_text(SPEC)
+    run_experiment(load_experiment(str(spec)), tmp_path / "o", progress=False)
+    md = write_report(tmp_path / "o")[0].read_text()
+    rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+            for line in md.splitlines() if line.startswith("| a/")}
+    head = next(line for line in md.splitlines() if line.startswith("| variant"))
+    cols = [c.strip() for c in head.split("|")[2:-1]]
+    dist, rate = cols.index("flight_distance (paper)"), cols.index("sph_success (paper)")
+    assert rows["a/0.15"][dist] == "25.500 ± 2.300" and rows["a/0.45"][dist] == "32.500 ± 2.900"  # EGO-Swarm
+    assert rows["a/0.15"][rate] == "1.000" and rows["a/0.45"][rate] == "0.750"  # 100 % and 75 %
+    assert "crashes (paper)" not in cols  # the paper has no such column
