@@ -225,12 +225,17 @@ def _cmd_run(args) -> int:
     steps = res.config["steps"]
     print(f"{res.config['method']} on {scn.name}, seed {args.seed}, {steps} steps of {res.config['dt']:g} s "
           f"({res.config['horizon']:g} s simulated, {res.wall_time:.2f} s wall)")
-    goal = (f"Y = {m['Y']:.0f}  R_goal = {m['R_goal']:.3f}  E_mean = {m['E_mean']:.3f} m  "
-            if "Y" in m else "no goal (periodic box)  ")
-    print(f"  {goal}R_unsafe = {m['R_unsafe']:.3f}  d_clr_min = {m['d_clr_min']:.3f} m"
-          + (f"  L_mean = {m['L_mean']:.1f} m" if "L_mean" in m else "")
-          + f"  collisions = {m['collisions']:.0f}  crashes = {m['crashes']:.0f} of {res.positions.shape[1]} "
-          f"(contact = {res.config['rules']['contact']})")
+    contacts = (f"  collisions = {m['collisions']:.0f}  crashes = {m['crashes']:.0f} of {res.positions.shape[1]} "
+                f"(contact = {res.config['rules']['contact']})")
+    if "Y" in m:  # a goal to reach: the navigation metrics
+        print(f"  Y = {m['Y']:.0f}  R_goal = {m['R_goal']:.3f}  E_mean = {m['E_mean']:.3f} m  "
+              f"R_unsafe = {m['R_unsafe']:.3f}  d_clr_min = {m['d_clr_min']:.3f} m"
+              + (f"  L_mean = {m['L_mean']:.1f} m" if "L_mean" in m else "") + contacts)
+    else:  # no goal (a periodic box): what the Vicsek family is judged by (HWVEM Table 1)
+        print("  no goal (periodic box)  "
+              + (f"converged = {m['converged']:.0f}  k_con = {m['k_con']:.0f} steps  "
+                 f"deg_con_final = {m['deg_con_final']:.3f}  " if "k_con" in m else "")
+              + f"min_inter_agent_distance = {m['min_inter_agent_distance']:.3f} m" + contacts)
     if args.plot:
         from swarmnav.viz import plot_run
 
@@ -341,8 +346,11 @@ def _cmd_experiment(args) -> int:
     failed = sum(r["status"] != "done" for r in rows)
     print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/results.sqlite, runs.csv, summary.csv")
     for s in summary:
-        keys = [k for k in ("Y_mean", "R_goal_mean", "E_mean_mean", "R_unsafe_mean", "collisions_mean",
-                            "crashes_mean") if k in s]
+        # the metrics that mean something for the runs: navigation (and the SPH Table II test where
+        # it was measured), or consensus in a periodic box (no goal, no obstacles)
+        names = (("Y_mean", "R_goal_mean", "E_mean_mean", "R_unsafe_mean", "sph_success_mean") if "Y_mean" in s
+                 else ("converged_mean", "k_con_mean", "deg_con_final_mean"))
+        keys = [k for k in (*names, "collisions_mean", "crashes_mean") if k in s]
         print(f"  {s['variant']:32s} " + "  ".join(f"{k}={s[k]:.3f}" for k in keys))
     if failed:
         print(f"  {failed} run(s) failed (see the error column of runs.csv); rerun the same command to retry them",

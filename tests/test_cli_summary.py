@@ -1,0 +1,31 @@
+"""The summary lines of ``run`` and ``experiment`` show the metrics that mean something for the
+runs: navigation metrics where there is a goal, consensus metrics in a periodic box."""
+
+from _helpers.cli import run_cli
+
+
+def test_run_in_a_periodic_box_reports_consensus_not_goal_metrics(tmp_path):
+    p = run_cli("run", "--method", "vem", "--scenario", "periodic_box:n=20,rho=1.0,seed=2", "--steps", "10",
+                "--out", tmp_path / "r")
+    assert p.returncode == 0, p.stderr
+    line = p.stdout.splitlines()[1]
+    assert "no goal (periodic box)" in line and "k_con = " in line and "deg_con_final = " in line
+    assert "R_unsafe" not in line and "Y = " not in line and "R_goal" not in line
+
+
+def test_run_with_a_goal_reports_navigation_metrics(tmp_path):
+    p = run_cli("run", "--method", "apf", "--scenario", "default_corridor", "--steps", "5", "--out", tmp_path / "r")
+    assert p.returncode == 0, p.stderr
+    line = p.stdout.splitlines()[1]
+    assert line.lstrip().startswith("Y = ") and "R_unsafe = " in line and "k_con" not in line
+
+
+def test_experiment_summary_of_a_periodic_sweep_leaves_out_goal_metrics(tmp_path):
+    spec = tmp_path / "box.toml"
+    spec.write_text('name = "box"\nmethod = "vem"\nscenario = "periodic_box:n=20,rho=1.0,seed={seed}"\n'
+                    'steps = 10\nseeds = "1-2"\n')
+    p = run_cli("experiment", spec, "--out", tmp_path / "o", "--quiet")
+    assert p.returncode == 0, p.stderr
+    row = next(line for line in p.stdout.splitlines() if line.strip().startswith("default"))
+    assert "k_con_mean=" in row and "converged_mean=" in row
+    assert "R_unsafe" not in row and "Y_mean" not in row
