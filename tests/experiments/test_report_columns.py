@@ -35,3 +35,19 @@ def test_each_variant_reads_its_density_column_in_our_units(tmp_path):
     assert rows["a/0.15"][dist] == "25.500 ± 2.300" and rows["a/0.45"][dist] == "32.500 ± 2.900"  # EGO-Swarm
     assert rows["a/0.15"][rate] == "1.000" and rows["a/0.45"][rate] == "0.750"  # 100 % and 75 %
     assert "crashes (paper)" not in cols  # the paper has no such column
+    assert rows["a/0.45"][cols.index("paper row")] == "ego_swarm [3]"
+
+
+def test_report_names_the_build_that_ran_and_the_paper_row_beside_it(tmp_path):
+    spec = tmp_path / "b.toml"
+    spec.write_text('name = "b"\nmethod = "hes"\nscenario = "default_corridor"\nsteps = 3\nseeds = "1"\n'
+                    '[[variants]]\nname = "ours"\n[variants.params]\npreset = "faithful"\n'
+                    '[report]\nreference = "hes.table2"\nmetrics = ["Y"]\nvariant_map = { ours = "rule" }\n')
+    run_experiment(load_experiment(str(spec)), tmp_path / "o", progress=False)
+    md = write_report(tmp_path / "o")[0].read_text()
+    head = next(line for line in md.splitlines() if line.startswith("| variant"))
+    row = next(line for line in md.splitlines() if line.startswith("| ours"))
+    cols = [c.strip() for c in head.split("|")[1:-1]]
+    cells = [c.strip() for c in row.split("|")[1:-1]]
+    assert cells[cols.index("build")] == "preset=faithful"
+    assert cells[cols.index("paper row")] == "rule"  # our variant is set beside the paper's rule row

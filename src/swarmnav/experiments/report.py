@@ -81,6 +81,19 @@ def _split_dotted(s: str) -> list[str]:
     return out
 
 
+#: run parameters that say which build ran: the preset, and the decider with its model
+BUILD_KEYS = ("preset", "decision", "llm_model", "llm_gguf")
+
+
+def build_label(row: dict | None) -> str:
+    """What a stored run was flown with, beyond its method: ``preset=guard``, ``decision=llamacpp
+    llm_gguf=smollm2`` (the variant's parameters and the sweep's --set overrides); "" if none."""
+    params = (row or {}).get("params") or {}
+    if params.get("decision") == "rule":
+        params = {k: v for k, v in params.items() if not k.startswith("llm_")}
+    return " ".join(f"{k}={params[k]}" for k in BUILD_KEYS if k in params)
+
+
 def _paper_cells(ref: dict, index: int | None, metrics: list[str], metric_map: dict) -> dict[str, Any]:
     """A variant's published cells by our metric name: ``metric_map`` names the paper's key of a
     metric (``{flight_distance = "dist_m"}``) or the key and the factor that brings the paper's unit
@@ -184,9 +197,11 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
         if isinstance(key, list):  # [reference key, entry of its per-scene lists]
             key, index = key
         ref = _lookup(ref_root, key) if isinstance(ref_root, dict) else None
+        row_name = key.strip('"') + (f" [{index}]" if index is not None else "")
         variants.append({"name": v["name"], "runs": len(mine), "done": len(done), "values": per_metric,
                          "planned": planned.get(v["name"], 0), "failed": len(mine) - len(done),
-                         "seeds": [r["seed"] for r in done],
+                         "seeds": [r["seed"] for r in done], "build": build_label(mine[0] if mine else None),
+                         "paper_row": row_name if isinstance(ref, dict) and row_name != v["name"] else "",
                          "reference": _paper_cells(ref, index, metric_names, spec.get("metric_map") or {})
                          if isinstance(ref, dict) else None})
     return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
@@ -272,6 +287,12 @@ def tables(t: dict) -> list[dict[str, Any]]:
     for title, chunk in groups:
         columns = [{"label": "variant", "metric": None, "kind": "name"}]
         if not out:
+            # what ran (preset, decider and model) and which published row it is set beside, where
+            # either is not the variant's name: an LLM row of ours is never read as the paper's model
+            if any(v.get("build") for v in t["variants"]):
+                columns.append({"label": "build", "metric": None, "kind": "build"})
+            if any(v.get("paper_row") for v in t["variants"]):
+                columns.append({"label": "paper row", "metric": None, "kind": "paper_row"})
             columns.append({"label": "runs", "metric": None, "kind": "runs"})
         for m in chunk:
             columns.append({"label": _header(m), "metric": m, "kind": "ours"})
@@ -283,6 +304,8 @@ def tables(t: dict) -> list[dict[str, Any]]:
             for c in columns:
                 if c["kind"] == "name":
                     row.append(v["name"])
+                elif c["kind"] in ("build", "paper_row"):
+                    row.append(v.get(c["kind"]) or "")
                 elif c["kind"] == "runs":  # done of planned: an interrupted sweep shows 6/10, not 6/6
                     row.append(f"{v['done']}/{v['planned']}")
                 elif c["kind"] == "ours":
@@ -399,6 +422,10 @@ def _short(name: str, limit: int = 40) -> str:
     return name if len(name) <= limit else name[: limit - 1] + "…"
 
 
+#: table columns of text (left-aligned), not numbers
+_TEXT_KINDS = ("name", "build", "paper_row")
+
+
 def _html_table(tab: dict) -> str:
     """One table; a metric with a paper column gets a two-level header (metric over ours | paper)."""
     e = html.escape
@@ -407,7 +434,7 @@ def _html_table(tab: dict) -> str:
     rs = ' rowspan="2"' if two else ""
     top, sub = [], []
     for c in cols:
-        if c["kind"] == "name":
+        if c["kind"] in _TEXT_KINDS:
             top.append(f'<th class="name"{rs}>{e(c["label"])}</th>')
         elif c["kind"] == "paper":
             sub.append('<th class="num paper">paper</th>')
@@ -422,7 +449,7 @@ def _html_table(tab: dict) -> str:
     for r in tab["rows"]:
         cells = []
         for c, text in zip(cols, r):
-            if c["kind"] == "name":
+            if c["kind"] in _TEXT_KINDS:
                 cells.append(f'<td class="name">{e(text)}</td>')
                 continue
             mean, pm, sd = text.partition(" ± ")  # the spread in grey, so the means read first
@@ -530,7 +557,7 @@ def write_report(directory: str | Path, experiment: str | None = None,
     for tab in tabs:
         md += ["", f"## {tab['title']}", ""] + ([tab["note"], ""] if tab.get("note") else [])
         md += ["| " + " | ".join(c["label"] for c in tab["columns"]) + " |",
-               "|" + "".join("---|" if c["kind"] == "name" else "--:|" for c in tab["columns"])]
+               "|" + "".join("---|" if c["kind"] in _TEXT_KINDS else "--:|" for c in tab["columns"])]
         md += ["| " + " | ".join(r) + " |" for r in tab["rows"]]
     md += [""] + [f"![{n}](report_files/{n})" for n, _ in figs] + [""]
     replays = _replays(store, experiment, viewers) if viewers else []
