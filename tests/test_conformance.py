@@ -51,7 +51,18 @@ def test_registry_lists_apf_and_rejects_unknown():
         registry.make("apf", k_attt=1.0)
 
 
-@pytest.mark.parametrize("method", [m for m in registry.names() if registry.spec(m).navigation])
+def _flies_periodic(method: str) -> bool:
+    return getattr(registry.make(method), "periodic", True)
+
+
+@pytest.mark.parametrize("method", [m for m in registry.names() if not _flies_periodic(m)])
+def test_method_that_cannot_fly_a_periodic_box_refuses_it_in_one_line(method):
+    with pytest.raises(swarmnav.ConfigError, match="cannot fly a periodic world"):
+        swarmnav.run(method, "periodic_box:n=10,rho=1.0", seed=2, steps=3)
+
+
+@pytest.mark.parametrize("method", [m for m in registry.names() if registry.spec(m).navigation
+                                    and _flies_periodic(m)])
 def test_periodic_world_wraps_positions(method):
     res = swarmnav.run(method, "periodic_box:n=30,rho=1.0", seed=2, steps=30)
     side = res.config["scenario"]["world"]["bounds"][2]

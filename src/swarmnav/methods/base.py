@@ -48,6 +48,8 @@ class Method(Protocol):
     dynamics: Dynamics
     dt: float  # integration step [s] the method is designed for
     dims: tuple[int, ...]  # world dimensions flown natively; (2,): a 3-D scene is flown in its slice at z_fly
+    # optional ``periodic: bool`` (absent: True): False for a method that cannot fly a periodic
+    # box (the trajectory planners); the rollout refuses such a run with one line
 
     def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray, rng: np.random.Generator) -> None: ...
 

@@ -85,6 +85,9 @@ def run(
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
     world, plane_z = _world_of(scn, m.dims, z_fly, m.name)
+    if world.periodic and not getattr(m, "periodic", True):
+        raise ConfigError(f"{m.name} cannot fly a periodic world ({scn.name}): its plans cross the world's "
+                          "edge, where a periodic box wraps; fly it in a walled or open world")
     rng = np.random.default_rng(seed)
     pos = world.spawn_positions(rng)
     vel = np.zeros_like(pos)
