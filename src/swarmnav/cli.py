@@ -358,6 +358,16 @@ def _cmd_experiment(args) -> int:
     return 1 if failed else 0
 
 
+def _cmd_merge(args) -> int:
+    from swarmnav.experiments.runner import merge_stores
+
+    _writable_dir(args.into, "--into")
+    copied, there = merge_stores(args.sources, args.into)
+    print(f"merged {copied} run(s) into {args.into}/results.sqlite ({there} already there); "
+          f"run the experiment into it to add the runs it lacks, then: swarmnav report {args.into}")
+    return 0
+
+
 def _cmd_report(args) -> int:
     from swarmnav.experiments.report import write_report
 
@@ -459,6 +469,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-viewers", action="store_true",
                    help="no replay viewer per run (by default each stored trajectory gets one, linked from the report)")
     s.set_defaults(fn=_cmd_report)
+
+    s = sub.add_parser("merge", help="copy the finished runs of results directories into another one "
+                       "(sweeps flown apart, e.g. on two machines, reported together)")
+    s.add_argument("sources", nargs="+", metavar="SRC", help="results directories to copy from")
+    s.add_argument("--into", required=True, metavar="DIR", help="the results directory to copy into (created if missing)")
+    s.set_defaults(fn=_cmd_merge)
 
     s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question, "
                        "'llm bench' scores one on recorded decision states (docs/llm.md)")

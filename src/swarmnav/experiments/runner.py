@@ -49,6 +49,40 @@ def _write_files(root: Path, row: dict) -> None:
     row["artifacts"] = paths
 
 
+def merge_stores(sources: list[str | Path], into: str | Path) -> tuple[int, int]:
+    """Copy every finished run of the stores ``sources`` that ``into`` has not finished, with its
+    trajectory and artifact files, and each experiment's description that ``into`` lacks (so
+    ``swarmnav report --experiment NAME`` works there). Runs are keyed by their configuration,
+    so a run flown in two sweeps, or on two machines, lands once; the same experiment run later
+    into ``into`` finds it done. Returns (runs copied, runs already there)."""
+    dst = Store(into)
+    have = dst.done_keys()
+    copied = skipped = 0
+    for src_root in sources:
+        src_root = Path(src_root)
+        if src_root.resolve() == dst.root.resolve():
+            raise ConfigError(f"merge: {src_root} is the target store itself")
+        if not (src_root / "results.sqlite").exists():
+            raise ConfigError(f"merge: {src_root} holds no results store (results.sqlite)")
+        src = Store(src_root)
+        rows = []
+        for row in src.rows():
+            if row["status"] != "done" or row["key"] in have:
+                skipped += row["status"] == "done"
+                continue
+            for rel in ([row["trajectory"]] if row.get("trajectory") else []) + list(row["artifacts"]):
+                _atomic_write(dst.root / rel, (src.root / rel).read_bytes())
+            rows.append(row)
+            have.add(row["key"])
+        dst.put_many(rows)  # after their files: a row never points at a file that is not there
+        copied += len(rows)
+        known = set(dst.meta_keys())
+        for key in src.meta_keys():
+            if key.startswith("experiment:") and key not in known:
+                dst.set_meta(key, src.meta(key))
+    return copied, skipped
+
+
 def _atomic_write(path: Path, data: bytes) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp")

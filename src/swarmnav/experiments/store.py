@@ -115,6 +115,10 @@ class Store:
         except json.JSONDecodeError:
             raise StoreError(f"{self.path}: not a usable results store (meta '{key}' is not JSON)") from None
 
+    def meta_keys(self) -> list[str]:
+        with self._db() as db:
+            return [k for (k,) in db.execute("SELECT key FROM meta ORDER BY key")]
+
     def done_keys(self) -> set[str]:
         with self._db() as db:
             return {k for (k,) in db.execute("SELECT key FROM runs WHERE status = 'done'")}
