@@ -263,6 +263,16 @@ def curve_free(ctrl: np.ndarray, dt: float, view: MapView, part: float = 2.0 / 3
     return curve_hits(pts, view.grid, view.counts, view.origin, view.res, view.blocked) < 0
 
 
+def swarm_gap(ctrl: np.ndarray, others: np.ndarray) -> float:
+    """Smallest distance [m] between the free control points and the others' positions at their
+    times (inf: no other)."""
+    if others.shape[0] == 0 or ctrl.shape[0] <= 3:
+        return float("inf")
+    gap = np.linalg.norm(others[:, 3:] - ctrl[None, 3:], axis=2)
+    gap = gap[np.isfinite(gap)]
+    return float(gap.min()) if gap.size else float("inf")
+
+
 @dataclass(slots=True)
 class Outcome:
     ctrl: np.ndarray
@@ -281,8 +291,9 @@ def rebound_optimize(ctrl: np.ndarray, dt: float, w: Weights, view: MapView, sea
     """EGO-Planner Algorithm 1 (module docstring) from the initial control points ``ctrl``, with
     the free end of the swarm planner pulled to ``target``: optimise; while the curve crosses
     obstacles on new stretches, add their ``{p, v}`` pairs and optimise again (at most
-    ``max_rebound`` times); if it still collides within its first 2/3, restart with the collision
-    and swarm weights doubled (at most ``max_restart`` times)."""
+    ``max_rebound`` times); if it still collides within its first 2/3, or passes another robot's
+    broadcast plan closer than half the swarm clearance ``C_w`` at a control point, restart with the
+    collision and swarm weights doubled (at most ``max_restart`` times)."""
     dim = ctrl.shape[1]
     pairs = Pairs(dim)
     step = 0.5 * view.res
@@ -301,7 +312,7 @@ def rebound_optimize(ctrl: np.ndarray, dt: float, w: Weights, view: MapView, sea
         if new > 0 and rebounds < max_rebound:
             rebounds += 1
             continue
-        if curve_free(ctrl, dt, view) or restarts >= max_restart:
+        if (curve_free(ctrl, dt, view) and swarm_gap(ctrl, others) >= 0.5 * w.cw) or restarts >= max_restart:
             break
         restarts += 1
         wk = replace(wk, lam_c=2.0 * wk.lam_c, lam_w=2.0 * wk.lam_w)
