@@ -139,7 +139,7 @@ class EgoSwarm:
         self._check_every = max(1, int(round(p.check_period / p.dt)))
         self._min_gap = max(1, int(round(4 * p.check_period / p.dt)))  # steps between two triggered replans
         self._stats = dict(plans=0, fallbacks=0, brakes=0, rebounds=0, refined=0, iterations=0, pairs=0,
-                           failed_searches=0, trig_obstacle=0, trig_swarm=0, trig_period=0, trig_end=0)
+                           failed_searches=0, astar_seeds=0, trig_obstacle=0, trig_swarm=0, trig_period=0, trig_end=0)
         self._plan_ms: list[float] = []
         self._steps = 0
 
@@ -173,6 +173,7 @@ class EgoSwarm:
             "ego_opt_iterations_mean": s["iterations"] / plans,
             "ego_pairs_mean": s["pairs"] / plans,
             "ego_failed_searches": float(s["failed_searches"]),
+            "ego_astar_seeds": float(s["astar_seeds"]),
             "ego_replans_obstacle": float(s["trig_obstacle"]),
             "ego_replans_swarm": float(s["trig_swarm"]),
             "ego_replans_period": float(s["trig_period"]),
@@ -306,6 +307,11 @@ class EgoSwarm:
                 path.append(rest[: int(np.argmin(np.linalg.norm(rest - lg, axis=1))) + 1])
         path.append(lg[None])
         path = np.vstack(path)
+        if self._retry[r] and p.retry_guide == "astar":  # ours: after a failed replan, seed from A*
+            found = self.maps.search(r, q0, lg, p.max_expand)
+            if found is not None and len(found) >= 2:
+                path = found
+                self._stats["astar_seeds"] += 1
         pts = resample(path, p.ctrl_spacing)
         if len(pts) < 2:
             pts = np.vstack([q0, lg])
@@ -329,7 +335,7 @@ class EgoSwarm:
         def search(a: np.ndarray, b: np.ndarray):
             return self.maps.search(r, a, b, p.max_expand)
 
-        out = rebound_optimize(ctrl, dt, self._w, view, search, others_at, p.max_rebound, p.max_iter, lg,
+        out = rebound_optimize(ctrl, dt, self._w, view, search, others_at, p.max_rebound, p.max_iter, None if final else lg,
                                p.max_restart)
         if out.ok:
             out = reallocate(out, start, self._w, view, others_at, p.max_iter)

@@ -16,8 +16,9 @@ minimise (EGO-Planner eq. 2, EGO-Swarm eq. 3)
 - ``J_fit = sum_j |B(t_j) - B_old(t_j / r)|^2`` at the knots: the refinement's fitness to the
   rebounded curve after the time re-allocation by the ratio ``r`` (EGO-Planner Section V).
 
-The optimiser is SciPy's L-BFGS-B (the authors use L-BFGS) with this cost and its analytic
-gradient compiled by numba. :func:`rebound_optimize` is EGO-Planner's Algorithm 1: optimise, look
+The optimiser is L-BFGS (as the authors'), compiled with numba together with this cost and
+its analytic gradient (:func:`_lbfgs`); SciPy's L-BFGS-B on the same cost is kept as a switch
+(``SOLVER``) and as the oracle of the tests. :func:`rebound_optimize` is EGO-Planner's Algorithm 1: optimise, look
 for control-polygon stretches that still cross obstacles, give their points new ``{p, v}`` pairs
 from a new guide path, optimise again, a bounded number of times. :func:`reallocate` is the time
 re-allocation and refinement.
@@ -34,6 +35,12 @@ from scipy.optimize import minimize
 
 from swarmnav.planning.bspline import boundary_points, evaluate
 from swarmnav.planning.esdf_free import colliding_runs, find_pairs, occupied, pair_cost, points_occupied, polygon_hits
+
+
+#: the solver of :func:`_solve`: "lbfgs" (compiled, default) or "scipy" (L-BFGS-B)
+SOLVER = "lbfgs"
+#: gradient tolerance of the solver (the released planner's g_epsilon = 0.01 at its scale)
+G_TOL = 1e-3
 
 
 @dataclass(frozen=True, slots=True)
@@ -221,34 +228,132 @@ def _assign_pairs(ctrl: np.ndarray, dt: float, pairs: Pairs, view: MapView, sear
     return new, failed, bool(np.any(hit))
 
 
+@njit(cache=True)
+def _lbfgs(ctrl, lo, hi, dt, lam_s, lam_c, lam_f, lam_w, lam_fit, sf, cw, v_max, a_max,
+           pair_idx, pair_p, pair_v, others, anchors, lam_t, target, max_iter, g_tol):
+    """L-BFGS (Nocedal & Wright Alg. 7.4/7.5; memory 16 as the released planner) on the rows
+    ``ctrl[lo:hi]``, in place: two-loop recursion with the ``s'y / y'y`` scaling, backtracking to
+    the Armijo condition (c1 = 1e-4), curvature pairs with ``s'y <= 0`` skipped. Stops when the
+    largest gradient component is below ``g_tol``, a step moves no point more than 1e-4 m, no
+    decrease is found, or after ``max_iter`` iterations. Returns the iteration count."""
+    n, dim = ctrl.shape
+    nv = (hi - lo) * dim
+    mem = 16
+    S = np.zeros((mem, nv))
+    Y = np.zeros((mem, nv))
+    rho = np.zeros(mem)
+    alpha = np.zeros(mem)
+    G = np.empty((n, dim))
+    x = np.empty(nv)
+    g = np.empty(nv)
+    for k in range(nv):
+        x[k] = ctrl[lo + k // dim, k % dim]
+    f = cost_grad(ctrl, dt, lam_s, lam_c, lam_f, lam_w, lam_fit, sf, cw, v_max, a_max,
+                  pair_idx, pair_p, pair_v, others, anchors, lam_t, target, G)
+    for k in range(nv):
+        g[k] = G[lo + k // dim, k % dim]
+    count = 0
+    head = 0
+    it = 0
+    x_new = np.empty(nv)
+    g_new = np.empty(nv)
+    while it < max_iter:
+        gmax = 0.0
+        for k in range(nv):
+            gmax = max(gmax, abs(g[k]))
+        if gmax <= g_tol:
+            break
+        it += 1
+        q = g.copy()
+        for c in range(count):
+            idx = (head - 1 - c) % mem
+            alpha[idx] = rho[idx] * np.dot(S[idx], q)
+            q -= alpha[idx] * Y[idx]
+        if count > 0:
+            last = (head - 1) % mem
+            q *= 1.0 / (rho[last] * np.dot(Y[last], Y[last]))
+        else:
+            q *= min(1.0, 0.5 / max(np.sqrt(np.dot(g, g)), 1e-12))  # first step at most 0.5 m
+        for c in range(count - 1, -1, -1):
+            idx = (head - 1 - c) % mem
+            b = rho[idx] * np.dot(Y[idx], q)
+            q += (alpha[idx] - b) * S[idx]
+        slope = -np.dot(g, q)
+        if slope >= 0.0:
+            count = 0
+            q = g.copy()
+            slope = -np.dot(g, g)
+        step = 1.0
+        accepted = False
+        f_new = f
+        for _ in range(40):
+            for k in range(nv):
+                x_new[k] = x[k] - step * q[k]
+                ctrl[lo + k // dim, k % dim] = x_new[k]
+            f_new = cost_grad(ctrl, dt, lam_s, lam_c, lam_f, lam_w, lam_fit, sf, cw, v_max, a_max,
+                              pair_idx, pair_p, pair_v, others, anchors, lam_t, target, G)
+            if f_new <= f + 1e-4 * step * slope:
+                accepted = True
+                break
+            step *= 0.5
+        if not accepted:
+            for k in range(nv):
+                ctrl[lo + k // dim, k % dim] = x[k]
+            break
+        move = 0.0
+        sy = 0.0
+        for k in range(nv):
+            g_new[k] = G[lo + k // dim, k % dim]
+            move = max(move, abs(x_new[k] - x[k]))
+            sy += (x_new[k] - x[k]) * (g_new[k] - g[k])
+        if sy > 1e-12:
+            for k in range(nv):
+                S[head, k] = x_new[k] - x[k]
+                Y[head, k] = g_new[k] - g[k]
+            rho[head] = 1.0 / sy
+            head = (head + 1) % mem
+            count = min(count + 1, mem)
+        x[:] = x_new
+        g[:] = g_new
+        f = f_new
+        if move < 1e-4:
+            break
+    return it
+
+
 def _solve(ctrl: np.ndarray, dt: float, w: Weights, pairs: Pairs, others: np.ndarray, anchors: np.ndarray,
            lam_fit: float, max_iter: int, target: np.ndarray | None = None) -> tuple[np.ndarray, int, bool]:
-    """L-BFGS-B on ``Q_3 .. Q_{K-3}`` (fixed end) or ``Q_3 .. Q_K`` (free end: ``target`` given,
-    pulled there by the terminal term weighted ``lam_c``); returns (points, iterations, finite)."""
+    """L-BFGS on ``Q_3 .. Q_{K-3}`` (fixed end) or ``Q_3 .. Q_K`` (free end: ``target`` given,
+    pulled there by the terminal term weighted ``lam_c``); returns (points, iterations, finite).
+    ``SOLVER = "scipy"`` runs SciPy's L-BFGS-B on the same compiled cost instead (slower: its
+    Python call per evaluation costs ~50 us; the tests check both agree)."""
     n, dim = ctrl.shape
     hi = n if target is not None else n - 3
     if hi <= 3:
         return ctrl, 0, True
     work = np.ascontiguousarray(ctrl, dtype=float).copy()
-    grad = np.empty_like(work)
     lam_t = w.lam_c if target is not None else 0.0
     tgt = np.zeros(dim) if target is None else np.asarray(target, dtype=float)
+    args = (dt, w.lam_s, w.lam_c, w.lam_f, w.lam_w, lam_fit, w.sf, w.cw, w.v_max, w.a_max,
+            pairs.idx, pairs.p, pairs.v, others, anchors, lam_t, tgt)
+    if SOLVER == "scipy":
+        grad = np.empty_like(work)
 
-    def fun(x):
-        work[3:hi] = x.reshape(-1, dim)
-        f = cost_grad(work, dt, w.lam_s, w.lam_c, w.lam_f, w.lam_w, lam_fit, w.sf, w.cw, w.v_max, w.a_max,
-                      pairs.idx, pairs.p, pairs.v, others, anchors, lam_t, tgt, grad)
-        return f, grad[3:hi].ravel().copy()
+        def fun(x):
+            work[3:hi] = x.reshape(-1, dim)
+            return cost_grad(work, *args, grad), grad[3:hi].ravel().copy()
 
-    res = minimize(fun, work[3:hi].ravel(), jac=True, method="L-BFGS-B",
-                   options={"maxiter": int(max_iter), "gtol": 1e-3})
-    out = work.copy()
-    out[3:hi] = res.x.reshape(-1, dim)
-    return out, int(res.nit), bool(np.all(np.isfinite(out)))
+        res = minimize(fun, work[3:hi].ravel(), jac=True, method="L-BFGS-B",
+                       options={"maxiter": int(max_iter), "gtol": G_TOL})
+        work[3:hi] = res.x.reshape(-1, dim)
+        nit = int(res.nit)
+    else:
+        nit = int(_lbfgs(work, 3, hi, *args, int(max_iter), G_TOL))
+    return work, nit, bool(np.all(np.isfinite(work)))
 
 
 def sample_curve(ctrl: np.ndarray, dt: float, spacing: float) -> np.ndarray:
-    """Points of the spline about ``spacing`` [m] apart (at v_max-ish speeds: 8 per knot at least)."""
+    """Points of the spline about ``spacing`` [m] apart (8 per knot span at least)."""
     dur = (ctrl.shape[0] - 3) * dt
     length = float(np.sum(np.linalg.norm(np.diff(ctrl, axis=0), axis=1)))
     m = max(int(np.ceil(length / spacing)), 8 * (ctrl.shape[0] - 3), 2)
@@ -287,7 +392,7 @@ class Outcome:
 
 def rebound_optimize(ctrl: np.ndarray, dt: float, w: Weights, view: MapView, search: Callable,
                      others_at: Callable[[float, int], np.ndarray], max_rebound: int, max_iter: int,
-                     target: np.ndarray, max_restart: int = 3) -> Outcome:
+                     target: np.ndarray | None, max_restart: int = 3) -> Outcome:
     """EGO-Planner Algorithm 1 (module docstring) from the initial control points ``ctrl``, with
     the free end of the swarm planner pulled to ``target``: optimise; while the curve crosses
     obstacles on new stretches, add their ``{p, v}`` pairs and optimise again (at most

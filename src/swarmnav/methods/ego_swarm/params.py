@@ -9,7 +9,7 @@ read, nothing copied); "shared" = the Table II comparison's common dynamics (SPH
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 from swarmnav.params import param
 
@@ -83,4 +83,8 @@ class EgoSwarmParams:
     goal_radius: float = param(2.4, "m", "[0, inf)", "ours",
                                "per-robot goals fill a disc of this radius around the scene's goal (within the "
                                "3 m arrival radius), assigned to the spawn layout")
+    retry_guide: Literal["astar", "previous"] = param(
+        "astar", "", None, "ours",
+        "initial path of the replan after a failed one: an A* path to the local goal on the robot's map (ours; "
+        "the released planner retries with random initial polynomials), or the usual rest of the plan + line")
     force_fail: bool = param(False, "", None, "ours (tests)", "every optimisation reports failure (fallback test)")
