@@ -119,7 +119,7 @@ class EgoSwarm:
                                   p.sensing_range)
         self._counts = np.array(self.maps.shape[::-1], dtype=np.int64)
         x = np.asarray(positions, dtype=float)
-        self.goals = goal_slots(scenario.goal_array, x, p.goal_radius)
+        self.goals = goal_slots(scenario.goal_array, x, p.goal_disc)
         self._home = x.copy()  # start of each robot's global path (the line to its goal)
         self._log = CommLog()
         self.board = TrajectoryBoard(n, self._log)

@@ -80,7 +80,7 @@ class EgoSwarmParams:
     max_map_bytes: int = param(2 * 2**30, "B", "[1, inf)", "ours",
                                "largest memory the robots' maps may take; a larger world is refused")
     # --- goals (EGO-Swarm gives each drone its own goal) ---
-    goal_radius: float = param(2.4, "m", "[0, inf)", "ours",
+    goal_disc: float = param(2.4, "m", "[0, inf)", "ours",
                                "per-robot goals fill a disc of this radius around the scene's goal (within the "
                                "3 m arrival radius), assigned to the spawn layout")
     retry_guide: Literal["astar", "previous"] = param(
