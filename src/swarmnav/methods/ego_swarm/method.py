@@ -99,7 +99,7 @@ class EgoSwarm:
         self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
         self._w = Weights(p.lambda_smooth, p.lambda_collision, p.lambda_feasibility, p.lambda_swarm,
                           p.lambda_fitness, p.dist0, 2.0 * p.swarm_clearance, p.v_max, p.a_max,
-                          p.feasibility_tolerance)
+                          p.feasibility_tolerance, p.swarm_min_gap)
         self._dt_knot = p.ctrl_spacing / p.v_max
 
     # ------------------------------------------------------------------ contract
@@ -247,6 +247,18 @@ class EgoSwarm:
         hit = curve_hits(pts, view.grid, view.counts, view.origin, view.res, view.blocked)
         return -1 if hit < 0 else hit * stride
 
+    def _swarm_conflict(self, r: int, k: int, horizon: float) -> int:
+        """0 if robot ``r``'s plan passes a newer plan of another robot closer than
+        ``swarm_clearance`` within ``horizon`` [s], else -1."""
+        n = len(self._k0)
+        js = k + np.arange(0, int(horizon / self.dt) + 1, max(1, int(round(0.1 / self.dt))))
+        idx = np.clip(js[None, :] - self._k0[:, None], 0, (self._len - 1)[:, None])
+        P = self._Q[np.arange(n)[:, None], idx]  # (N, J, D)
+        gap = np.linalg.norm(P - P[r][None], axis=2).min(axis=1)
+        close = (gap < self.params.swarm_clearance) & (self._t0 > self._t0[r])
+        close[r] = False
+        return 0 if np.any(close) else -1
+
     def _local_goal(self, r: int, q: np.ndarray) -> tuple[np.ndarray, bool]:
         """The point of the global path ``home -> goal`` at ``planning_horizon`` from ``q`` (the
         goal itself within reach), moved towards ``q`` out of occupied cells of the map."""
@@ -354,6 +366,8 @@ class EgoSwarm:
             s["fallbacks"] += 1
             self._retry[r] = True
             hit = -1 if self._plans[r] is None else self._collides(r, k, p.emergency_time)
+            if hit < 0 and self._plans[r] is not None and p.brake_on_swarm:
+                hit = self._swarm_conflict(r, k, p.emergency_time)
             if self._plans[r] is None or (hit >= 0 and not self._braking[r]):
                 s["brakes"] += 1
                 i = int(self._index(k)[r])

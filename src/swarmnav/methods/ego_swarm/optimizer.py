@@ -57,6 +57,7 @@ class Weights:
     v_max: float  # [m/s]
     a_max: float  # [m/s^2]
     tol: float  # feasibility tolerance (fraction)
+    min_gap: float = 0.5  # [m] restart while a control point passes another robot's plan closer than this
 
 
 @dataclass(frozen=True, slots=True)
@@ -397,7 +398,7 @@ def rebound_optimize(ctrl: np.ndarray, dt: float, w: Weights, view: MapView, sea
     the free end of the swarm planner pulled to ``target``: optimise; while the curve crosses
     obstacles on new stretches, add their ``{p, v}`` pairs and optimise again (at most
     ``max_rebound`` times); if it still collides within its first 2/3, or passes another robot's
-    broadcast plan closer than half the swarm clearance ``C_w`` at a control point, restart with the
+    broadcast plan closer than ``min_gap`` at a control point, restart with the
     collision and swarm weights doubled (at most ``max_restart`` times)."""
     dim = ctrl.shape[1]
     pairs = Pairs(dim)
@@ -417,7 +418,7 @@ def rebound_optimize(ctrl: np.ndarray, dt: float, w: Weights, view: MapView, sea
         if new > 0 and rebounds < max_rebound:
             rebounds += 1
             continue
-        if (curve_free(ctrl, dt, view) and swarm_gap(ctrl, others) >= 0.5 * w.cw) or restarts >= max_restart:
+        if (curve_free(ctrl, dt, view) and swarm_gap(ctrl, others) >= w.min_gap) or restarts >= max_restart:
             break
         restarts += 1
         wk = replace(wk, lam_c=2.0 * wk.lam_c, lam_w=2.0 * wk.lam_w)

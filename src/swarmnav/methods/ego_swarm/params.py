@@ -43,6 +43,9 @@ class EgoSwarmParams:
     dist0: float = param(0.5, "m", "(0, inf)", "launch optimization/dist0", "obstacle clearance s_f of the {p, v} cost")
     swarm_clearance: float = param(0.5, "m", "(0, inf)", "launch optimization/swarm_clearance",
                                    "per-robot clearance: two trajectories are pushed 2 x swarm_clearance apart")
+    swarm_min_gap: float = param(0.5, "m", "[0, inf)", "released (swarm_clearance)",
+                                 "restart the optimisation (weights doubled) while a control point passes another "
+                                 "robot's plan closer than this (0.6 m, tried on seeds 1-10: more failed replans, more contacts)")
     ctrl_spacing: float = param(0.4, "m", "[0.05, 5]", "launch manager/control_points_distance",
                                 "control-point spacing; knot span = ctrl_spacing / v_max")
     feasibility_tolerance: float = param(0.05, "", "[0, 10]", "launch manager/feasibility_tolerance",
@@ -83,6 +86,10 @@ class EgoSwarmParams:
     goal_disc: float = param(2.4, "m", "[0, inf)", "ours",
                                "per-robot goals fill a disc of this radius around the scene's goal (within the "
                                "3 m arrival radius), assigned to the spawn layout")
+    brake_on_swarm: bool = param(True, "", None, "ours",
+                                 "a failed replan also brakes when the plan it keeps passes a newer plan of another "
+                                 "robot closer than swarm_clearance within emergency_time (the released emergency "
+                                 "stop looks at obstacles)")
     retry_guide: Literal["astar", "previous"] = param(
         "astar", "", None, "ours",
         "initial path of the replan after a failed one: an A* path to the local goal on the robot's map (ours; "
