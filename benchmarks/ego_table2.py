@@ -12,8 +12,10 @@
 Columns as Table II (mean +- population std over the trials; Rate = ``sph_success``), then the
 worst inter-robot and robot-obstacle distances, ``contact`` (trials with two robots closer than
 0.4 m or a robot closer than 0.2 m to an obstacle), ``late`` (no contact, but a robot not within
-3 m of the goal at 90 s), the fallbacks per trial, and the planning time per robot per replan
-(wall clock, one core: the median over trials of each trial's median and 95th percentile).
+3 m of the goal at 90 s), the fallbacks per trial, the planning time per robot per replan
+(wall clock, one core: the median over trials of each trial's median and 95th percentile), and
+the jerk energy over the trials without contact (a contact stops the robot in one step, and that
+stop alone adds ~1e5 m^2/s^5 to its jerk integral).
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ def table(dirs: list[Path]) -> None:
     rs = rows(dirs)
     head = " ".join(f"{h:>14}" for _, h in COLS)
     print(f"{'d_obs':>6} {'runs':>4} {head} {'min r-r':>7} {'min r-o':>7} {'contact':>7} {'late':>4} "
-          f"{'fallb.':>6} {'plan ms med':>11} {'p95':>5}")
+          f"{'fallb.':>6} {'plan ms med':>11} {'p95':>5} {'Eng no-contact':>14}")
     for dens in sorted({r["density"] for r in rs}):
         mine = [r for r in rs if r["density"] == dens]
         cells = []
@@ -69,7 +71,8 @@ def table(dirs: list[Path]) -> None:
         print(f"{dens:>6g} {len(mine):>4} " + " ".join(f"{c:>14}" for c in cells)
               + f" {min(r['min_inter_robot_distance'] for r in mine):>7.2f}"
               + f" {min(r['min_robot_obstacle_distance'] for r in mine):>7.2f} {sum(hit):>7} {late:>4}"
-              + f" {np.mean([r['ego_fallbacks'] for r in mine]):>6.0f} {med:>11.1f} {p95:>5.1f}")
+              + f" {np.mean([r['ego_fallbacks'] for r in mine]):>6.0f} {med:>11.1f} {p95:>5.1f}"
+              + f" {np.mean([r['jerk_energy'] for r, h in zip(mine, hit) if not h] or [np.nan]):>14.3g}")
         if dens in PAPER:
             print(f"{'paper':>6} {'20':>4} " + " ".join(f"{c:>14}" for c in PAPER[dens]))
 
