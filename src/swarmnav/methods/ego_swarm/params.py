@@ -26,7 +26,7 @@ class EgoSwarmParams:
     a_max: float = param(1.5, "m/s^2", "(0, inf)", "shared (SPH Table I; launch max_acc)",
                          "acceleration bound of the vehicle and of the planner")
     dt: float = param(0.02, "s", "[0.001, 0.1]", "ours",
-                      "control step: 50 Hz, the rate the authors' trajectory server sends position commands")
+                      "control step: 50 Hz, as SPH's released code; plans change at most every check_period")
     k_p: float = param(5.0, "1/s^2", "[0, inf)", "shared (SPH eq. 13, Table I)",
                        "position gain of the PD tracking law (the authors fly an SO(3) controller)")
     k_v: float = param(3.5, "1/s", "[0, inf)", "shared (SPH eq. 13, Table I)", "velocity gain of the tracking law")
