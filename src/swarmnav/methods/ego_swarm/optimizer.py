@@ -5,8 +5,8 @@ minimise (EGO-Planner eq. 2, EGO-Swarm eq. 3)
 
     J = lambda_s J_s + lambda_c J_c + lambda_f J_f + lambda_w J_w   [+ lambda_fit J_fit]
 
-- ``J_s = sum |Q_{i+3} - 3 Q_{i+2} + 3 Q_{i+1} - Q_i|^2``: jerk of the control points (the
-  released code's smoothness term; the paper adds the acceleration's, small at these spacings);
+- ``J_s = sum |Q_{i+3} - 3 Q_{i+2} + 3 Q_{i+1} - Q_i|^2``: jerk of the control points (our
+  choice; the paper adds the acceleration's);
 - ``J_c``: the ESDF-free ``{p, v}`` cost (:mod:`swarmnav.planning.esdf_free`);
 - ``J_f = sum_axes max(|V| - v_max, 0)^2 + max(|A| - a_max, 0)^2`` over the control-point
   velocities ``V_i = (Q_{i+1} - Q_i) / dt`` and accelerations ``A_i = (V_{i+1} - V_i) / dt``;
