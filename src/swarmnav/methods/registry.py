@@ -37,6 +37,7 @@ _BUILTIN_MODULES = (
     "swarmnav.methods.apf",
     "swarmnav.methods.hes",
     "swarmnav.methods.vicsek",
+    "swarmnav.methods.ego_swarm",
 )
 
 
