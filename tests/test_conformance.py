@@ -12,7 +12,8 @@ from swarmnav.methods import registry
 from swarmnav.world.scenario import builtin_names
 
 STEPS = 40
-MIN_TIME = 0.8  # [s]: a fast controller (SPH at 100 Hz) gets enough steps to show it moves
+MIN_TIME = 1.2  # [s]: a fast controller (SPH at 100 Hz) gets enough steps to show it moves, and a
+#                 planner starting from rest (EGO-Swarm's jerk-minimal start: 0.09 m in 0.8 s) time to get going
 
 
 def _steps(method: str) -> int:

@@ -137,12 +137,12 @@ def test_swarm_reaches_the_goal_around_a_pillar_without_contact(dim):
 
 
 def test_periodic_world_refused_with_one_line(tmp_path):
-    with pytest.raises(swarmnav.ConfigError, match="ego-swarm: a periodic world"):
+    with pytest.raises(swarmnav.ConfigError, match="ego-swarm cannot fly a periodic world"):
         swarmnav.run("ego-swarm", "periodic_box:n=10,rho=1.0", seed=1, steps=5)
     out = run_cli("run", "--method", "ego-swarm", "--scenario", "periodic_box:n=10,rho=1.0", "--steps", "5",
                   "--out", tmp_path / "run")
     assert out.returncode == 2
-    assert "ego-swarm: a periodic world" in out.stderr and "Traceback" not in out.stderr
+    assert "ego-swarm cannot fly a periodic world" in out.stderr and "Traceback" not in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1
 
 
