@@ -224,11 +224,11 @@ def test_same_step_autoreset_returns_the_new_start_and_keeps_the_last_observatio
 
 
 # ------------------------------------------------------------------ baselines and evaluate
-@pytest.mark.parametrize("method, steps", [("apf", 1000), ("hes", 150)])
-def test_a_baseline_in_the_env_reproduces_swarmnav_run(method, steps):
+@pytest.mark.parametrize("method, horizon", [("apf", 100.0), ("hes", 15.0), ("ego-swarm", 6.0)])
+def test_a_baseline_in_the_env_reproduces_swarmnav_run(method, horizon):
     # the method's dt and dynamics, nobody terminated at the goal: the env is the rollout
-    res = E.evaluate(method, "default_corridor", [1], horizon=steps * 0.1, terminate_at_goal=False)[0]
-    ref = swarmnav.run(method, "default_corridor", seed=1, steps=steps)
+    res = E.evaluate(method, "default_corridor", [1], horizon=horizon, terminate_at_goal=False)[0]
+    ref = swarmnav.run(method, "default_corridor", seed=1, horizon=horizon)
     assert res.positions.shape == ref.positions.shape
     # equal up to the division and multiplication by a_max of the normalised action
     np.testing.assert_allclose(res.positions, ref.positions, atol=1e-8)

@@ -5,7 +5,7 @@
   (:class:`SwarmEnv`), registered when this module is imported; its vector form
   :class:`SwarmVectorEnv` (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
   steps B copies as one array call;
-- :func:`baseline_policy`: HES, SPH and APF as policies (privileged path), :func:`random_policy`;
+- :func:`baseline_policy`: HES, SPH, APF and the Table II peers as policies (privileged path), :func:`random_policy`;
 - :func:`evaluate`: any policy over seeds, scored with the simulator's metrics.
 
 Options (:class:`EnvOptions`) are checked like method parameters: an unknown name or a value

@@ -35,7 +35,7 @@ from swarmnav.sim.result import RunResult
 from swarmnav.world.scenario import Scenario
 
 #: The methods :func:`baseline_policy` knows.
-BASELINES = ("hes", "sph", "apf")
+BASELINES = ("hes", "sph", "apf", "ego-swarm")
 
 
 def method_options(name: str, **params: Any) -> dict[str, Any]:
@@ -124,7 +124,7 @@ class BaselinePolicy:
 
 
 def baseline_policy(name: str, env: SwarmParallelEnv, **params: Any) -> BaselinePolicy:
-    """HES, SPH or APF (``name``) as a policy of ``env`` (privileged path: see the module
+    """HES, SPH, APF or a Table II peer (``name``, one of :data:`BASELINES`) as a policy of ``env`` (privileged path: see the module
     docstring). ``env`` must have the method's step and dynamics (:func:`method_options`);
     ``**params`` are the method's parameters (``swarmnav methods NAME``)."""
     return BaselinePolicy(name, env, **params)
