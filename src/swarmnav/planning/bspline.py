@@ -18,6 +18,8 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
+from swarmnav.planning.lbfgs import direction as lbfgs_direction
+
 from swarmnav.sensing.esdf import Esdf, esdf3d_query_kernel, esdf_query_kernel
 
 #: Uniform cubic B-spline basis: position on segment s at local u in [0, 1) is
@@ -295,20 +297,7 @@ def _lbfgs_spline(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, or
         if gmax <= 1e-9:
             break
         it += 1
-        q = g.copy()
-        for c in range(count):  # newest first
-            idx = (head - 1 - c) % mem
-            alpha[idx] = rho[idx] * np.dot(S[idx], q)
-            q -= alpha[idx] * Y[idx]
-        if count > 0:
-            last = (head - 1) % mem
-            q *= 1.0 / (rho[last] * np.dot(Y[last], Y[last]))
-        else:
-            q *= min(1.0, 1.0 / max(np.sqrt(np.dot(g, g)), 1e-12))  # first step at most 1 m
-        for c in range(count - 1, -1, -1):  # oldest first
-            idx = (head - 1 - c) % mem
-            b = rho[idx] * np.dot(Y[idx], q)
-            q += (alpha[idx] - b) * S[idx]
+        q = lbfgs_direction(g, S, Y, rho, alpha, head, count, mem, 1.0)  # first step at most 1.0 m
         slope = -np.dot(g, q)
         if slope >= 0.0:  # not a descent direction: restart from steepest descent
             count = 0

@@ -35,6 +35,7 @@ from scipy.optimize import minimize
 
 from swarmnav.planning.bspline import boundary_points, evaluate
 from swarmnav.planning.esdf_free import colliding_runs, find_pairs, occupied, pair_cost, points_occupied, polygon_hits
+from swarmnav.planning.lbfgs import direction as lbfgs_direction
 
 
 #: the solver of :func:`_solve`: "lbfgs" (compiled, default) or "scipy" (L-BFGS-B)
@@ -265,20 +266,7 @@ def _lbfgs(ctrl, lo, hi, dt, lam_s, lam_c, lam_f, lam_w, lam_fit, sf, cw, v_max,
         if gmax <= g_tol:
             break
         it += 1
-        q = g.copy()
-        for c in range(count):
-            idx = (head - 1 - c) % mem
-            alpha[idx] = rho[idx] * np.dot(S[idx], q)
-            q -= alpha[idx] * Y[idx]
-        if count > 0:
-            last = (head - 1) % mem
-            q *= 1.0 / (rho[last] * np.dot(Y[last], Y[last]))
-        else:
-            q *= min(1.0, 0.5 / max(np.sqrt(np.dot(g, g)), 1e-12))  # first step at most 0.5 m
-        for c in range(count - 1, -1, -1):
-            idx = (head - 1 - c) % mem
-            b = rho[idx] * np.dot(Y[idx], q)
-            q += (alpha[idx] - b) * S[idx]
+        q = lbfgs_direction(g, S, Y, rho, alpha, head, count, mem, 0.5)  # first step at most 0.5 m
         slope = -np.dot(g, q)
         if slope >= 0.0:
             count = 0
