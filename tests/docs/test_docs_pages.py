@@ -31,9 +31,9 @@ def _rel(p: Path) -> str:
 
 
 def _slug(heading: str) -> str:
-    """GitHub's anchor for a heading: lower case, markup and punctuation dropped, spaces to '-'."""
-    text = re.sub(r"[`*_]", "", heading.strip().lower())
-    text = "".join(c for c in text if c in " -" or unicodedata.category(c)[0] in "LN")
+    """GitHub's anchor for a heading: lower case, backticks, emphasis and punctuation but - and _ dropped, spaces to -."""
+    text = re.sub(r"[`*]", "", heading.strip().lower())
+    text = "".join(c for c in text if c in " -_" or unicodedata.category(c)[0] in "LN")
     return text.replace(" ", "-")
 
 
@@ -98,3 +98,4 @@ def test_the_checks_can_fail(tmp_path: Path) -> None:
     assert _links(page) == ["missing.md", "#nope"]
     assert "the-referee-closed-worlds-crashes-success" in _anchors(page)
     assert _slug("Table II's peers, flown (`sph-table2`)") == "table-iis-peers-flown-sph-table2"
+    assert _slug("Fig. 3 (B) — the narrow passage (`sph_narrow`)") == "fig-3-b--the-narrow-passage-sph_narrow"
