@@ -6,8 +6,9 @@ step, against swarm size (issue 6: median planning time well under T_p = 0.2 s).
 
 Planning = map update + grid search + L-BFGS spline optimisation + sampling of one robot's
 trajectory; coordination = visibility raycasts + SPH forces + ESDF force for the whole swarm.
-Wall-clock figures depend on the machine and its load; the numbers in docs/methods/sph.md were
-measured on the shared 2-core development machine while other jobs ran.
+Wall-clock figures depend on the machine and its load; the numbers of docs/history/sph.md
+(*Table II under the first defaults*, Speed) were measured on the shared 2-core development machine
+while other jobs ran.
 """
 
 from __future__ import annotations

@@ -7,7 +7,8 @@ clearance >= w / 2 from every disc and both walls joins x = -1 m to x = 13 m (0.
 4-connected; bisection to 0.05 m). Two robots pass a corridor abreast with neither inside the
 ESDF band and no contact only if it is at least 2 d_thr + 2 body radii = 1.4 m wide; below that
 the swarm must cross in single file, and a robot beside another in the gap is pressed into it by
-the environment force (docs/methods/sph.md, *Why 0.45 falls short*).
+the environment force (docs/methods/sph.md, *Why the densest forests fall short*; the table this prints:
+docs/reproduction/sph.md, *The forests*).
 """
 
 from __future__ import annotations

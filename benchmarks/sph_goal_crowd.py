@@ -11,7 +11,7 @@ Why it matters: the repulsion of Algorithm 1 (line 9, k_rep sum q_ij / |q_ij|^2)
 cut-off inside R = 20 m, so the robots already gathered push a late one out with about
 (robots gathered) x k_rep / (crowd radius) m/s^2, against a pull that does not grow with N. The
 disc that holds the crowd grows with N faster than sqrt(N): a fixed 3 m disc holds 15 robots,
-not 30 (docs/methods/sph.md, *Final approach*).
+not 30 (docs/methods/sph.md, *Final approach and band guard*).
 """
 
 from __future__ import annotations

@@ -388,7 +388,7 @@ def hwvem_mission_family(tiny_offset: float = 1.45, rect_offset: float = 1.3, pa
 
     One layout, four free numbers (the defaults are ``hwvem_mission``, laid out from the paper's
     figure and text; ``hwvem_mission_fitted`` is the option ``rect_offset = 0.6``, fitted to the
-    paper's baselines, see docs/methods/vicsek.md). Along a 70 m path (at ``turn_scale = 1``) the swarm meets two tiny
+    paper's baselines, see docs/history/vicsek.md). Along a 70 m path (at ``turn_scale = 1``) the swarm meets two tiny
     circles (r = 0.25 m), a 6 m passage with funnel entrance faces, a huge circle (r = 3 m) and
     a diamond either side of the high leg, a triangle above the descending leg, a rectangle
     (2 m x 1 m) and a small circle either side of the low leg, and a triangle-diamond passage
