@@ -29,3 +29,16 @@ def test_experiment_summary_of_a_periodic_sweep_leaves_out_goal_metrics(tmp_path
     row = next(line for line in p.stdout.splitlines() if line.strip().startswith("default"))
     assert "k_con_mean=" in row and "converged_mean=" in row
     assert "R_unsafe" not in row and "Y_mean" not in row
+
+
+def test_experiment_summary_shows_the_sph_success_test_only_for_an_sph_table(tmp_path):
+    """HES's own tables have no use for the SPH paper's success test; a spec that names an SPH
+    table shows it, whichever method flies."""
+    for name, ref, shown in (("hes-like", "hes.table2", False), ("peer", "sph.table2", True)):
+        spec = tmp_path / f"{name}.toml"
+        spec.write_text(f'name = "{name}"\nmethod = "apf"\nscenario = "default_corridor"\nsteps = 5\nseeds = "1"\n'
+                        f'[report]\nreference = "{ref}"\n')
+        p = run_cli("experiment", spec, "--out", tmp_path / name, "--quiet")
+        assert p.returncode == 0, p.stderr
+        row = next(line for line in p.stdout.splitlines() if line.strip().startswith("default"))
+        assert "Y_mean=" in row and ("sph_success_mean=" in row) == shown
