@@ -27,7 +27,8 @@ ON_LINE = 3.0
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     out = {}
-    for name, method, scene, steps in (("ego", "ego-swarm", FOREST, 300), ("apf", "apf", "default_corridor", 30)):
+    for name, method, scene, steps in (("ego", "ego-swarm", FOREST, 300), ("apf", "apf", "default_corridor", 30),
+                                       ("ego3d", "ego-swarm", "sph_cluttered_3d", 80)):
         d = tmp_path_factory.mktemp(name)
         run(method, scene, seed=1, steps=steps).save(d)
         assert main(["view", str(d)]) == 0
@@ -118,6 +119,20 @@ def test_plans_pixels_lie_on_the_lines_when_on_and_vanish_when_off(runs, browser
     browser.eval("document.getElementById('plans').click()")
     again = _shot(browser, tmp_path / "again.png")
     assert np.array_equal(again, on)
+    assert browser.errors == []
+
+
+def test_a_3d_runs_plans_are_drawn_in_3d(runs, browser):
+    res = RunResult.load(runs["ego3d"])
+    _open(browser, runs["ego3d"])
+    assert browser.eval("swarmnav.view()") == "persp"
+    k, err = 60, browser.eval("swarmnav.data.quant.error")
+    browser.eval(f"swarmnav.seek({k})")
+    drawn = browser.eval("swarmnav.plans()")
+    for r, j in enumerate(res.plans.latest(k, res.positions.shape[1])):
+        pts, _ = res.plans.trajectory(j)
+        assert len(drawn[r][-1]) == 3 and np.linalg.norm(np.array(drawn[r][-1]) - pts[-1]) <= err + 1e-5
+    assert np.ptp(res.plans.points[:, 2]) > 0.1  # the plans do climb and sink: z is drawn, not assumed
     assert browser.errors == []
 
 
