@@ -118,10 +118,11 @@ class RunResult:
             raise SwarmnavError(f"{d}: trajectory.npz arrays disagree in shape (positions {P.shape}, velocities "
                                 f"{arrays['velocities'].shape}, clearance {arrays['clearance'].shape}, labels "
                                 f"{arrays['labels'].shape})")
-        plans = {k.removeprefix(PLAN_PREFIX): arrays.pop(k) for k in list(arrays) if k.startswith(PLAN_PREFIX)}
-        if plans:
+        stored = {k.removeprefix(PLAN_PREFIX): arrays.pop(k) for k in list(arrays) if k.startswith(PLAN_PREFIX)}
+        plans = None  # a run directory without plan arrays: a method without the hook, or an older run
+        if stored:
             try:
-                plans = Plans.from_arrays(plans, n=P.shape[1], dim=P.shape[2])
+                plans = Plans.from_arrays(stored, n=P.shape[1], dim=P.shape[2])
             except ValueError as e:
                 raise SwarmnavError(f"{d}: trajectory.npz has damaged plans: {e}") from None
         events = []
@@ -129,10 +130,10 @@ class RunResult:
         if ev.exists():
             events = [json.loads(line) for line in ev.read_text().splitlines() if line.strip()]
         wall = float(metrics.pop("wall_time_s", 0.0))
-        return cls(config=config, events=events, metrics=metrics, wall_time=wall, plans=plans or None, **arrays)
+        return cls(config=config, events=events, metrics=metrics, wall_time=wall, plans=plans, **arrays)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, slots=True, eq=False)
 class Plans:
     """Every trajectory a method committed in a run, in commit order (the ``plans()`` hook,
     docs/methods/contract.md). Plan j was committed by robot ``robot[j]`` at control step

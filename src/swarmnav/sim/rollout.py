@@ -23,11 +23,11 @@ from swarmnav.world.catalog import load_scenario
 from swarmnav.world.scenario import Rules, Scenario
 
 
+#: The run options that override the scene's referee settings (``world.boundary``, ``[rules]``).
+SCENE_OPTIONS = ("boundary", "contact", "goal_radius", "d_safe", "body_radius")
 #: Options of the run itself, accepted by :func:`run` beside the method's parameters (and by
 #: ``--set`` on the command line and in experiment specs).
-RUN_OPTIONS = ("z_fly", "boundary", "contact", "goal_radius", "d_safe", "body_radius", "plans")
-#: The run options that override the scene's referee settings (``world.boundary``, ``[rules]``).
-SCENE_OPTIONS = RUN_OPTIONS[1:6]
+RUN_OPTIONS = ("z_fly", *SCENE_OPTIONS, "plans")
 
 
 def run(
