@@ -174,7 +174,9 @@ def _print_params(spec, out) -> None:
         planar = " (a 3-D scene is flown in its horizontal slice at z_fly)" if tuple(dims) == (2,) else ""
         print(f"worlds: {' and '.join(f'{d}-D' for d in dims)}{planar}", file=out)
     print("run options (--set): n = swarm size [-]" + (", z_fly = altitude of the slice flown in a 3-D scene [m]"
-                                                      if tuple(dims) == (2,) else ""), file=out)
+                                                      if tuple(dims) == (2,) else "")
+          + (", plans = false keeps no committed trajectories (docs/methods/contract.md)"
+             if callable(getattr(spec.factory, "plans", None)) else ""), file=out)
     table = presets(spec.params)
     if table:
         print("presets (--set preset=NAME):", file=out)

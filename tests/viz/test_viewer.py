@@ -186,3 +186,30 @@ def test_a_scene_path_travels_with_the_page(tmp_path):
     run("hwvem", "hwvem_mission", seed=1, steps=5).save(d)
     assert main(["view", str(d)]) == 0
     assert page_data(d / "viewer.html")["path"] == [list(map(float, p)) for p in load_scenario("hwvem_mission").path]
+
+
+def test_committed_plans_travel_in_the_page_within_the_stated_error(tmp_path):
+    """A planner's plans (EGO-Swarm) are in the page: their steps, robots and offsets exactly,
+    points within the page's stated position error, times to 1 ms; a run without plans (HES)
+    carries none."""
+    from swarmnav.sim import RunResult
+
+    d = tmp_path / "ego"
+    run("ego-swarm", "random_forest:density=0.25,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0",
+        seed=1, steps=150).save(d)
+    assert main(["view", str(d)]) == 0
+    data, res = page_data(d / "viewer.html"), RunResult.load(d)
+    pl, a, q = res.plans, data["arrays"], data["quant"]
+    assert data["plans"] == {"count": len(pl), "points": len(pl.points)}
+    for key in ("step", "robot", "offsets"):
+        np.testing.assert_array_equal(decode(a[f"plan_{key}"]), getattr(pl, key))
+    lo, hi = np.array(q["lo"]), np.array(q["hi"])
+    pts = lo + decode(a["plan_points"]) * (hi - lo) / LEVELS
+    assert np.linalg.norm(pts - pl.points, axis=1).max() <= q["error"] + 1e-5  # float32 points
+    t = decode(a["plan_tau"]) + np.repeat(pl.step * res.config["dt"], np.diff(pl.offsets))
+    assert np.abs(t - pl.times).max() <= 5e-4 + 1e-5
+    hes = tmp_path / "hes"
+    run("hes", "default_corridor", seed=1, steps=5).save(hes)
+    main(["view", str(hes)])
+    data = page_data(hes / "viewer.html")
+    assert data["plans"] is None and not [k for k in data["arrays"] if k.startswith("plan_")]

@@ -12,6 +12,11 @@ dynamics model and an ``info`` dict. Metrics-only data goes in ``info``:
 ``summary()`` returns method-specific run metrics (floats) merged into ``RunResult.metrics``.
 An optional ``artifacts()`` returns extra files of the run, ``{file name: str | bytes}``, kept
 in ``RunResult.artifacts`` and written into the run directory (e.g. an LLM transcript).
+An optional ``timings()`` returns wall-clock figures (``RunResult.timings``, never metrics). An
+optional ``plans()`` returns the trajectories the method committed, as flat arrays ``step``
+(P,), ``robot`` (P,), ``offsets`` (P + 1,), ``points`` (M, d) [m] and ``times`` (M,) [s]
+(``swarmnav.planning.plan_log.PlanLog`` builds them), kept in ``RunResult.plans`` and drawn by
+the replay viewer. docs/methods/contract.md states the whole contract.
 """
 
 from __future__ import annotations

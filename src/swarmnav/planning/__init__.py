@@ -10,6 +10,8 @@
 - :mod:`~swarmnav.planning.messages`: what the robots broadcast (positions, trajectories), each
   message counted with its size in bytes, so the ``comm_mbps`` metric is measured from the
   messages a planner actually sent.
+- :mod:`~swarmnav.planning.plan_log`: the trajectories a planner committed, sampled for replay
+  (what its optional ``plans()`` hook returns).
 
 A planner is its paper's cost terms and decisions on top of these parts.
 """

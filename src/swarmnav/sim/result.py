@@ -35,6 +35,9 @@ class RunResult:
             ``artifacts()`` hook (e.g. ``llm_transcript.jsonl``); written by ``save``.
         timings: wall-clock figures from the method's optional ``timings()`` hook (e.g.
             planning time per replan [ms]); not reproducible, so kept out of ``metrics``.
+        plans: the trajectories the method committed, from its optional ``plans()`` hook
+            (:class:`Plans`); None for a method without the hook or a run with ``plans=False``,
+            and then not saved.
     """
 
     config: dict[str, Any]
@@ -48,6 +51,7 @@ class RunResult:
     wall_time: float = 0.0
     artifacts: dict[str, str | bytes] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
+    plans: Plans | None = None
 
     @property
     def n_subswarms(self) -> np.ndarray:
@@ -77,6 +81,8 @@ class RunResult:
             if (d / name).exists() and not (d / name).is_file():
                 raise SwarmnavError(f"cannot write {d / name}: a directory (or other non-file) is in the way")
         extra = {} if self.roles is None else {"roles": self.roles}  # a run without roles keeps its old file
+        if self.plans is not None:  # likewise a run without plans
+            extra.update({PLAN_PREFIX + k: v for k, v in self.plans.arrays().items()})
         _atomic(d / "trajectory.npz", lambda f: np.savez_compressed(
             f, positions=self.positions, velocities=self.velocities, clearance=self.clearance,
             labels=self.labels, **extra))
@@ -112,16 +118,108 @@ class RunResult:
             raise SwarmnavError(f"{d}: trajectory.npz arrays disagree in shape (positions {P.shape}, velocities "
                                 f"{arrays['velocities'].shape}, clearance {arrays['clearance'].shape}, labels "
                                 f"{arrays['labels'].shape})")
+        stored = {k.removeprefix(PLAN_PREFIX): arrays.pop(k) for k in list(arrays) if k.startswith(PLAN_PREFIX)}
+        plans = None  # a run directory without plan arrays: a method without the hook, or an older run
+        if stored:
+            try:
+                plans = Plans.from_arrays(stored, n=P.shape[1], dim=P.shape[2])
+            except ValueError as e:
+                raise SwarmnavError(f"{d}: trajectory.npz has damaged plans: {e}") from None
         events = []
         ev = d / "events.jsonl"
         if ev.exists():
             events = [json.loads(line) for line in ev.read_text().splitlines() if line.strip()]
         wall = float(metrics.pop("wall_time_s", 0.0))
-        return cls(config=config, events=events, metrics=metrics, wall_time=wall, **arrays)
+        return cls(config=config, events=events, metrics=metrics, wall_time=wall, plans=plans, **arrays)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Plans:
+    """Every trajectory a method committed in a run, in commit order (the ``plans()`` hook,
+    docs/methods/contract.md). Plan j was committed by robot ``robot[j]`` at control step
+    ``step[j]`` and passes through ``points[offsets[j]:offsets[j + 1]]`` at run times
+    ``times[offsets[j]:offsets[j + 1]]``.
+
+    Attributes:
+        step: (P,) int32 control step of each commit (non-decreasing).
+        robot: (P,) int32 index of the robot that committed it.
+        offsets: (P + 1,) int64, 0 first and M last, non-decreasing.
+        points: (M, d) float32 sampled positions [m], d the run's dimension.
+        times: (M,) float32 run time of each sample [s].
+    """
+
+    step: np.ndarray
+    robot: np.ndarray
+    offsets: np.ndarray
+    points: np.ndarray
+    times: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.step)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes the five arrays take in memory (and, uncompressed, in ``trajectory.npz``)."""
+        return sum(a.nbytes for a in self.arrays().values())
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {"step": self.step, "robot": self.robot, "offsets": self.offsets, "points": self.points,
+                "times": self.times}
+
+    def trajectory(self, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Plan ``j``'s points (L, d) [m] and times (L,) [s]."""
+        a, b = self.offsets[j], self.offsets[j + 1]
+        return self.points[a:b], self.times[a:b]
+
+    def latest(self, step: int, n: int) -> np.ndarray:
+        """(n,) index of each robot's latest plan committed at or before ``step`` (-1: none yet)."""
+        out = np.full(n, -1, dtype=np.int64)
+        j = np.flatnonzero(self.step <= step)
+        out[self.robot[j]] = j  # commit order: a later plan of a robot overwrites an earlier one
+        return out
+
+    @classmethod
+    def from_arrays(cls, a: dict[str, Any], n: int, dim: int, lift: float | None = None) -> Plans:
+        """Checked, typed plans from the hook's arrays (``lift``: the altitude [m] at which a
+        planar method's 2-D points are placed in a 3-D run). Raises ValueError naming the fault."""
+        missing = sorted({"step", "robot", "offsets", "points", "times"} - set(a))
+        extra = sorted(set(a) - {"step", "robot", "offsets", "points", "times"})
+        if missing or extra:
+            raise ValueError(f"plans need step, robot, offsets, points and times (missing {missing}, unknown {extra})")
+        step, robot, off = (_integers(a[k], t, k) for k, t in (("step", np.int32), ("robot", np.int32),
+                                                                ("offsets", np.int64)))
+        pts = np.asarray(a["points"], dtype=np.float32)
+        times = np.asarray(a["times"], dtype=np.float32).reshape(-1)
+        if lift is not None and pts.ndim == 2 and pts.shape[1] == 2 and dim == 3:
+            pts = np.column_stack([pts, np.full(len(pts), lift, dtype=np.float32)])
+        P = len(step)
+        if len(robot) != P or len(off) != P + 1:
+            raise ValueError(f"{P} steps, {len(robot)} robots and {len(off)} offsets (want {P + 1})")
+        if pts.ndim != 2 or pts.shape[1] != dim or len(times) != len(pts):
+            raise ValueError(f"points {pts.shape} and times {times.shape} must be (M, {dim}) and (M,)")
+        if off[0] != 0 or off[-1] != len(pts) or np.any(np.diff(off) < 0):
+            raise ValueError(f"offsets must rise from 0 to {len(pts)}")
+        if P and (robot.min() < 0 or robot.max() >= n or step.min() < 0 or np.any(np.diff(step) < 0)):
+            raise ValueError(f"robots must lie in 0..{n - 1} and steps rise from 0")
+        if not (np.isfinite(pts).all() and np.isfinite(times).all()):
+            raise ValueError("points and times must be finite")
+        return cls(step, robot, off, pts, times)
+
+
+#: Prefix of the plans' arrays in ``trajectory.npz`` (``plan_step``, ``plan_points``, ...).
+PLAN_PREFIX = "plan_"
 
 
 #: The files :meth:`RunResult.save` always writes (artifacts come on top, under their own names).
 RUN_FILES = ("metrics.json", "trajectory.npz", "config.json", "events.jsonl")
+
+
+def _integers(x: Any, dtype, name: str) -> np.ndarray:
+    """``x`` as a flat array of ``dtype``; ValueError unless it holds integers that fit."""
+    a = np.asarray(x).reshape(-1)
+    if a.size and (a.dtype.kind not in "iu" or a.min() < np.iinfo(dtype).min or a.max() > np.iinfo(dtype).max):
+        raise ValueError(f"{name} must be integers of {np.dtype(dtype).name}, got {a.dtype.name}")
+    return a.astype(dtype)
 
 
 def _atomic(path: Path, write) -> None:

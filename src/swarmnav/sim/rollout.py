@@ -14,20 +14,20 @@ from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
 from swarmnav.metrics.flight import FlightParams, flight_metrics
 from swarmnav.metrics.navigation import MetricParams, goal_reached, navigation_metrics
-from swarmnav.params import as_dict
+from swarmnav.params import as_dict, coerce
 from swarmnav.portable import numerics
 from swarmnav.sensing import PreparedGeometry
 from swarmnav.sim.referee import Referee
-from swarmnav.sim.result import RunResult
+from swarmnav.sim.result import Plans, RunResult
 from swarmnav.world.catalog import load_scenario
 from swarmnav.world.scenario import Rules, Scenario
 
 
+#: The run options that override the scene's referee settings (``world.boundary``, ``[rules]``).
+SCENE_OPTIONS = ("boundary", "contact", "goal_radius", "d_safe", "body_radius")
 #: Options of the run itself, accepted by :func:`run` beside the method's parameters (and by
 #: ``--set`` on the command line and in experiment specs).
-RUN_OPTIONS = ("z_fly", "boundary", "contact", "goal_radius", "d_safe", "body_radius")
-#: The run options that override the scene's referee settings (``world.boundary``, ``[rules]``).
-SCENE_OPTIONS = RUN_OPTIONS[1:]
+RUN_OPTIONS = ("z_fly", *SCENE_OPTIONS, "plans")
 
 
 def run(
@@ -44,6 +44,7 @@ def run(
     goal_radius: float | None = None,
     d_safe: float | None = None,
     body_radius: float | None = None,
+    plans: bool | str = True,
     **params: Any,
 ) -> RunResult:
     """Simulate ``method`` on ``scenario`` for ``steps`` steps from a seeded start.
@@ -68,6 +69,9 @@ def run(
             spawn box's z range); an error anywhere else.
         boundary, contact, goal_radius, d_safe, body_radius: override the scene's
             ``world.boundary`` and ``[rules]`` (docs/scenarios.md); None keeps the scene's.
+        plans: keep the trajectories a planner committed (its optional ``plans()`` hook,
+            docs/methods/contract.md) in ``RunResult.plans``; False (or ``"false"``) keeps
+            none. Either way the run flies the same.
         **params: method parameters (unknown names raise ConfigError).
 
     The same (method, params, scene, seed, steps) always gives identical arrays.
@@ -75,6 +79,7 @@ def run(
     scn = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
     scn = with_rules(scn, boundary=boundary, contact=contact, goal_radius=goal_radius, d_safe=d_safe,
                      body_radius=body_radius)
+    keep_plans = coerce(plans, bool, "plans")
     m = registry.make(method, **params) if isinstance(method, str) else method
     if (steps is None) == (horizon is None):
         raise ConfigError("give exactly one of steps or horizon")
@@ -221,6 +226,12 @@ def run(
     artifacts = getattr(m, "artifacts", None)  # optional hook: extra files of the run directory
     if callable(artifacts):
         result.artifacts = dict(artifacts())
+    hook = getattr(m, "plans", None)  # optional hook: the trajectories the method committed
+    if keep_plans and callable(hook):
+        try:
+            result.plans = Plans.from_arrays(hook(), n=N, dim=d, lift=plane_z)
+        except ValueError as e:  # a method's defect, not the user's input
+            raise ValueError(f"{m.name}.plans() broke its contract (docs/methods/contract.md): {e}") from None
     return result
 
 

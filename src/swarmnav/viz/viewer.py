@@ -5,7 +5,8 @@ vendored under ``viz/vendor/three``); nothing is fetched when it is opened, so i
 offline from any folder. It shows the run top-down (a 2-D canvas) or in perspective
 (three.js with OrbitControls: a 3-D run's obstacles as solids; a planar run at the fixed
 altitude of HES Appendix A, Figure A1), with play / pause, speed, a timeline with the
-structural events, and a strip chart of minimum clearance and sub-swarm count.
+structural events, a strip chart of minimum clearance and sub-swarm count and, when the run
+recorded them (``RunResult.plans``), each robot's committed plan ahead of it.
 
 Data are kept small: positions and velocities are quantised to 16 bits per axis against the
 run's own box (:func:`quantise`; the largest error is half a step, :func:`quantisation_error`),
@@ -106,8 +107,13 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
     K, N, d = P.shape[0] - 1, P.shape[1], P.shape[2]
     if not np.isfinite(P).all():
         raise SwarmnavError("positions are not all finite; nothing to replay")
+    plans = getattr(result, "plans", None)
+    plans = plans if plans is not None and len(plans) else None
     lo = np.minimum(scn.lower[:d], P.reshape(-1, d).min(axis=0))
     hi = np.maximum(scn.upper[:d], P.reshape(-1, d).max(axis=0))
+    if plans is not None and len(plans.points):  # a plan may leave the world: the box holds it too
+        lo = np.minimum(lo, plans.points.min(axis=0))
+        hi = np.maximum(hi, plans.points.max(axis=0))
     V = np.asarray(result.velocities, dtype=float)
     vmax = float(np.max(np.abs(V))) if V.size and np.isfinite(V).all() else 0.0
     vmax = vmax if vmax > 0 else 1.0
@@ -134,6 +140,13 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
     roles = getattr(result, "roles", None)
     if roles is not None:
         arrays["roles"] = _blob(np.asarray(roles, dtype=np.uint8))
+    if plans is not None:  # committed trajectories: points coded as the positions; times [s] as
+        # float32 from each plan's commit, to 1 ms (the same few values in every plan: they compress)
+        since = plans.times - np.repeat(plans.step * dt, np.diff(plans.offsets))
+        arrays |= {"plan_step": _blob(plans.step.astype("<u4")), "plan_robot": _blob(plans.robot.astype("<u4")),
+                   "plan_offsets": _blob(plans.offsets.astype("<u4")),
+                   "plan_points": _blob(quantise(plans.points.astype(float), lo, hi), delta=True),
+                   "plan_tau": _blob(np.round(since, 3).astype("<f4"))}
     plane = result.config.get("plane")
     return {
         "format": 1,
@@ -149,6 +162,7 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
         "palette": [f"#{int(r * 255):02x}{int(g * 255):02x}{int(b * 255):02x}" for r, g, b, _ in palette],
         "label_ids": ids.tolist(),
         "roles": list(ROLE_NAMES) if roles is not None else None,
+        "plans": None if plans is None else {"count": len(plans), "points": int(len(plans.points))},
         "d_safe": MetricParams().d_safe,
         "altitude": PLANAR_ALTITUDE if d == 2 else (plane or {}).get("z_fly"),
         "slab_height": SLAB_HEIGHT,

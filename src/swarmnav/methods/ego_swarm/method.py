@@ -42,6 +42,7 @@ from swarmnav.planning.bspline import SplinePlan, boundary_points
 from swarmnav.planning.esdf_free import occupied
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
+from swarmnav.planning.plan_log import PlanLog, sample_rows
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
 
@@ -139,6 +140,7 @@ class EgoSwarm:
                            failed_searches=0, astar_seeds=0, trig_obstacle=0, trig_swarm=0, trig_period=0, trig_end=0)
         self._plan_ms: list[float] = []
         self._steps = 0
+        self._log_plans = PlanLog(dim)
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.params
@@ -183,6 +185,11 @@ class EgoSwarm:
         t = np.array(self._plan_ms) if self._plan_ms else np.zeros(1)
         return {"plan_ms_median": float(np.median(t)), "plan_ms_p95": float(np.percentile(t, 95)),
                 "plan_ms_max": float(t.max())}
+
+    def plans(self) -> dict[str, np.ndarray]:
+        """Every committed plan (splines and emergency stops), sampled every 0.1 s
+        (:class:`~swarmnav.planning.plan_log.PlanLog`; docs/methods/contract.md)."""
+        return self._log_plans.arrays()
 
     # ------------------------------------------------------------------ the state machine
 
@@ -384,6 +391,8 @@ class EgoSwarm:
             self._A = pad(self._A, np.zeros_like(self._A[:, -1:]))
         q, vq, aq = plan.sample(self.dt * np.arange(length))
         self._Q[r, :length], self._V[r, :length], self._A[r, :length] = q, vq, aq
+        rows = sample_rows(length, self.dt)  # the reference just sampled, every 0.1 s of it
+        self._log_plans.add(k, r, t + self.dt * rows, q[rows])
         self._k0[r], self._len[r], self._t0[r] = k, length, t
         self._final[r] = final
         self._plans[r] = plan

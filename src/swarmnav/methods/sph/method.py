@@ -38,6 +38,7 @@ from swarmnav.params import build
 from swarmnav.planning.bspline import SplineCosts, evaluate, optimize
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import POSITION_BYTES, CommLog
+from swarmnav.planning.plan_log import PlanLog, sample_times
 from swarmnav.planning.schedule import ReplanSchedule
 from swarmnav.planning.tracker import References, track
 from swarmnav.sensing.esdf import Esdf, grid_nodes
@@ -141,6 +142,7 @@ class Sph:
         self._steps = 0
         self._plan_ms: list[float] = []
         self._coord_ms: list[float] = []
+        self._log_plans = PlanLog(scenario.dim)
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.params
@@ -237,6 +239,12 @@ class Sph:
             "coord_ms_median": float(np.median(coord)),
         }
 
+    def plans(self) -> dict[str, np.ndarray]:
+        """Every robot's spline of every replan, whole, sampled every 0.1 s
+        (:class:`~swarmnav.planning.plan_log.PlanLog`; docs/methods/contract.md). A robot flies
+        the first ``T_p`` of each before the next replan replaces it."""
+        return self._log_plans.arrays()
+
     # ------------------------------------------------------------------ planning
 
     def _reference(self, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -285,6 +293,9 @@ class Sph:
         else:
             length = self._schedule.every
         self.references.load([pl.sample for pl in plans], step, length, p.dt, dim)
+        for r, pl in enumerate(plans):
+            tau = sample_times(pl.duration)
+            self._log_plans.add(step, r, step * p.dt + tau, pl.sample(tau)[0])
         self._schedule.done(step)
         if not p.plan_once:
             self._hold[:] = 0.0  # the new reference starts at this step

@@ -12,11 +12,13 @@
   const TRAIL_SECONDS = 3, TRAIL_POINTS = 12, BANDS = [0.12, 0.25, 0.45, 0.7];
   const OBST_FACE = '#b3d9f2', OBST_EDGE = '#4d7ea8', GOAL = '#ffd400', SOLID = '#c5cad3', SOLID_EDGE = '#59606b';
   const PATH = '#9467bd';  // tab:purple, the figures' path colour
+  // committed plans: dashed lines in the agent's colour (dashes: ahead, against the trail behind)
+  const PLAN_WIDTH = 1.5, PLAN_ALPHA = 0.9, PLAN_DASH = [6, 3];  // [css px]
   const ROLE_NAMES = D.roles || null;
   const LARGE = N > 300;  // a large swarm: cheaper drawing (see buildScene)
 
   // ------------------------------------------------------------------ data
-  const TYPES = {uint8: Uint8Array, uint16: Uint16Array, float32: Float32Array};
+  const TYPES = {uint8: Uint8Array, uint16: Uint16Array, uint32: Uint32Array, float32: Float32Array};
   function bytes(s) {
     if (Uint8Array.fromBase64) return Uint8Array.fromBase64(s);
     const bin = atob(s), u = new Uint8Array(bin.length);
@@ -40,14 +42,53 @@
     return out;
   }
   let P, V, C, LAB, ROLE, MINC, NSUB;
+  // committed trajectories (D.plans, when the run recorded them): plan j of robot PL.robot[j],
+  // committed at step PL.step[j], is points PL.pts[off[j] .. off[j + 1]) at run times PL.t[...]
+  const PL = {byRobot: null, maxLen: 0};
   async function load() {
     const A = D.arrays, q = D.quant;
-    const [p, v, c, lab, minc, nsub, role] = await Promise.all(
-      ['positions', 'velocities', 'clearance', 'labels', 'min_clearance', 'n_subswarms', 'roles']
+    const [p, v, c, lab, minc, nsub, role, pstep, probot, poff, ppts, ptau] = await Promise.all(
+      ['positions', 'velocities', 'clearance', 'labels', 'min_clearance', 'n_subswarms', 'roles',
+       'plan_step', 'plan_robot', 'plan_offsets', 'plan_points', 'plan_tau']
         .map(k => A[k] ? decode(A[k]) : null));
     P = dequantise(p, q.lo, q.hi);
     V = dequantise(v, q.lo.map(() => -q.vmax), q.lo.map(() => q.vmax));
     C = c; LAB = lab; MINC = minc; NSUB = nsub; ROLE = role;
+    if (D.plans) {
+      const t = new Float64Array(ptau.length), lists = Array.from({length: N}, () => []);
+      for (let j = 0; j < pstep.length; j++) {
+        for (let r = poff[j]; r < poff[j + 1]; r++) t[r] = pstep[j] * DT + ptau[r];  // run time [s]
+        lists[probot[j]].push(j); PL.maxLen = Math.max(PL.maxLen, poff[j + 1] - poff[j] + 1);
+      }
+      Object.assign(PL, {step: pstep, robot: probot, off: poff, pts: dequantise(ppts, q.lo, q.hi), t});
+      PL.byRobot = lists.map(l => Int32Array.from(l));  // each in commit order: steps non-decreasing
+    }
+  }
+  /** Robot i's latest plan committed at or before step s (-1: none yet). */
+  function planAt(i, s) {
+    const l = PL.byRobot[i];
+    let a = 0, b = l.length;  // first entry committed after s
+    while (a < b) { const m = (a + b) >> 1; if (PL.step[l[m]] <= s) a = m + 1; else b = m; }
+    return a ? l[a - 1] : -1;
+  }
+  /** What is drawn of robot i's plan at step k: the plan from the current time to its end,
+   * [[x, y(, z)], ...] [m], the first point interpolated at t = k dt; null when the robot has
+   * no plan yet or its plan ended before t. */
+  function planAhead(i) {
+    const j = planAt(i, k);
+    if (j < 0) return null;
+    const a = PL.off[j], b = PL.off[j + 1], t = k * DT, T = PL.t, X = PL.pts;
+    let c = a;
+    while (c < b && T[c] < t) c++;
+    if (c === b) return null;
+    const pt = r => Array.from(X.subarray(r * DIM, r * DIM + DIM));
+    const out = [];
+    if (c > a && T[c] > T[c - 1]) {
+      const f = (t - T[c - 1]) / (T[c] - T[c - 1]), p0 = pt(c - 1), p1 = pt(c);
+      out.push(p0.map((x, d) => x + f * (p1[d] - x)));
+    }
+    for (let r = c; r < b; r++) out.push(pt(r));
+    return out;
   }
   const clearanceOf = (k, i) => {
     const code = C[k * N + i];
@@ -59,7 +100,7 @@
   const roleOf = (k, i) => ROLE ? ROLE_NAMES[ROLE[k * N + i]] : 'not recorded';
 
   // ------------------------------------------------------------------ state
-  let k = 0, kf = 0, playing = false, rate = 1, view = DIM === 3 ? 'persp' : 'top', showTrails = true;
+  let k = 0, kf = 0, playing = false, rate = 1, view = DIM === 3 ? 'persp' : 'top', showTrails = true, showPlans = !!D.plans;
   let dirty = true, selected = -1, hovered = -1;
   const stats = {frames: 0, draws: 0, drawMs: 0, scaleSum: 0, readyMs: null, t0: performance.now()};
   const fmt = (x, n = 2) => (x === null || x === undefined || !isFinite(x)) ? 'n/a' : x.toFixed(n);
@@ -156,6 +197,16 @@
         }
       }
       ctx.globalAlpha = 1;
+    }
+    if (showPlans) {  // each robot's plan ahead, in its sub-swarm's colour
+      ctx.lineWidth = PLAN_WIDTH; ctx.globalAlpha = PLAN_ALPHA; ctx.setLineDash(PLAN_DASH);
+      for (let i = 0; i < N; i++) {
+        const line = planAhead(i);
+        if (!line || line.length < 2) continue;
+        ctx.beginPath(); line.forEach(([x, y], j) => j ? ctx.lineTo(X(x), Y(y)) : ctx.moveTo(X(x), Y(y)));
+        ctx.strokeStyle = D.palette[LAB[k * N + i]]; ctx.stroke();
+      }
+      ctx.globalAlpha = 1; ctx.setLineDash([]);
     }
     const r = N > 300 ? 2.2 : N > 60 ? 3 : 4.5;
     for (let c = 0; c < D.palette.length; c++) {
@@ -353,6 +404,17 @@
     tGeo.setAttribute('color', new THREE.BufferAttribute(tCol, 4).setUsage(THREE.DynamicDrawUsage));
     const trails = new THREE.LineSegments(tGeo, new THREE.LineBasicMaterial({vertexColors: true, transparent: true, depthWrite: false}));
     trails.frustumCulled = false; scene.add(trails);
+    // committed plans: dashed line segments in each agent's colour, rewritten in place like the
+    // trails (the dashes run on the length along each plan, pDist [m])
+    const maxPlan = D.plans ? N * PL.maxLen : 1, dash = 0.012 * Math.max(ext[0], ext[1]);
+    const pPos = new Float32Array(maxPlan * 6), pCol = new Float32Array(maxPlan * 6), pDist = new Float32Array(maxPlan * 2);
+    const pGeo = new THREE.BufferGeometry();
+    pGeo.setAttribute('position', new THREE.BufferAttribute(pPos, 3).setUsage(THREE.DynamicDrawUsage));
+    pGeo.setAttribute('color', new THREE.BufferAttribute(pCol, 3).setUsage(THREE.DynamicDrawUsage));
+    pGeo.setAttribute('lineDistance', new THREE.BufferAttribute(pDist, 1).setUsage(THREE.DynamicDrawUsage));
+    const planLines = new THREE.LineSegments(pGeo, new THREE.LineDashedMaterial({vertexColors: true, transparent: true, opacity: PLAN_ALPHA,
+                                                                                 depthWrite: false, dashSize: 2 * dash, gapSize: dash}));
+    planLines.frustumCulled = false; scene.add(planLines);
     const camera = new THREE.PerspectiveCamera(40, 1, Math.max(0.05, diag / 2000), diag * 20);
     // the default camera of the matplotlib 3-D figures (elevation 35, azimuth -60 deg); a planar
     // run from higher up (50 deg), to see between its slabs
@@ -362,7 +424,7 @@
     controls.target.copy(centre); controls.update();
     controls.addEventListener('change', () => { dirty = true; });
     const palette = D.palette.map(c => new THREE.Color(c));
-    const g = {THREE, renderer, scene, camera, controls, agents, arrow, trails, tGeo, tPos, tCol, palette, ring, roleRings, altitude,
+    const g = {THREE, renderer, scene, camera, controls, agents, arrow, trails, tGeo, tPos, tCol, pGeo, pPos, pCol, pDist, palette, ring, roleRings, altitude,
                m: new THREE.Matrix4(), q: new THREE.Quaternion(), p: new THREE.Vector3(), s: new THREE.Vector3(1, 1, 1),
                ux: new THREE.Vector3(1, 0, 0), u: new THREE.Vector3(), ray: new THREE.Raycaster(), ptr: new THREE.Vector2()};
     layoutPersp(g);
@@ -426,6 +488,22 @@
     }
     g.tGeo.setDrawRange(0, 2 * n);
     g.tGeo.attributes.position.needsUpdate = true; g.tGeo.attributes.color.needsUpdate = true;
+    n = 0;
+    if (showPlans) {
+      for (let i = 0; i < N; i++) {
+        const line = planAhead(i), col = g.palette[LAB[k * N + i]];
+        if (!line) continue;
+        for (let j = 0, len = 0; j + 1 < line.length; j++, n++) {
+          for (const [o, pt] of [[n * 6, line[j]], [n * 6 + 3, line[j + 1]]]) {
+            g.pPos[o] = pt[0]; g.pPos[o + 1] = pt[1]; g.pPos[o + 2] = DIM === 3 ? pt[2] : g.altitude;
+            g.pCol[o] = col.r; g.pCol[o + 1] = col.g; g.pCol[o + 2] = col.b;
+          }
+          g.pDist[2 * n] = len; len += Math.hypot(...line[j + 1].map((x, d) => x - line[j][d])); g.pDist[2 * n + 1] = len;
+        }
+      }
+    }
+    g.pGeo.setDrawRange(0, 2 * n);
+    for (const a of ['position', 'color', 'lineDistance']) g.pGeo.attributes[a].needsUpdate = true;
     const pick = selected >= 0 ? selected : hovered;
     g.ring.visible = pick >= 0;
     if (pick >= 0) { const a = (k * N + pick) * DIM; g.ring.position.set(P[a], P[a + 1], zOf(k, pick)); }
@@ -572,6 +650,8 @@
   chart.addEventListener('click', ev => { pause(); const r = chart.getBoundingClientRect(); seek((ev.clientX - r.left - CH.pad) / (r.width - 2 * CH.pad) * K); });
   viewSel.addEventListener('change', () => setView(viewSel.value));
   $('trails').addEventListener('change', ev => { showTrails = ev.target.checked; dirty = true; });
+  if (D.plans) $('plans').addEventListener('change', ev => { showPlans = ev.target.checked; dirty = true; });
+  else $('plans-box').remove();  // nothing recorded: no toggle
   $('adaptive').addEventListener('change', ev => setResolution(ev.target.checked ? 'adaptive' : 'full'));
   const RATES = [0.25, 0.5, 1, 2, 5, 10, 20, 50, 100];
   for (const x of RATES) speedSel.add(new Option(`${x}x`, x));
@@ -591,6 +671,7 @@
     const parts = [];
     if (D.palette.length <= 8) D.palette.forEach((c, j) => parts.push(`<span class="sw" style="background:${c}"></span>sub-swarm ${D.label_ids[j]}`));
     if (ROLE) parts.push('<span class="sw" style="border:2px solid #000"></span>leader (thick ring), subleader (ring)');
+    if (D.plans) parts.push(`&nbsp; - - plan ahead (${D.plans.count} committed)`);
     $('legend').innerHTML = parts.join(' ');
     const m = D.metrics;
     $('summary').textContent = `N = ${N}, K = ${K}, dt = ${DT} s` + ('Y' in m ? `  ·  Y = ${fmt(m.Y, 0)}  R_goal = ${fmt(m.R_goal)}  E_mean = ${fmt(m.E_mean)} m  R_unsafe = ${fmt(m.R_unsafe, 3)}` : '') +
@@ -637,6 +718,14 @@
       G.p.set(...arrowAt(i)[0]).project(G.camera);
       return [r.left + (G.p.x + 1) / 2 * stage.clientWidth, r.top + (1 - G.p.y) / 2 * stage.clientHeight];
     },
+    /** Page coordinates [css px] of the point [x, y(, z)] [m] in the current view (a planar
+     * run's points at its perspective altitude). */
+    project(pt) {
+      const r = stage.getBoundingClientRect();
+      if (view === 'top') return [r.left + X(pt[0]), r.top + Y(pt[1])];
+      G.p.set(pt[0], pt[1], DIM === 3 ? pt[2] : G.altitude).project(G.camera);
+      return [r.left + (G.p.x + 1) / 2 * stage.clientWidth, r.top + (1 - G.p.y) / 2 * stage.clientHeight];
+    },
     /** Perspective: the direction each arrow points (unit vectors, from its instance matrix). */
     headings() {
       const out = [];
@@ -651,6 +740,14 @@
     resolution(mode, budget) {
       if (mode) setResolution(mode, budget);
       return {mode: RES.adaptive ? 'adaptive' : 'full', budget: RES.budget, scale: RES.scale};
+    },
+    /** Committed plans: with an argument, show (true) or hide them (as the page's check box)
+     * and draw; returns, per robot, its plan as drawn at the current step ([[x, y(, z)], ...]
+     * [m] from the current time to the plan's end; null: none) or null when the run has none. */
+    plans(on) {
+      if (!D.plans) return null;
+      if (on !== undefined) { showPlans = !!on; $('plans').checked = showPlans; render(); }
+      return Array.from({length: N}, (_, i) => showPlans ? planAhead(i) : null);
     },
     /** The perspective renderer, once loaded: 'three.js r185'. */
     renderer: () => G ? `three.js r${G.THREE.REVISION}` : null,
