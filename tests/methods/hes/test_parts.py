@@ -1,4 +1,4 @@
-"""Our extensions as named parts (methods/hes/part.py): which switch builds which part, the step
+"""Our extensions as named parts (methods/hes/hooks.py, methods/hes/parts/): which switch builds which part, the step
 context they read, split commitment and the width penalty on their own. Passage mode, the stall
 planner, trail following, the route hold and the barriers have their own test files."""
 

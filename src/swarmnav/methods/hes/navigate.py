@@ -3,7 +3,7 @@
 The reactive route choice of Section 3.2: the direct route when the goal is in clear view, else
 the cheapest reported corridor, kept with a hysteresis while it is still seen. Parts of ours
 plug in at the hooks ``encircle``, ``plan``, ``hold``, ``candidates``, ``end_route``, ``lost``,
-``chosen``, ``target`` and ``restart`` (see ``part.py``). With the safety stack on, c_s advances
+``chosen``, ``target`` and ``restart`` (see ``hooks.py``). With the safety stack on, c_s advances
 toward its target at the adaptive cruise speed on a leash around the centroid and is kept off the
 walls (Section 5.3 layers, ours).
 """
@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from swarmnav.methods.hes.barriers import push_clear
+from swarmnav.methods.hes.parts.barriers import push_clear
 from swarmnav.methods.hes.corridors import Corridor, direct_corridor, segment_clear
 from swarmnav.methods.hes.decision import ENCIRCLE, target_proximity, task_mode
 from swarmnav.methods.hes.formation import hex_width

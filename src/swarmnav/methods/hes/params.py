@@ -1,5 +1,5 @@
 """Parameters of the HES method: the paper's Table A1 (:class:`PaperParams`), the values it leaves
-open (:class:`CoreParams`), and one nested record per extension of ours (``extension_params``).
+open (:class:`CoreParams`), and one nested record per extension of ours (``parts/params.py``).
 
 Every field carries its unit and its source. ``Table A1`` / ``eq. (n)`` values are the
 paper's and must not be tuned. Fields marked ``ours`` are not given by the paper; the reason
@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 
 from swarmnav.errors import ConfigError
 from swarmnav.llm.config import DECISIONS, validate as validate_llm  # noqa: F401  DECISIONS: rule + LLM back ends
-from swarmnav.methods.hes.extension_params import (
+from swarmnav.methods.hes.parts.params import (
     AblationParams, BarrierParams, CommitParams, GuardParams, HoldParams, PassageParams, SafetyParams, StallParams,
     TrailParams, WidthParams,
 )
@@ -88,7 +88,7 @@ class CoreParams:
     enc_yield: float = param(0.0, "m", "[0, inf)", "ours",
         "0: off; > 0: an encircling member's slot moves in toward the goal until it lies this far "
         "from every return of the member's own LiDAR ring, so the turning ring bends around an "
-        "obstacle near the goal (encircle.py). The faithful build's 3.5 m: d_safe plus ~2 m, what a "
+        "obstacle near the goal (parts/encircle.py). The faithful build's 3.5 m: d_safe plus ~2 m, what a "
         "member trails outside its slot on the turning ring (v_s^2 / (k_p r_enc) = 2.1 m: the "
         "centripetal 1.5 m/s^2 from the slot attraction); 3.0 m left default_corridor R_unsafe "
         "0.197, 4.0 m took sigma_E to 1.22 m")
@@ -120,7 +120,7 @@ class CoreParams:
     projection: float = param(0.0, "m", "[0, inf)", "ours",
         "the geometric post-update safety projection of Section 5.3 (no formula given): 0 = off; > "
         "0: each agent's next step is shortened until it ends this far short of every LiDAR return "
-        "ahead of it, so no agent crosses a wall in one step (projection.py)")
+        "ahead of it, so no agent crosses a wall in one step (parts/projection.py)")
     d_floor: float = param(0.05, "m", "(0, inf)", "ours",
         "distances are floored here before 1/d and 1/d^2 (bounded forces)")
     w_pass: float = param(2.0, "m", "(0, inf)", "ours",
