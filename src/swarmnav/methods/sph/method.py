@@ -30,10 +30,11 @@ from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.methods.base import Observation, check_map_bytes, format_extent
 from swarmnav.planning.bspline import SplineCosts, evaluate, optimize
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
-from swarmnav.methods.sph.kernel import band_guard, environment_force, released_environment_force, sph_forces
+from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
-from swarmnav.methods.sph.yielding import goal_distance_field, yield_rates
+from swarmnav.methods.sph.parts.guard import band_guard
+from swarmnav.methods.sph.parts.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
 from swarmnav.planning.bspline import SplineCosts, evaluate, optimize
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
@@ -44,7 +45,7 @@ from swarmnav.sensing.esdf import Esdf, grid_nodes
 from swarmnav.world.scenario import Scenario
 
 
-#: Peak bytes per node of building the yield field (yielding.goal_distance_field: the node graph
+#: Peak bytes per node of building the yield field (parts/yielding.goal_distance_field: the node graph
 #: and its Dijkstra; measured with tracemalloc on 0.5-5 M nodes), 8 of which stay as the field
 _YIELD_BYTES = {2: 330, 3: 970}
 
@@ -189,7 +190,7 @@ class Sph:
             # stops at hold.
             lag = np.linalg.norm(q_ref - x, axis=1)
             phi = np.clip(2.0 - 2.0 * lag / hold, 0.0, 1.0)
-        if p.yield_range > 0:  # a queue in narrow places (yielding.py)
+        if p.yield_range > 0:  # a queue in narrow places (parts/yielding.py)
             to_goal, _ = self._to_goal.query(x)
             phi = np.minimum(phi, yield_rates(to_goal, x, d, vi, vj, p.yield_range, p.yield_clearance))
         if hold > 0 or p.yield_range > 0:

@@ -1,0 +1,12 @@
+"""Our parts of SPH: what we added to the paper's method, each switched by its own parameter and
+off in ``preset=paper`` (the default build today; ``swarmnav methods sph`` lists what each preset
+switches on).
+
+- ``yielding``: a queue in narrow places (``yield_range`` > 0; presets ``queue``, ``guard``,
+  ``retime``);
+- ``guard``: the band guard on the tracking term (``band_guard``; preset ``guard``).
+
+Our other switches are small branches of the core's replanning, named by their parameters and
+documented in docs/methods/sph.md, *Files*: the lag bounds ``ref_reset`` / ``goal_reset`` /
+``ref_hold``, the plan speed ``plan_v_max`` and the re-timing of short plans ``retime``.
+"""
