@@ -12,7 +12,8 @@ from swarmnav.methods.base import Observation
 from swarmnav.methods.hes import Hes
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.hierarchy import Report, make_pack
-from swarmnav.methods.hes.navigate import choose_route, width_penalty
+from swarmnav.methods.hes.navigate import choose_route
+from swarmnav.methods.hes.parts.regulation import width_penalty
 from swarmnav.methods.hes.report import sense
 from swarmnav.methods.hes.step import Step, SubSwarm
 from swarmnav.world import from_dict
