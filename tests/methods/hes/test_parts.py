@@ -45,8 +45,8 @@ def test_the_old_flat_switch_names_still_work(old, new):
     assert _parts(**{old: False}) == _parts(**{new: False})
 
 
-def test_the_faithful_preset_and_the_safety_stack_ablation():
-    assert _parts(preset="faithful") == ["ring_yield", "wall", "projection"]  # of ours: the safety stack; readings: the ring, the projection
+def test_the_paper_preset_and_the_safety_stack_ablation():
+    assert _parts(preset="paper") == ["ring_yield", "wall", "projection"]  # of ours: the safety stack; readings: the ring, the projection
     assert _parts(safety_stack_off=True) == ["commit", "hold", "trail", "passage", "stall"]
 
 

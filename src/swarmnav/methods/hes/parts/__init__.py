@@ -1,15 +1,16 @@
 """Our parts of HES: what we added to the paper's method, each with its own parameters, state and
 switch, plugged in at the hooks of ``swarmnav.methods.hes.hooks`` (the core's step calls them).
 
-Nothing in this package is in the paper. Three parts are the readings the paper's own words leave
-to us and ``preset=paper`` switches them on (``swarmnav methods hes`` lists what differs):
+Nothing in this package is in the paper. Some parts are the readings the paper's own words leave
+to us, and ``preset=paper`` switches them on (``swarmnav methods hes`` lists what differs):
 ``encircle`` (``core.enc_yield``: the paper gives no encircle slots), ``safety`` with ``barriers``
-(the wall barrier: the "safety stack" Section 5.3 and Table 3 name without a formula),
-``projection`` (the "geometric post-update safety projection" Section 5.3 names). The others are
-our default build's additions: ``routes`` (split commitment, route hold), ``trail`` (trail
-following), ``passage`` (passage mode), ``stall`` with ``plan`` (stall planner), ``safety`` (the
-contact guard). ``params`` holds their parameter records. docs/methods/hes.md, *Files*, maps every
-file of the family to the paper or to us.
+(the wall barrier) and ``regulation`` (the waypoint leash, adaptive cruise and wall clearance): the
+"safety stack" Section 5.3 and Table 3 name without a formula; ``projection`` (the "geometric
+post-update safety projection" Section 5.3 names). The others are our default build's additions:
+``routes`` (split commitment, route hold), ``trail`` (trail following), ``passage`` (passage mode),
+``stall`` with ``plan`` (stall planner), ``safety`` (the contact guard), ``regulation`` (the
+width penalty). ``params`` holds their parameter records. docs/methods/builds.md maps every file
+of the family to the paper or to us.
 """
 
 from __future__ import annotations
