@@ -11,7 +11,7 @@ in at the hooks of ``hooks``): ``parts.routes`` (split commitment, route hold), 
 (trail following), ``parts.passage`` (passage mode), ``parts.stall`` with ``parts.plan`` (stall
 planner), ``parts.safety`` with ``parts.barriers`` (wall barrier, contact guard),
 ``parts.encircle`` (the ring that gives way), ``parts.projection`` (the post-update projection),
-``parts.params`` (their parameters). See ``docs/methods/hes.md``, *Files*.
+``parts.params`` (their parameters). See ``docs/methods/builds.md``.
 """
 
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, Proposal, RulePolicy, project

@@ -6,7 +6,8 @@ switches on).
   ``retime``);
 - ``guard``: the band guard on the tracking term (``band_guard``; preset ``guard``).
 
-Our other switches are small branches of the core's replanning, named by their parameters and
-documented in docs/methods/sph.md, *Files*: the lag bounds ``ref_reset`` / ``goal_reset`` /
-``ref_hold``, the plan speed ``plan_v_max`` and the re-timing of short plans ``retime``.
+Our other switches are small branches of the core's replanning, named by their parameters,
+documented in docs/methods/sph.md and mapped in docs/methods/builds.md: the lag bounds
+``ref_reset`` / ``goal_reset`` / ``ref_hold``, the plan speed ``plan_v_max`` and the re-timing of
+short plans ``retime``.
 """
