@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_sweep.py [--skip-ray]``. Prints
 
-1. wall time of ``swarmnav experiment hes-sim3 --set decision=rule --seeds 1-10 --workers 2``
+1. wall time of ``swarmnav experiment hes-sim3 --set decision=rule --set preset=swarmnav --seeds 1-10 --workers 2``
    (target: < 60 s on the 2-core machine);
 2. whether ``--backend ray`` gives identical per-run metrics;
 3. whether a sweep SIGKILLed partway and rerun ends with exactly the uninterrupted runs.
@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-CMD = ["experiment", "hes-sim3", "--set", "decision=rule", "--seeds", "1-10", "--workers", "2", "--quiet"]
+CMD = ["experiment", "hes-sim3", "--set", "decision=rule", "--set", "preset=swarmnav", "--seeds", "1-10", "--workers", "2", "--quiet"]
 
 
 def swarmnav(*args: str) -> list[str]:

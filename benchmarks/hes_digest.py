@@ -7,7 +7,7 @@ R_goal are unchanged and how far E_mean and R_unsafe moved (the tolerances of a 
 may alter results at rounding level only: E_mean 0.05 m, R_unsafe 0.02).
 
     PYTHONPATH=src python benchmarks/hes_digest.py run --out new.jsonl              # 4 paper + 15 unseen scenes
-    PYTHONPATH=src python benchmarks/hes_digest.py run --out f.jsonl --set preset=faithful
+    PYTHONPATH=src python benchmarks/hes_digest.py run --out f.jsonl --set preset=paper
     PYTHONPATH=src python benchmarks/hes_digest.py compare old.jsonl new.jsonl
 
 To digest another commit, run this script with PYTHONPATH pointing at that commit's ``src``

@@ -81,7 +81,7 @@ def test_scenario_file_and_plot(tmp_path):
     (["run", "--method", "apf", "--scenario-file", "J", "--out", "X"], "scene files are TOML (.toml), not JSON"),
     (["run", "--method", "apf", "--scenario", "default_coridor", "--out", "X"], "did you mean default_corridor?"),
     (["run", "--method", "hse", "--scenario", "default_corridor", "--out", "X"], "did you mean hes?"),
-    (["run", "--method", "hes", "--scenario", "default_corridor", "--out", "X", "--set", "preset=paper"], "unknown preset 'paper'"),
+    (["run", "--method", "hes", "--scenario", "default_corridor", "--out", "X", "--set", "preset=papers"], "unknown preset 'papers' (did you mean paper"),
     (["run", "--method", "sph", "--scenario", "default_corridor", "--out", "X", "--steps", "5", "--horizon", "3"], "not allowed with argument"),
     (["run", "--method", "sph", "--scenario", "default_corridor", "--out", "X", "--horizon", "-3"], "horizon must be finite and > 0 s"),
     (["experiment", "apf-scenes", "--set", "k_rep=-1", "--out", "X"], "variant default_corridor: apf: k_rep must be in [0, inf)"),
@@ -225,7 +225,7 @@ def test_methods_name_lists_every_parameter_with_unit_range_and_source(capsys):
             assert f" {info.unit} " in row if info.unit else " - " in row
     main(["methods", "hes"])
     out = capsys.readouterr().out
-    assert "faithful   passage.on=false guard.on=false stall.on=false trail.on=false commit.on=false" in out
+    assert "builds: the default is preset=swarmnav; the paper's is preset=paper" in out
     assert "dt" in out and "[0.0001, 1]" in out and "Section 5.1" in out
 
 
@@ -384,3 +384,30 @@ def test_run_into_a_directory_of_other_files_needs_no_force(tmp_path):
     out.mkdir()
     (out / "notes.txt").write_text("not a run")
     assert _run_into(out) == 0 and (out / "notes.txt").read_text() == "not a run"
+
+
+@pytest.mark.parametrize("method, default, n_diff, differs", [
+    ("hes", "swarmnav", 16, ["passage.on              true -> false", "core.merge_rule         swarmnav -> paper_cooldown"]),
+    ("sph", "paper", 0, []),
+    ("hwvem", "mission", 1, ["wrap_neighbours  true -> false"]),
+    ("ego-swarm", "swarmnav", 2, ["retry_guide     astar -> previous"]),
+])
+def test_methods_names_the_default_and_the_paper_build_and_what_differs(method, default, n_diff, differs, capsys):
+    assert main(["methods", method]) == 0
+    out = capsys.readouterr().out
+    same = " (the same build)" if default == "paper" else ""
+    assert f"builds: the default is preset={default}; the paper's is preset=paper{same}" in out
+    lines = out.splitlines()
+    paper = next(i for i, line in enumerate(lines) if line.startswith("  paper ("))
+    assert ("the default" in lines[paper]) == (default == "paper")
+    if n_diff:
+        assert lines[paper + 1] == f"    differs from the default in {n_diff} parameter(s) (default -> paper):"
+        listed = lines[paper + 2: paper + 2 + n_diff]
+        assert all(line.startswith("      ") for line in listed)
+        for d in differs:
+            assert f"      {d}" in listed
+    if method == "sph":  # our recommended sets are named, with what they change
+        guard = next(i for i, line in enumerate(lines) if line.startswith("  guard: ours, recommended in 2-D"))
+        assert "      band_guard   false -> true" in lines[guard + 2: guard + 8]
+    if method == "hes":
+        assert "  faithful: the earlier name of preset paper (still accepted, same values)" in out

@@ -30,10 +30,10 @@ def test_the_spec_runs_every_variant(tmp_path, monkeypatch):
                  "--out", str(out), "--quiet"]) == 0
     with open(out / "runs.csv") as f:
         rows = list(csv.DictReader(f))
-    assert sorted(r["variant"] for r in rows) == ["apf", "hes", "hes-faithful", "sph"]
+    assert sorted(r["variant"] for r in rows) == ["apf", "hes", "hes-paper", "sph"]
     assert all(r["status"] == "done" for r in rows)
     steps = {r["variant"]: int(r["steps"]) for r in rows}
-    assert steps == {"apf": 50, "hes": 50, "hes-faithful": 50, "sph": 500}  # 5 s of each method's own dt
+    assert steps == {"apf": 50, "hes": 50, "hes-paper": 50, "sph": 500}  # 5 s of each method's own dt
 
 
 def test_the_python_script_runs(tmp_path):

@@ -18,7 +18,7 @@ import swarmnav
 from swarmnav.cli import main
 from swarmnav.errors import ConfigError, SwarmnavError
 from swarmnav.methods import registry
-from swarmnav.params import Range, aliases, as_dict, build, describe, presets
+from swarmnav.params import Range, aliases, as_dict, build, default_build, describe, differences, presets
 
 METHODS = registry.names()
 #: (method, ParamInfo) for every numeric parameter of every registered method.
@@ -83,12 +83,28 @@ def test_presets_name_real_parameters_with_valid_values(method):
 
 
 def test_a_preset_then_overrides_on_top():
-    m = registry.make("hes", preset="faithful", passage_mode=True)  # an old flat name, on top of the preset
+    m = registry.make("hes", preset="paper", passage_mode=True)  # an old flat name, on top of the preset
     assert m.params.passage.on is True and m.params.stall.on is False
-    m = registry.make("hes", **{"preset": "faithful", "passage.on": "true"})
+    m = registry.make("hes", **{"preset": "paper", "passage.on": "true"})
     assert m.params.passage.on is True and m.params.stall.on is False
-    with pytest.raises(ConfigError, match="unknown preset 'faithfull' .*did you mean faithful"):
-        registry.make("hes", preset="faithfull")
+    with pytest.raises(ConfigError, match="unknown preset 'papr' .*did you mean paper"):
+        registry.make("hes", preset="papr")
+
+
+def test_an_earlier_preset_name_resolves_to_the_same_build():
+    # HES's paper build was called "faithful" before issue 34: old specs and stored runs keep their meaning
+    assert registry.make("hes", preset="faithful").params == registry.make("hes", preset="paper").params
+    assert registry.make("hes", preset="paper").params != registry.make("hes").params
+
+
+@pytest.mark.parametrize("method", ["hes", "sph", "hwvem", "ego-swarm"])
+def test_every_family_names_its_default_and_its_paper_build(method):
+    cls = registry.spec(method).params
+    assert "paper" in presets(cls) and default_build(cls) in presets(cls)
+    assert build(cls, {"preset": default_build(cls)}) == cls()  # the default build is the defaults
+    diff = differences(cls, "paper")
+    assert all(a != b for _, a, b in diff)
+    assert (diff == []) == (default_build(cls) == "paper")  # only SPH's default is its paper build today
 
 
 @given(st.sampled_from(["(", "["]), st.floats(-1e6, 1e6), st.floats(0, 1e6), st.sampled_from([")", "]"]))

@@ -163,7 +163,7 @@ def _print_params(spec, out) -> None:
     import shutil
     import textwrap
 
-    from swarmnav.params import aliases, describe, presets
+    from swarmnav.params import aliases, default_build, describe, differences, preset_aliases, preset_doc, presets
 
     def shown(v) -> str:
         return ("true" if v else "false") if isinstance(v, bool) else ('""' if v == "" else f"{v:g}" if isinstance(v, float) else str(v))
@@ -179,10 +179,27 @@ def _print_params(spec, out) -> None:
              if callable(getattr(spec.factory, "plans", None)) else ""), file=out)
     table = presets(spec.params)
     if table:
-        print("presets (--set preset=NAME):", file=out)
-        for name, values in table.items():
-            body = " ".join(f"{k}={shown(v)}" for k, v in values.items()) or "the defaults"
-            print(f"  {name:10s} {body}", file=out)
+        cls, default = spec.params, default_build(spec.params)
+        paper = "paper" if "paper" in table else None
+        print(f"builds: the default is {f'preset={default}' if default else 'the defaults'}; the paper's is "
+              f"{f'preset={paper}' if paper else 'none'}" + (" (the same build)" if paper == default else ""), file=out)
+        print("presets (--set preset=NAME; values given beside it apply on top):", file=out)
+        for name in table:
+            tag = ", ".join(t for t, on in (("the default", name == default), ("the paper", name == paper)) if on)
+            tag = f" ({tag})" if tag else ""
+            print(f"  {name}{tag}: {preset_doc(cls, name) or 'no description'}", file=out)
+            if name == default:
+                continue
+            diff = differences(cls, name)
+            if not diff:
+                print("    = the default build", file=out)
+                continue
+            print(f"    differs from the default in {len(diff)} parameter(s) (default -> {name}):", file=out)
+            w = max(len(k) for k, _, _ in diff)
+            for k, a, b in diff:
+                print(f"      {k:{w}s}  {shown(a)} -> {shown(b)}", file=out)
+        for old, new in preset_aliases(cls).items():
+            print(f"  {old}: the earlier name of preset {new} (still accepted, same values)", file=out)
     old = aliases(spec.params)
     if old:
         print(f"older flat names are accepted too ({len(old)}, e.g. {', '.join(f'{k} = {v}' for k, v in list(old.items())[:2])})",

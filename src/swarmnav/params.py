@@ -156,11 +156,35 @@ def presets(cls: type) -> dict[str, dict[str, Any]]:
     return dict(getattr(cls, "PRESETS", {}))
 
 
+def preset_aliases(cls: type) -> dict[str, str]:
+    """Older preset names of record class ``cls`` -> the preset they now name (``faithful`` ->
+    ``paper``): accepted by :func:`build`, so old specs and stored runs still resolve."""
+    return dict(getattr(cls, "PRESET_ALIASES", {}))
+
+
+def default_build(cls: type) -> str | None:
+    """The preset of record class ``cls`` that its defaults are (``DEFAULT_BUILD``), or None."""
+    return getattr(cls, "DEFAULT_BUILD", None)
+
+
+def preset_doc(cls: type, name: str) -> str:
+    """One line on what preset ``name`` of record class ``cls`` is (``PRESET_DOCS``), or ""."""
+    return getattr(cls, "PRESET_DOCS", {}).get(name, "")
+
+
+def differences(cls: type, preset: str) -> list[tuple[str, Any, Any]]:
+    """``(parameter, default value, value in the preset)`` of every parameter in which preset
+    ``preset`` of record class ``cls`` differs from the default build, in declaration order: what
+    the preset resolves to, not what it lists (a listed value equal to the default is no difference)."""
+    base, other = as_dict(cls()), as_dict(build(cls, {"preset": preset}))
+    return [(k, base[k], other[k]) for k in base if other[k] != base[k]]
+
+
 def build(cls: type[T], overrides: Mapping[str, Any] | None = None, *, context: str = "") -> T:
     """Instantiate parameter record ``cls`` with ``overrides`` applied.
 
-    ``preset=NAME`` (one of the record's ``PRESETS``) applies that preset's values first; the
-    other overrides then apply on top of it.
+    ``preset=NAME`` (one of the record's ``PRESETS``, or an older name of one in
+    ``PRESET_ALIASES``) applies that preset's values first; the other overrides then apply on top of it.
 
     Raises:
         ConfigError: on an unknown key (naming it and the known keys), a value of the wrong
@@ -175,6 +199,7 @@ def build(cls: type[T], overrides: Mapping[str, Any] | None = None, *, context: 
     if "preset" in overrides:
         name = str(overrides.pop("preset"))
         table = presets(cls)
+        name = preset_aliases(cls).get(name, name)
         if name not in table:
             known = ", ".join(sorted(table)) or "none"
             raise ConfigError(f"{where}unknown preset '{name}'{_did_you_mean(name, table)}; known: {known}")

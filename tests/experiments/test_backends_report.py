@@ -44,6 +44,7 @@ def test_user_spec_file_with_matrix_and_report(tmp_path):
     md, html = write_report(tmp_path / "o")
     text = md.read_text()
     assert "| apf/default_corridor | default_corridor [0] | 2/2 |" in text  # the paper row it is set beside
+    assert "Build of every variant: `preset=paper` (its method's default)." in text  # named once, no column
     assert "6.126" in text  # the paper's rule E_mean for default_corridor sits beside ours
     assert "Y (paper)" in text
 

@@ -49,5 +49,37 @@ def test_report_names_the_build_that_ran_and_the_paper_row_beside_it(tmp_path):
     row = next(line for line in md.splitlines() if line.startswith("| ours"))
     cols = [c.strip() for c in head.split("|")[1:-1]]
     cells = [c.strip() for c in row.split("|")[1:-1]]
-    assert cells[cols.index("build")] == "preset=faithful"
+    assert cells[cols.index("build")] == "preset=paper"  # "faithful", the earlier name, labelled by the current one
     assert cells[cols.index("paper row")] == "rule"  # our variant is set beside the paper's rule row
+
+
+def test_a_run_without_a_preset_is_labelled_with_its_default_build(tmp_path):
+    spec = tmp_path / "d.toml"
+    spec.write_text('name = "d"\nmethod = "hes"\nscenario = "default_corridor"\nsteps = 3\nseeds = "1"\n'
+                    '[[variants]]\nname = "ours"\n[[variants]]\nname = "paper"\n[variants.params]\npreset = "paper"\n'
+                    '[report]\nmetrics = ["Y"]\n')
+    run_experiment(load_experiment(str(spec)), tmp_path / "o", progress=False)
+    md = write_report(tmp_path / "o")[0].read_text()
+    head = next(line for line in md.splitlines() if line.startswith("| variant"))
+    cols = [c.strip() for c in head.split("|")[1:-1]]
+    build = {cells[0]: cells[cols.index("build")] for cells in
+             ([c.strip() for c in line.split("|")[1:-1]] for line in md.splitlines() if line.startswith(("| ours", "| paper")))}
+    assert build == {"ours": "preset=swarmnav", "paper": "preset=paper"}
+
+
+def test_both_builds_swept_keep_the_paper_row_and_say_which_build_ran(tmp_path):
+    spec = tmp_path / "s.toml"
+    spec.write_text('name = "s"\nmethod = "hes"\nscenario = "default_corridor"\nsteps = 3\nseeds = "1"\n'
+                    '[[variants]]\nname = "rule"\n[variants.params]\ndecision = "rule"\n'
+                    '[report]\nreference = "hes.table2"\nmetrics = ["Y"]\n')
+    exp = load_experiment(str(spec), overrides={"preset": "paper|swarmnav"})
+    run_experiment(exp, tmp_path / "o", progress=False)
+    md = write_report(tmp_path / "o")[0].read_text()
+    head = next(line for line in md.splitlines() if line.startswith("| variant"))
+    cols = [c.strip() for c in head.split("|")[1:-1]]
+    rows = {cells[0]: cells for cells in ([c.strip() for c in line.split("|")[1:-1]] for line in md.splitlines()
+                                          if line.startswith("| rule["))}
+    assert set(rows) == {"rule[preset=paper]", "rule[preset=swarmnav]"}
+    for build, cells in zip(("paper", "swarmnav"), (rows["rule[preset=paper]"], rows["rule[preset=swarmnav]"])):
+        assert cells[cols.index("build")] == f"preset={build} decision=rule"
+        assert cells[cols.index("paper row")] == "rule"  # the paper's rule row beside each build

@@ -87,11 +87,48 @@ BUILD_KEYS = ("preset", "decision", "llm_model", "llm_gguf")
 
 def build_label(row: dict | None) -> str:
     """What a stored run was flown with, beyond its method: ``preset=guard``, ``decision=llamacpp
-    llm_gguf=smollm2`` (the variant's parameters and the sweep's --set overrides); "" if none."""
-    params = (row or {}).get("params") or {}
+    llm_gguf=smollm2`` (the variant's parameters and the sweep's --set overrides). The build is
+    always named: a run without a preset is labelled with its method's default build
+    (``preset=swarmnav``), and a preset's earlier name with its current one (``faithful`` ->
+    ``paper``); "" only for a method without presets and nothing else set."""
+    row = row or {}
+    params = dict(row.get("params") or {})
     if params.get("decision") == "rule":
         params = {k: v for k, v in params.items() if not k.startswith("llm_")}
+    cls = _params_class(row.get("method"))
+    if cls is not None:
+        from swarmnav.params import default_build, preset_aliases
+
+        if "preset" in params:
+            params["preset"] = preset_aliases(cls).get(str(params["preset"]), params["preset"])
+        elif default_build(cls):
+            params["preset"] = default_build(cls)
     return " ".join(f"{k}={params[k]}" for k in BUILD_KEYS if k in params)
+
+
+def names_build(row: dict | None) -> bool:
+    """The run's parameters name its build (a preset, a decider or a model), as a variant or --set did."""
+    return any(k in ((row or {}).get("params") or {}) for k in BUILD_KEYS)
+
+
+def build_column(t: dict) -> bool:
+    """The first table has a ``build`` column when a variant names its build or the variants' builds
+    differ; otherwise every variant flew the same default build, which ``settings`` states once."""
+    builds = [v.get("build") for v in t["variants"]]
+    return any(v.get("build_named") for v in t["variants"]) or len(set(builds)) > 1
+
+
+def _params_class(method: str | None) -> type | None:
+    """The parameter record class of a registered method, or None (unknown or no method)."""
+    if not method:
+        return None
+    from swarmnav.errors import SwarmnavError
+    from swarmnav.methods import registry
+
+    try:
+        return registry.spec(method).params
+    except SwarmnavError:
+        return None
 
 
 def _paper_cells(ref: dict, index: int | None, metrics: list[str], metric_map: dict) -> dict[str, Any]:
@@ -193,7 +230,8 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
             vals = np.array([float(r["metrics"][m]) for r in done if m in r["metrics"]
                              and r["metrics"][m] is not None], dtype=float)
             per_metric[m] = vals
-        key, index = vmap.get(v["name"], v["name"]), spec.get("reference_index")
+        base = v["name"].split("[", 1)[0]  # a swept variant (rule[preset=paper]) keeps its spec variant's paper row
+        key, index = vmap.get(v["name"], vmap.get(base, base)), spec.get("reference_index")
         if isinstance(key, list):  # [reference key, entry of its per-scene lists]
             key, index = key
         ref = _lookup(ref_root, key) if isinstance(ref_root, dict) else None
@@ -201,6 +239,7 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
         variants.append({"name": v["name"], "runs": len(mine), "done": len(done), "values": per_metric,
                          "planned": planned.get(v["name"], 0), "failed": len(mine) - len(done),
                          "seeds": [r["seed"] for r in done], "build": build_label(mine[0] if mine else None),
+                         "build_named": names_build(mine[0] if mine else None),
                          "paper_row": row_name if isinstance(ref, dict) and row_name != v["name"] else "",
                          "reference": _paper_cells(ref, index, metric_names, spec.get("metric_map") or {})
                          if isinstance(ref, dict) else None})
@@ -235,13 +274,17 @@ def completeness(t: dict) -> str:
 
 
 def settings(t: dict) -> str:
-    """The report's line on what the sweep ran with: its seeds and its ``--set`` overrides."""
+    """The report's line on what the sweep ran with: its seeds, its ``--set`` overrides and, when
+    every variant flew the same default build (no ``build`` column), that build."""
     seeds = _seed_ranges(t["seed_list"]) or "not recorded"
     if t["overrides"] is None:
         sets = "not recorded (a store written before swarmnav kept them)"
     else:
         sets = " ".join(f"`{k}={v}`" for k, v in t["overrides"].items()) or "none"
-    return f"Seeds: {seeds}. Overrides (`--set`): {sets}."
+    builds = {v.get("build") for v in t["variants"]} - {"", None}
+    build = f" Build of every variant: `{builds.pop()}` (its method's default)." \
+        if len(builds) == 1 and not build_column(t) else ""
+    return f"Seeds: {seeds}. Overrides (`--set`): {sets}.{build}"
 
 
 def _seed_ranges(seeds: list[int]) -> str:
@@ -289,7 +332,7 @@ def tables(t: dict) -> list[dict[str, Any]]:
         if not out:
             # what ran (preset, decider and model) and which published row it is set beside, where
             # either is not the variant's name: an LLM row of ours is never read as the paper's model
-            if any(v.get("build") for v in t["variants"]):
+            if build_column(t) and any(v.get("build") for v in t["variants"]):
                 columns.append({"label": "build", "metric": None, "kind": "build"})
             if any(v.get("paper_row") for v in t["variants"]):
                 columns.append({"label": "paper row", "metric": None, "kind": "paper_row"})

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -46,6 +46,14 @@ class ApfParams:
     these scenes). They were set once, as the smallest repulsion, separation and damping of a
     coarse grid that gave zero collisions on the four HES scenes and two random forests at
     seed 1, and are kept fixed for every scene."""
+
+    #: One build: Khatib's field as docs/methods/apf.md reads it, with the gains below; named ``paper``
+    #: so that every method answers ``preset=paper`` (a spec flying the paper builds of several methods).
+    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {"paper": {}}
+    DEFAULT_BUILD: ClassVar[str] = "paper"
+    PRESET_DOCS: ClassVar[dict[str, str]] = {
+        "paper": "Khatib's potential field (1986) per agent on its own range sensor, with our gains (no paper "
+                 "gives APF gains for these scenes)"}
 
     dt: float = param(0.1, "s", "[0.0001, 1]", "ours", "integration step, as HES")
     n_rays: int = param(360, "", "[4, 36000]", "HES Table A1", "LiDAR rays")

@@ -193,7 +193,7 @@ def _guard_reference(a, x, v, dt, a_brake, margin, a_max, passes=4):
 
 
 def test_contact_guard_skips_only_neighbours_it_cannot_bind():
-    from swarmnav.methods.hes.barriers import agent_guard
+    from swarmnav.methods.hes.parts.barriers import agent_guard
 
     rng = np.random.default_rng(14)
     for trial in range(300):

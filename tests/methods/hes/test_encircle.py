@@ -26,6 +26,6 @@ def test_yielding_ring_keeps_its_members_out_of_d_safe_and_keeps_turning():
     assert speed[3.5] > 0.5 * Hes().params.core.v_s  # it still circulates
 
 
-def test_yield_is_off_by_default_and_in_the_faithful_preset():
+def test_yield_is_off_by_default_and_in_the_paper_preset():
     assert Hes().params.core.enc_yield == 0.0
-    assert Hes(preset="faithful").params.core.enc_yield > 0.0
+    assert Hes(preset="paper").params.core.enc_yield > 0.0

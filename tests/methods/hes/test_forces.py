@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from swarmnav.methods.hes import barriers as B
+from swarmnav.methods.hes.parts import barriers as B
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.params import HesParams

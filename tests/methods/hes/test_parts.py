@@ -1,4 +1,4 @@
-"""Our extensions as named parts (methods/hes/part.py): which switch builds which part, the step
+"""Our extensions as named parts (methods/hes/hooks.py, methods/hes/parts/): which switch builds which part, the step
 context they read, split commitment and the width penalty on their own. Passage mode, the stall
 planner, trail following, the route hold and the barriers have their own test files."""
 
@@ -12,7 +12,8 @@ from swarmnav.methods.base import Observation
 from swarmnav.methods.hes import Hes
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.hierarchy import Report, make_pack
-from swarmnav.methods.hes.navigate import choose_route, width_penalty
+from swarmnav.methods.hes.navigate import choose_route
+from swarmnav.methods.hes.parts.regulation import width_penalty
 from swarmnav.methods.hes.report import sense
 from swarmnav.methods.hes.step import Step, SubSwarm
 from swarmnav.world import from_dict
@@ -44,8 +45,8 @@ def test_the_old_flat_switch_names_still_work(old, new):
     assert _parts(**{old: False}) == _parts(**{new: False})
 
 
-def test_the_faithful_preset_and_the_safety_stack_ablation():
-    assert _parts(preset="faithful") == ["ring_yield", "wall", "projection"]  # of ours: the safety stack; readings: the ring, the projection
+def test_the_paper_preset_and_the_safety_stack_ablation():
+    assert _parts(preset="paper") == ["ring_yield", "wall", "projection"]  # of ours: the safety stack; readings: the ring, the projection
     assert _parts(safety_stack_off=True) == ["commit", "hold", "trail", "passage", "stall"]
 
 

@@ -16,7 +16,7 @@ from swarmnav.methods.hes import control as hes_control
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.corridors import detect_gaps, seen_passages
 from swarmnav.methods.hes.params import HesParams
-from swarmnav.methods.hes.passage import passage_dsafe
+from swarmnav.methods.hes.parts.passage import passage_dsafe
 from swarmnav.sensing import lidar_ring, ray_table
 from swarmnav.world.catalog import load_scenario
 
@@ -130,7 +130,7 @@ def _chain_method(crossed_1, crossed_2, route_is_2, mode=None):
     gate 1's gap (11.6, -9.25), normal +x, and gate 2's gap (21.6, +9.25), normal +x."""
     from swarmnav.methods import registry
     from swarmnav.methods.hes.corridors import Corridor
-    from swarmnav.methods.hes.passage import Passage
+    from swarmnav.methods.hes.parts.passage import Passage
 
     scene = load_scenario(GATES, n=6)
     x = np.array([[8.0, -8.0], [9.0, -9.0], [14.0, -8.0], [16.0, 0.0], [18.0, 6.0], [24.0, 8.0]])

@@ -12,7 +12,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 import swarmnav
-from swarmnav.methods.hes.plan import clearance, cost_to_go, descend, lookahead, mark_hits
+from swarmnav.methods.hes.parts.plan import clearance, cost_to_go, descend, lookahead, mark_hits
 from swarmnav.sensing import ray_table
 
 FOREST = "random_forest:density=0.25,seed=2,length=12,r_min=1.0,r_max=2.0,min_passage=1.0"

@@ -1,4 +1,4 @@
-"""The readings of Simulation 2 the faithful build uses: eq. (36)'s near-obstacle term as
+"""The readings of Simulation 2 the paper build uses: eq. (36)'s near-obstacle term as
 k_e (d_safe / d + 1)^2 (``core.ke_ratio``), the safety stack off keeping the waypoint's leash
 (``ablation.keep_leash``) and "w/o acc. bound" lifting the safety filter too
 (``ablation.relax_filter``)."""

@@ -9,7 +9,7 @@ from _helpers.cli import run_cli
 
 from swarmnav.errors import ConfigError
 from swarmnav.methods import registry
-from swarmnav.methods.hes.stall import BYTES_PER_CELL
+from swarmnav.methods.hes.parts.stall import BYTES_PER_CELL
 from swarmnav.world import from_dict
 
 FAR = {"name": "far", "world": {"bounds": [-1e6, -1e6, 1e6, 1e6]}, "swarm": {"n": 4, "spawn": [0.0, 0.0, 4.0, 4.0]},

@@ -7,7 +7,7 @@ import numpy as np
 
 from swarmnav.methods.hes.report import handed_over, strayed
 from swarmnav.methods.hes.targets import turned
-from swarmnav.methods.hes.trail import n_cut_off
+from swarmnav.methods.hes.parts.trail import n_cut_off
 from swarmnav.sensing import PreparedGeometry, segments_blocked
 from swarmnav.world.catalog import load_scenario
 
@@ -111,7 +111,7 @@ def test_report_rows_are_the_report_stages_one_by_one():
 
 
 def test_goal_range_is_the_nearest_and_farthest_hypot():
-    from swarmnav.methods.hes.stall import goal_range
+    from swarmnav.methods.hes.parts.stall import goal_range
 
     rng = np.random.default_rng(9)
     for _ in range(500):
@@ -124,7 +124,7 @@ def test_goal_range_is_the_nearest_and_farthest_hypot():
 
 def test_gap_sides_counts_the_members_in_line_with_the_gap_on_each_side():
     """Against the matrix form (which may round differently: the counts agree off the boundaries)."""
-    from swarmnav.methods.hes.routes import gap_sides
+    from swarmnav.methods.hes.parts.routes import gap_sides
 
     rng = np.random.default_rng(10)
     for _ in range(2000):

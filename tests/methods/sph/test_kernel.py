@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from swarmnav.methods.sph.kernel import band_guard, environment_force, kernel_sigma, kernel_slope, kernel_value, sph_forces
+from swarmnav.methods.sph.kernel import environment_force, kernel_sigma, kernel_slope, kernel_value, sph_forces
+from swarmnav.methods.sph.parts.guard import band_guard
 
 H, C = 10.0, 54.97
 

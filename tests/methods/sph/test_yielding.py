@@ -6,7 +6,7 @@ import pytest
 
 import swarmnav
 from swarmnav.methods import registry
-from swarmnav.methods.sph.yielding import goal_distance_field, yield_rates
+from swarmnav.methods.sph.parts.yielding import goal_distance_field, yield_rates
 from swarmnav.sensing.esdf import Esdf
 from swarmnav.world import from_dict
 

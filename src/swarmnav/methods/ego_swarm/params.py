@@ -23,7 +23,19 @@ MAX_PLAN_STEPS = 100_000
 class EgoSwarmParams:
     """EGO-Swarm (Zhou, Wang, Gao et al., ICRA 2021) on EGO-Planner's ESDF-free optimiser."""
 
-    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {"paper": {}}
+    #: ``swarmnav`` is the default build: the papers' planner with our two named parts on (the A* guide
+    #: after a failed replan, the brake for another robot's plan); ``paper`` switches both off.
+    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
+        "swarmnav": {},
+        "paper": {"retry_guide": "previous", "brake_on_swarm": False},
+    }
+    DEFAULT_BUILD: ClassVar[str] = "swarmnav"
+    PRESET_DOCS: ClassVar[dict[str, str]] = {
+        "swarmnav": "our build: EGO-Swarm / EGO-Planner with the launch values and our two named parts "
+                    "(retry_guide, brake_on_swarm; chosen on seeds 1-10, docs/methods/ego-swarm.md)",
+        "paper": "EGO-Swarm / EGO-Planner with the launch values and the readings the papers leave open, "
+                 "without our two parts",
+    }
 
     # --- shared dynamics of the Table II comparison (replace the launch files' max_vel / max_acc) ---
     v_max: float = param(1.0, "m/s", "(0, inf)", "shared (SPH Table I; launch max_vel)",

@@ -6,10 +6,12 @@ decision sources), ``hierarchy`` (eq. 1-3, split / merge, eq. 41), ``formation``
 encircle slots); the step's stages ``report`` (1-2), ``structure`` (3), ``navigate`` and
 ``targets`` (4), ``control`` (5), passing one ``step.Step``; ``method`` (the wiring, ``Hes.act``).
 
-Our extensions, each a part with its own switch plugged in at the hooks of ``part``:
-``routes`` (split commitment, route hold), ``trail`` (trail following), ``passage`` (passage
-mode), ``stall`` with ``plan`` (stall planner), ``safety`` with ``barriers`` (wall barrier,
-contact guard). See ``docs/methods/hes.md``.
+Our additions live apart, in the subpackage ``parts`` (each a part with its own switch, plugged
+in at the hooks of ``hooks``): ``parts.routes`` (split commitment, route hold), ``parts.trail``
+(trail following), ``parts.passage`` (passage mode), ``parts.stall`` with ``parts.plan`` (stall
+planner), ``parts.safety`` with ``parts.barriers`` (wall barrier, contact guard),
+``parts.encircle`` (the ring that gives way), ``parts.projection`` (the post-update projection),
+``parts.params`` (their parameters). See ``docs/methods/builds.md``.
 """
 
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, Proposal, RulePolicy, project

@@ -13,7 +13,7 @@ One step (paper Section 4.4, "At each discrete step"), :meth:`Hes.act`:
 
 The stages pass one :class:`~swarmnav.methods.hes.step.Step`. The class holds the planner's
 memory (partition, sub-swarms, cooldowns) and the parts of ours that the parameters switch on
-(:func:`build_parts`), which plug in at the hooks listed in ``part.py``.
+(:func:`swarmnav.methods.hes.parts.build_parts`), which plug in at the hooks listed in ``hooks.py``.
 """
 
 from __future__ import annotations
@@ -30,57 +30,18 @@ from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import control, couple_workspace
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePolicy, project
-from swarmnav.methods.hes.encircle import RingYield
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.navigate import navigate
 from swarmnav.methods.hes.params import HesParams
-from swarmnav.methods.hes.part import Part, hook_table
-from swarmnav.methods.hes.passage import PassageMode
+from swarmnav.methods.hes.parts import build_parts
+from swarmnav.methods.hes.hooks import Part, hook_table
 from swarmnav.methods.hes.report import decision_state, reelect, report, report_constants, sense, split_paths
-from swarmnav.methods.hes.projection import PostProjection
-from swarmnav.methods.hes.routes import RouteHold, SplitCommit
-from swarmnav.methods.hes.safety import ContactGuard, WallBarrier
-from swarmnav.methods.hes.stall import StallPlanner
 from swarmnav.methods.hes.step import NEVER, Partition, Step, SubSwarm, partition
 from swarmnav.methods.hes.structure import merge, reassign_followers, split
 from swarmnav.methods.hes.targets import references
-from swarmnav.methods.hes.trail import TrailFollow
 from swarmnav.params import build
 from swarmnav.sensing import PreparedGeometry, ray_table
 from swarmnav.world.scenario import Scenario
-
-
-def build_parts(p: HesParams) -> list[Part]:
-    """The parts of ours that ``p`` switches on, in hook order:
-
-    ============== ====================== ==========================================
-    part           switch                 module
-    ============== ====================== ==========================================
-    RingYield      ``core.enc_yield`` > 0 encircle.py
-    SplitCommit    ``commit.on``          routes.py
-    RouteHold      ``hold.on``            routes.py
-    TrailFollow    ``trail.on``           trail.py
-    PassageMode    ``passage.on``         passage.py (its queue barrier: ``passage.agent_brake`` > 0)
-    StallPlanner   ``stall.on``           stall.py
-    WallBarrier    ``barrier.on``         safety.py (with the safety stack: ``ablation.safety_stack_off = false``)
-    ContactGuard   ``guard.on``           safety.py (with the safety stack)
-    PostProjection ``core.projection`` >0 projection.py
-    ============== ====================== ==========================================
-    """
-    stall = StallPlanner(p, narrow_relief=p.passage.on) if p.stall.on else None
-    passage = PassageMode(p, stall) if p.passage.on else None
-    parts: list[Part | None] = [
-        RingYield(p) if p.core.enc_yield > 0.0 else None,
-        SplitCommit(p) if p.commit.on else None,
-        RouteHold(p, passage) if p.hold.on else None,
-        TrailFollow(p) if p.trail.on else None,
-        passage,
-        stall,
-        WallBarrier(p, passage if p.passage.agent_brake > 0.0 else None) if p.filtered else None,
-        ContactGuard(p) if p.adaptive and p.guard.on else None,
-        PostProjection(p) if p.core.projection > 0.0 else None,
-    ]
-    return [q for q in parts if q is not None]
 
 
 class Hes:

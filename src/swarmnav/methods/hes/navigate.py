@@ -3,9 +3,10 @@
 The reactive route choice of Section 3.2: the direct route when the goal is in clear view, else
 the cheapest reported corridor, kept with a hysteresis while it is still seen. Parts of ours
 plug in at the hooks ``encircle``, ``plan``, ``hold``, ``candidates``, ``end_route``, ``lost``,
-``chosen``, ``target`` and ``restart`` (see ``part.py``). With the safety stack on, c_s advances
+``chosen``, ``target`` and ``restart`` (see ``hooks.py``). With the safety stack on, c_s advances
 toward its target at the adaptive cruise speed on a leash around the centroid and is kept off the
-walls (Section 5.3 layers, ours).
+walls, and the route cost may carry a width penalty: those layers of ours are in
+``parts/regulation.py``.
 """
 
 from __future__ import annotations
@@ -14,11 +15,11 @@ import math
 
 import numpy as np
 
-from swarmnav.methods.hes.barriers import push_clear
 from swarmnav.methods.hes.corridors import Corridor, direct_corridor, segment_clear
 from swarmnav.methods.hes.decision import ENCIRCLE, target_proximity, task_mode
 from swarmnav.methods.hes.formation import hex_width
 from swarmnav.methods.hes.hierarchy import Report
+from swarmnav.methods.hes.parts.regulation import leash, off_walls, width_penalty
 from swarmnav.methods.hes.step import NEVER, Step, SubSwarm
 
 
@@ -79,28 +80,13 @@ def regulate(h, step: Step, sub: SubSwarm, rep: Report, route: Corridor | None, 
     # two-vectors as Python floats: the same IEEE operations as numpy's, without its per-call cost
     tx, ty = float(target[0]), float(target[1])
     if p.leashed:
-        step_len = cruise(p, rep.clearance) * p.paper.dt
-        wx, wy = sub.waypoint.tolist()
-        dx, dy = tx - wx, ty - wy
-        dn = math.hypot(dx, dy)
-        if dn <= step_len:
-            wx, wy = tx, ty
-        else:
-            f = step_len / dn
-            wx, wy = wx + dx * f, wy + dy * f
-        cx, cy = float(cent[0]), float(cent[1])
-        ox, oy = wx - cx, wy - cy
-        on = math.hypot(ox, oy)
-        if on > p.core.lead:
-            f = p.core.lead / on
-            wx, wy = cx + ox * f, cy + oy * f
+        wx, wy = leash(p, rep.clearance, sub.waypoint, tx, ty, cent)
     else:
         wx, wy = tx, ty
     w = route.width if route is not None else math.inf
     if p.adaptive:
         a = sub.subleader
-        clear = min(p.safety.wp_clear, 0.5 * w)
-        wx, wy = push_clear(wx, wy, step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, clear, p.paper.lidar_range, 3)
+        wx, wy = off_walls(p, step.ring[a], x[a], w, wx, wy, h.cos, h.sin)
     sub.waypoint = np.array([wx, wy])
     # formation axis along the motion of c_s; squeeze across a corridor narrower than the formation
     dx, dy = tx - wx, ty - wy
@@ -154,15 +140,6 @@ def choose_route(h, step: Step, sub: SubSwarm, rep: Report) -> Corridor | None:
     return cands[best]
 
 
-def width_penalty(w: float, m: int, w0: float = 6.0) -> float:
-    """Route-cost penalty [m] of a narrow corridor for a sub-swarm of m agents (ours): the
-    extra queue length of funnelling m agents through it, 1 m per agent at w = 0, zero from
-    ``w0`` (6 m: three abreast at 2 m) up."""
-    if not math.isfinite(w):
-        return 0.0
-    return m * max(0.0, w0 - w) / w0
-
-
 def match(prev: Corridor, cands: list[Corridor]) -> int | None:
     """Index of the candidate that is the same corridor as ``prev`` (None if lost)."""
     if prev.direct:
@@ -178,16 +155,6 @@ def match(prev: Corridor, cands: list[Corridor]) -> int | None:
             best, j_best = d, j
     tol = max(3.0, 0.5 * min(prev.width, 20.0)) if math.isfinite(prev.width) else 3.0
     return j_best if best <= tol else None
-
-
-def cruise(p, clearance: float) -> float:
-    """Cruise speed v_s of a sub-swarm [m/s]; with the safety stack on, scaled down linearly
-    from v_s (clearance >= clr_slow) to v_min_frac v_s (clearance <= d_safe) by the nearest
-    LiDAR return of its members (adaptive cruise, ours; it paces the leashed waypoint)."""
-    if not p.leashed:
-        return p.core.v_s
-    f = _clip((clearance - p.paper.d_safe) / max(p.safety.clr_slow - p.paper.d_safe, 1e-9), 0.0, 1.0)
-    return p.core.v_s * (p.safety.v_min_frac + (1.0 - p.safety.v_min_frac) * f)
 
 
 def _clip(v: float, lo: float, hi: float) -> float:

@@ -28,14 +28,14 @@ import numpy as np
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.methods.base import Observation, check_map_bytes, format_extent
-from swarmnav.planning.bspline import SplineCosts, evaluate, optimize
-from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
-from swarmnav.methods.sph.kernel import band_guard, environment_force, released_environment_force, sph_forces
+from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
-from swarmnav.methods.sph.yielding import goal_distance_field, yield_rates
+from swarmnav.methods.sph.parts.guard import band_guard
+from swarmnav.methods.sph.parts.retime import retimed
+from swarmnav.methods.sph.parts.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
-from swarmnav.planning.bspline import SplineCosts, evaluate, optimize
+from swarmnav.planning.bspline import SplineCosts, optimize
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import POSITION_BYTES, CommLog
 from swarmnav.planning.plan_log import PlanLog, sample_times
@@ -45,7 +45,7 @@ from swarmnav.sensing.esdf import Esdf, grid_nodes
 from swarmnav.world.scenario import Scenario
 
 
-#: Peak bytes per node of building the yield field (yielding.goal_distance_field: the node graph
+#: Peak bytes per node of building the yield field (parts/yielding.goal_distance_field: the node graph
 #: and its Dijkstra; measured with tracemalloc on 0.5-5 M nodes), 8 of which stay as the field
 _YIELD_BYTES = {2: 330, 3: 970}
 
@@ -191,7 +191,7 @@ class Sph:
             # stops at hold.
             lag = np.linalg.norm(q_ref - x, axis=1)
             phi = np.clip(2.0 - 2.0 * lag / hold, 0.0, 1.0)
-        if p.yield_range > 0:  # a queue in narrow places (yielding.py)
+        if p.yield_range > 0:  # a queue in narrow places (parts/yielding.py)
             to_goal, _ = self._to_goal.query(x)
             phi = np.minimum(phi, yield_rates(to_goal, x, d, vi, vj, p.yield_range, p.yield_clearance))
         if hold > 0 or p.yield_range > 0:
@@ -311,23 +311,6 @@ class Sph:
             return pts[2:-1] if reaches_end or p.end_state == "rest" else pts[2:-2]
         return pts[1:-1]  # released: C_3 .. C_{K-3} = path[1] .. path[-2] (two knots on repeated points)
 
-    def _retimed(self, plan, start, end, pts: np.ndarray, reaches_end: bool):
-        """``plan`` optimised again, seeded from its own curve, if that curve is shorter than
-        ``retime`` times the grid path ``pts`` it was seeded from (a path the spline cuts short);
-        None if it is not. The knots are spent on the path's length, so the cut spline flies
-        slower than the planner's speed, and from a reference at rest it starts so slowly that
-        the next replan starts from rest again (docs/methods/sph.md, *Re-timing*)."""
-        p = self.params
-        tau = np.linspace(0.0, plan.duration, 8 * (plan.ctrl.shape[0] - 3) + 1)
-        curve, _, _ = evaluate(plan.ctrl, plan.dt_knot, tau)
-        length = float(np.sum(np.linalg.norm(np.diff(curve, axis=0), axis=1)))
-        if length >= p.retime * float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1))):
-            return None
-        guide = self._guide(resample(curve, p.ctrl_spacing), reaches_end)  # the end point is not a guide
-        if len(guide) == 0:
-            return None
-        return optimize(start, end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
-
     def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, others: np.ndarray | None = None):
         """One robot's replan: update its map, grid search to its goal, optimise the spline."""
         p = self.params
@@ -354,7 +337,9 @@ class Sph:
         self._plans += 1
         self._iterations += plan.iterations
         if p.retime > 0 and len(guide):
-            again = self._retimed(plan, (q, v, a), end, pts, reaches_end)
+            again = retimed(plan, (q, v, a), end, pts, p.retime, p.ctrl_spacing,
+                            lambda curve: self._guide(curve, reaches_end), self._dt_knot, self.esdf, self._costs,
+                            p.max_iter)
             if again is not None:
                 self._retimes += 1
                 self._iterations += again.iterations

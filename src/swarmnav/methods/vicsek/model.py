@@ -48,12 +48,27 @@ class VicsekParams:
     """Parameters of the Vicsek family. Defaults are the mission settings of HWVEM Section 3.2;
     the alignment study of Section 3.1 sets v0 = 0.03, eta = 0, c_rep = c_att = 0."""
 
-    #: Named parameter sets (``--set preset=NAME``) of the paper's Sections 3.1-3.2.
+    #: Named parameter sets (``--set preset=NAME``) of the paper's Sections 3.1-3.2. ``mission`` is the
+    #: default build; ``paper`` differs from it only in the seam of a periodic box (``wrap_neighbours``),
+    #: the reading Table 1 needs; ``alignment`` is Section 3.1's study in that reading.
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "mission": {},  # Sec. 3.2, the defaults (HWVEM-I weights)
+        "paper": {"wrap_neighbours": False},  # Sec. 3.2, no interaction across a periodic box's seam
         "hwvem-i": {"p1": 0.1, "p2": 5.0},  # Sec. 3.2
         "hwvem-ii": {"p1": 0.0, "p2": 100.0},  # Sec. 3.2
-        "alignment": {"v0": 0.03, "eta": 0.0, "c_rep": 0.0, "c_att": 0.0},  # Sec. 3.1: no attraction / repulsion
+        # Sec. 3.1 (Table 1, Figs. 5-6): no attraction / repulsion, no interaction across the seam
+        "alignment": {"v0": 0.03, "eta": 0.0, "c_rep": 0.0, "c_att": 0.0, "wrap_neighbours": False},
+    }
+    DEFAULT_BUILD: ClassVar[str] = "mission"
+    PRESET_DOCS: ClassVar[dict[str, str]] = {
+        "mission": "Section 3.2's mission settings (HWVEM-I weights) and our readings; in a periodic box "
+                   "neighbours interact across the seam (minimum image, ours)",
+        "paper": "Section 3.2's settings in the paper's reading of the periodic box: agents wrap but do not "
+                 "interact across its seam, so the information UAV's lower-left corner is a real place (the "
+                 "reading that reproduces Table 1, docs/methods/vicsek.md); no effect without a periodic box",
+        "hwvem-i": "Section 3.2's HWVEM-I layer weights (p1 = 0.1, p2 = 5)",
+        "hwvem-ii": "Section 3.2's HWVEM-II layer weights (p1 = 0, p2 = 100)",
+        "alignment": "Section 3.1's alignment study (Table 1, Figs. 5-6) in the paper's reading of the seam",
     }
 
     dt: float = param(1.0, "step", "[0.001, 1000]", "eq. (8)",

@@ -18,7 +18,7 @@ from numba import njit
 
 from swarmnav.methods.hes.corridors import newest_visible
 from swarmnav.methods.hes.forces import SIG_CENT, SIG_NN, SIG_SL, SIG_SLOT
-from swarmnav.methods.hes.part import Part
+from swarmnav.methods.hes.hooks import Part
 
 
 class TrailFollow(Part):

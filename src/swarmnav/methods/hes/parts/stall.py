@@ -28,9 +28,9 @@ from numba import njit
 from swarmnav.methods.base import check_map_bytes, format_extent
 from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.forces import SIG_CENT, SIG_SL, SIG_SLOT
-from swarmnav.methods.hes.part import Part
-from swarmnav.methods.hes.passage import throat_dsafe
-from swarmnav.methods.hes.plan import clearance, cost_to_go, descend, lookahead, mark_hits, nearest_reachable
+from swarmnav.methods.hes.hooks import Part
+from swarmnav.methods.hes.parts.passage import throat_dsafe
+from swarmnav.methods.hes.parts.plan import clearance, cost_to_go, descend, lookahead, mark_hits, nearest_reachable
 from swarmnav.methods.hes.step import NEVER
 
 

@@ -49,7 +49,7 @@ class GuardParams:
 
     on: bool = param(True, "", None, "ours",
         "contact guard (forces.agent_guard), every agent brakes for its neighbours with priority "
-        "over the clip of eq. (39); False = eq. (39) alone (the faithful build)")
+        "over the clip of eq. (39); False = eq. (39) alone (the paper build)")
     brake: float = param(2.2, "m/s^2", "[0, inf)", "ours",
         "contact guard: braking each agent of a closing pair is assumed to use (< a_max: head-on "
         "pairs need exactly this each; 2.0: one box_field_2 seed of ten stalls in a pocket, 1.8: "

@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from swarmnav.methods.hes.part import Part
+from swarmnav.methods.hes.hooks import Part
 
 YIELD_STEP = 0.25  # [m] radial resolution of the search (a fraction of the 1.4 m formation spacing)
 

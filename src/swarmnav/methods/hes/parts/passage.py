@@ -36,10 +36,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from swarmnav.methods.hes.barriers import agent_barrier, brake_radius
+from swarmnav.methods.hes.parts.barriers import agent_barrier, brake_radius
 from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.corridors import Corridor, segment_clear
-from swarmnav.methods.hes.part import Part
+from swarmnav.methods.hes.hooks import Part
 
 
 def throat_dsafe(half_width, d_safe: float, margin: float, relief: float = 0.0):

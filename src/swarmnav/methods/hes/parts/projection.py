@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from swarmnav.methods.hes.part import Part
+from swarmnav.methods.hes.hooks import Part
 
 
 @njit(cache=True)

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmnav.methods.hes.barriers import agent_guard, brake_radius, safety_filter
+from swarmnav.methods.hes.parts.barriers import agent_guard, brake_radius, safety_filter
 from swarmnav.methods.hes.neighbours import neighbour_rows
-from swarmnav.methods.hes.part import Part
+from swarmnav.methods.hes.hooks import Part
 
 
 class WallBarrier(Part):

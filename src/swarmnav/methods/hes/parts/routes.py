@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from swarmnav.methods.hes.corridors import segment_clear
-from swarmnav.methods.hes.part import Part
+from swarmnav.methods.hes.hooks import Part
 
 
 class SplitCommit(Part):
