@@ -38,6 +38,7 @@ _BUILTIN_MODULES = (
     "swarmnav.methods.hes",
     "swarmnav.methods.vicsek",
     "swarmnav.methods.ego_swarm",
+    "swarmnav.methods.mader",
 )
 
 

@@ -1,0 +1,307 @@
+"""``mader``: MADER, trajectory planning in multi-agent and dynamic environments (Tordesillas &
+How, T-RO 2021), for static obstacles and other agents.
+
+Each robot replans continuously and asynchronously. A replan started at step ``k_in``:
+
+1. point A: the robot's committed trajectory at ``t_in + replan_time`` (where the new plan will
+   start, since the robot keeps flying the committed one meanwhile);
+2. local goal G: the point ``Ra`` along a grid-search path on the robot's own map (or its goal
+   when closer); the path also seeds the free control points (our stand-in for Octopus Search);
+3. the problem (solver.py): the convex hull of each segment's B-spline control points must be
+   separated by a plane from every obstacle polyhedron the robot knows near the seed and from
+   every other agent's committed trajectory hull over that segment's time interval (the
+   snapshot of ``k_in``); the planes are decision variables; NLopt's MMA solves it;
+4. check (at ``t_in + replan_time``): the new plan is tested against every trajectory another
+   robot committed after ``k_in`` (it could not be in the problem); a conflict, or a failed
+   optimisation, keeps the committed trajectory (a fallback) and the robot replans again.
+   Recheck: commits of one step are processed one robot after the other, each check seeing the
+   commits before it, so no commit can slip in between a check and its commit.
+
+The command is the shared tracking law (SPH eq. 13 without the swarm force) on the committed
+trajectory, which is sampled at the control rate when it is committed.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from swarmnav.dynamics import SaturatedDoubleIntegrator
+from swarmnav.errors import ConfigError
+from swarmnav.methods.base import Observation, check_map_bytes, format_extent
+from swarmnav.methods.mader import solver as S
+from swarmnav.methods.mader.params import MaderParams
+from swarmnav.params import build
+from swarmnav.planning.bspline import boundary_points, evaluate
+from swarmnav.planning.hulls import inflate_points, interval_points, obstacle_vertices, pad, seed_planes, segment_points
+from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
+from swarmnav.planning.messages import CommLog, TrajectoryBoard
+from swarmnav.planning.tracker import track
+from swarmnav.world.scenario import Scenario
+
+_MAX_MAP_BYTES = 2 * 1024**3
+
+
+def min_time(dist: np.ndarray, v_max: float, a_max: float) -> np.ndarray:
+    """Rest-to-rest minimum time [s] of a double integrator over ``dist`` [m] per axis (trapezoid
+    or triangle velocity profile)."""
+    dist = np.abs(dist)
+    tri = dist < v_max * v_max / a_max
+    return np.where(tri, 2.0 * np.sqrt(dist / a_max), dist / v_max + v_max / a_max)
+
+
+class MaderMethod:
+    """The MADER planner (see the module docstring)."""
+
+    name = "mader"
+    dims = (2, 3)
+
+    def __init__(self, **overrides: Any):
+        p = build(MaderParams, overrides, context="mader")
+        self.params = p
+        self.dt = p.dt
+        self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
+        self._force_fail = False  # tests: every optimisation fails
+
+    # ------------------------------------------------------------------ contract
+
+    def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
+              rng: np.random.Generator) -> None:
+        p = self.params
+        if scenario.periodic:
+            raise ConfigError("mader: a periodic box has no obstacles to plan around nor a goal; "
+                              "use an open or walled scene")
+        if p.algorithm not in ("LD_SLSQP", "LD_MMA", "LD_CCSAQ"):
+            raise ConfigError(f"mader: algorithm must be LD_SLSQP, LD_MMA or LD_CCSAQ, not {p.algorithm!r}")
+        if S.nlopt is None:  # pragma: no cover
+            raise ConfigError("mader: needs the nlopt package (pip install nlopt)")
+        n, dim = scenario.n, scenario.dim
+        check_map_bytes("mader", f"a {format_extent(scenario.lower, scenario.upper)} world at "
+                        f"{p.grid_resolution:g} m", grid_cells(scenario.bounds, p.grid_resolution)
+                        * bytes_per_cell(dim, n, False, False), _MAX_MAP_BYTES, "grid_resolution",
+                        "use a coarser grid_resolution")
+        self.scenario = scenario
+        self.dim = dim
+        self.body = scenario.rules.body_radius
+        obstacles = scenario.solid_obstacles
+        self.maps = OccupancyMaps(obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.sensing_range)
+        zr = (scenario.lower[2], scenario.upper[2]) if dim == 3 else (-1e3, 1e3)
+        self.polys = [obstacle_vertices(o, dim, p.inflation, zr) for o in obstacles]
+        self.poly_lo = np.array([v.min(axis=0) for v in self.polys]).reshape(-1, dim)
+        self.poly_hi = np.array([v.max(axis=0) for v in self.polys]).reshape(-1, dim)
+        x = np.asarray(positions, dtype=float)
+        self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
+        self.comm = CommLog()
+        self.board = TrajectoryBoard(n, self.comm)
+        self.L = max(1, int(round(p.replan_time / p.dt)))  # replan latency [steps]
+        # committed plans: control points, knot span, start time [s], commit step
+        self.ctrl: list[np.ndarray] = []
+        self.dtk = np.ones(n)
+        self.t0 = np.zeros(n)
+        self.commit_step = np.zeros(n, dtype=np.int64)
+        self.ref_q = np.zeros((n, 1, dim))
+        self.ref_v = np.zeros((n, 1, dim))
+        self.ref_a = np.zeros((n, 1, dim))
+        self.ref_k0 = np.zeros(n, dtype=np.int64)
+        self.ref_len = np.ones(n, dtype=np.int64)
+        for r in range(n):  # at rest where it stands
+            self.ctrl.append(np.repeat(x[r][None], p.num_pol + 3, axis=0))
+            self._commit(r, self.ctrl[r], 1.0, 0)
+        # asynchronous replans: robot r starts its first at step r L / n
+        self.next_event = (np.arange(n) * self.L) // max(n, 1)
+        self.pending: list[dict | None] = [None] * n
+        self.stats = {"plans": 0, "commits": 0, "fallbacks": 0, "check_fails": 0, "evals": 0, "planes": 0,
+                      "search_failures": 0, "idle": 0}
+        self._plan_ms: list[float] = []
+        self._steps = 0
+
+    def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
+        p = self.params
+        k = obs.step
+        x, v = obs.positions, obs.velocities
+        for r in np.nonzero(self.next_event <= k)[0]:  # robot order: the recheck's serialisation
+            if self.pending[r] is not None:
+                self._check_commit(int(r), k)
+            self._start_replan(int(r), k, x[r])
+            self.next_event[r] = k + self.L
+        self._steps += 1
+        idx = np.clip(k - self.ref_k0, 0, self.ref_len - 1)
+        rr = np.arange(x.shape[0])
+        a = track(x, v, self.ref_q[rr, idx], self.ref_v[rr, idx], self.ref_a[rr, idx], p.k_p, p.k_v)
+        return a, {}
+
+    def summary(self) -> dict[str, float]:
+        s = self.stats
+        return {
+            "mader_plans": float(s["plans"]),
+            "mader_commits": float(s["commits"]),
+            "mader_fallbacks": float(s["fallbacks"]),
+            "mader_check_fails": float(s["check_fails"]),
+            "mader_search_failures": float(s["search_failures"]),
+            "mader_evals_mean": s["evals"] / max(s["plans"], 1),
+            "mader_planes_mean": s["planes"] / max(s["plans"], 1),
+            **self.comm.summary(self._steps * self.params.dt),
+        }
+
+    def timings(self) -> dict[str, float]:
+        """Wall-clock planning time per robot per replan [ms] (not reproducible: not metrics)."""
+        plan = np.array(self._plan_ms) if self._plan_ms else np.zeros(1)
+        return {"plan_ms_median": float(np.median(plan)), "plan_ms_p95": float(np.percentile(plan, 95)),
+                "plan_ms_max": float(plan.max())}
+
+    # ------------------------------------------------------------------ commits
+
+    def _commit(self, r: int, ctrl: np.ndarray, dtk: float, step: int) -> None:
+        """Robot ``r`` commits ``ctrl`` starting at ``step``: broadcast it and sample its reference."""
+        p = self.params
+        self.ctrl[r], self.dtk[r], self.t0[r], self.commit_step[r] = ctrl, dtk, step * p.dt, step
+        dur = (ctrl.shape[0] - 3) * dtk
+        self.board.publish(r, lambda tau, c=ctrl, h=dtk: evaluate(c, h, tau), step * p.dt, dur, ctrl.shape[0])
+        length = int(math.ceil(dur / p.dt)) + 1
+        if length > self.ref_q.shape[1]:  # grow the buffers, holding each robot's last sample
+            extra = length - self.ref_q.shape[1]
+            self.ref_q = np.concatenate([self.ref_q, np.repeat(self.ref_q[:, -1:], extra, axis=1)], axis=1)
+            self.ref_v = np.concatenate([self.ref_v, np.zeros((self.ref_v.shape[0], extra, self.dim))], axis=1)
+            self.ref_a = np.concatenate([self.ref_a, np.zeros((self.ref_a.shape[0], extra, self.dim))], axis=1)
+        q, vv, aa = evaluate(ctrl, dtk, p.dt * np.arange(length))
+        self.ref_q[r, :length], self.ref_v[r, :length], self.ref_a[r, :length] = q, vv, aa
+        self.ref_k0[r], self.ref_len[r] = step, length
+
+    def _state(self, r: int, t: float):
+        q, v, a = evaluate(self.ctrl[r], self.dtk[r], np.array([t - self.t0[r]]))
+        return q[0], v[0], a[0]
+
+    def _check_commit(self, r: int, k: int) -> None:
+        """Check the pending plan against the trajectories committed since it started; commit it
+        if it is clear, else keep the committed one (a fallback)."""
+        p = self.params
+        pend = self.pending[r]
+        self.pending[r] = None
+        others = [j for j in range(len(self.ctrl)) if j != r and self.commit_step[j] > pend["k_in"]]
+        if others:
+            ctrl, dtk = pend["ctrl"], pend["dtk"]
+            dur = (ctrl.shape[0] - 3) * dtk
+            t = k * p.dt + np.arange(0.0, dur + p.check_step, p.check_step)
+            mine = evaluate(ctrl, dtk, t - k * p.dt)[0]
+            theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
+            gap = np.linalg.norm(theirs - mine[None], axis=2).min()
+            if gap < 2 * self.body + p.check_margin:
+                self.stats["check_fails"] += 1
+                self.stats["fallbacks"] += 1
+                return
+        self._commit(r, pend["ctrl"], pend["dtk"], k)
+        self.stats["commits"] += 1
+
+    # ------------------------------------------------------------------ planning
+
+    def _start_replan(self, r: int, k: int, pos: np.ndarray) -> None:
+        p = self.params
+        goal = self.goals[r]
+        end = self.ctrl[r][-1]
+        if np.linalg.norm(end - goal) <= p.goal_tol and np.allclose(self.ctrl[r][-3:], end):
+            self.stats["idle"] += 1
+            return  # arrived: its committed plan rests at its goal
+        t0 = time.perf_counter()
+        k_c = k + self.L
+        qa, va, aa = self._state(r, k_c * p.dt)
+        self.maps.observe(r, pos)
+        result = self._plan(r, qa, va, aa, goal, k_c * p.dt)
+        self.stats["plans"] += 1
+        self._plan_ms.append(1e3 * (time.perf_counter() - t0))
+        if result is None:
+            self.stats["fallbacks"] += 1
+            return
+        self.pending[r] = {"ctrl": result[0], "dtk": result[1], "k_in": k}
+
+    def _plan(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, goal: np.ndarray, t_a: float):
+        """One MADER optimisation from state (q, v, a) at time ``t_a`` [s]: (ctrl, dt_knot) or None."""
+        p = self.params
+        dim = self.dim
+        path = self.maps.search(r, q, goal, p.max_expand)
+        if path is None:
+            self.stats["search_failures"] += 1
+            path = np.vstack([q, goal])
+        path = np.vstack([q, path[1:]]) if len(path) > 1 else np.vstack([q, goal])
+        seg_len = np.linalg.norm(np.diff(path, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(seg_len)])
+        horizon = min(p.Ra, cum[-1])
+        # local goal G: Ra along the path (the goal if closer)
+        G = _along(path, cum, horizon)
+        factor = p.factor_alloc_close if np.linalg.norm(q - goal) < p.dist_factor_alloc_close else p.factor_alloc
+        T = factor * float(min_time(G - q, p.v_max, p.a_max).max())
+        T = max(T, p.num_pol * 4 * p.dt, float(np.abs(v).max()) / p.a_max)
+        dtk = T / p.num_pol
+        start = boundary_points(q, v, a, dtk)
+        F = p.num_pol - 2
+        frac = np.arange(1, F + 1) / F  # free interior points spread along the path, q_f at G
+        free0 = np.array([_along(path, cum, horizon * f) for f in frac])
+        free0[-1] = G
+        seed = np.vstack([start, free0])
+        lo, hi = seed.min(axis=0) - p.obstacle_margin, seed.max(axis=0) + p.obstacle_margin
+        C0 = np.vstack([start, free0[:-1], np.repeat(free0[-1:], 3, axis=0)])
+        sp = segment_points(C0)
+        segs, sets = self._obstacles(r, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
+                                     t_a, dtk)
+        # the problem in coordinates centred at A: plane offsets d stay small (SLSQP's conditioning)
+        pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim) - q, p.weight, p.v_max, p.a_max)
+        free0, C0 = free0 - q, C0 - q
+        n0, d0, _ = seed_planes(segment_points(C0)[segs], pb.verts) if len(segs) else (np.zeros((0, dim)), np.zeros(0), 0)
+        self.stats["planes"] += len(segs)
+        if self._force_fail:
+            return None
+        res = S.solve(pb, free0, n0, d0, p.max_eval, p.eps_tol, p.xtol_rel, p.ftol_rel, p.algorithm, p.Ra + 4.0)
+        self.stats["evals"] += res.evaluations
+        if res.ctrl is None:
+            return None
+        ctrl = res.ctrl + q
+        # obstacles the solution reached that were not in the problem: reject (the next replan sees them)
+        lo2, hi2 = ctrl.min(axis=0), ctrl.max(axis=0)
+        if np.any(lo2 < lo) or np.any(hi2 > hi):
+            big_lo = np.minimum(lo, lo2 - p.obstacle_margin)
+            big_hi = np.maximum(hi, hi2 + p.obstacle_margin)
+            segs2, _ = self._obstacles(r, np.repeat(big_lo[None], p.num_pol, 0), np.repeat(big_hi[None], p.num_pol, 0),
+                                       t_a, dtk)
+            if len(segs2) > len(segs):
+                return None
+        return ctrl, dtk
+
+    def _obstacles(self, r: int, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):
+        """(segment of each plane, vertex set of each plane): for each segment s, the known obstacle
+        polyhedra meeting its box [lo[s], hi[s]], and each other agent's committed trajectory hull
+        over the segment's interval, grown by ``agent_inflation``, where it meets the box."""
+        p = self.params
+        segs, sets = [], []
+        for s in range(p.num_pol):
+            near = self.maps.known[r] & np.all(self.poly_lo <= hi[s], axis=1) & np.all(self.poly_hi >= lo[s], axis=1)
+            for o in np.nonzero(near)[0]:
+                segs.append(s)
+                sets.append(self.polys[o])
+        for j in range(len(self.ctrl)):
+            if j == r:
+                continue
+            for s in range(p.num_pol):
+                pts = interval_points(self.ctrl[j], self.dtk[j], self.t0[j], t_a + s * dtk, t_a + (s + 1) * dtk)
+                if np.any(pts.min(axis=0) - p.agent_inflation > hi[s]) or np.any(pts.max(axis=0) + p.agent_inflation < lo[s]):
+                    continue
+                segs.append(s)
+                sets.append(inflate_points(_unique_rows(pts), p.agent_inflation))
+        return np.array(segs, dtype=np.int64), sets
+
+
+def _unique_rows(pts: np.ndarray) -> np.ndarray:
+    keep = np.ones(len(pts), dtype=bool)
+    keep[1:] = np.any(np.abs(np.diff(pts, axis=0)) > 1e-12, axis=1)
+    return pts[keep]
+
+
+def _along(path: np.ndarray, cum: np.ndarray, s: float) -> np.ndarray:
+    """The point at arc length ``s`` along a polyline with cumulative lengths ``cum``."""
+    if cum[-1] <= 0:
+        return path[-1].copy()
+    s = min(max(s, 0.0), cum[-1])
+    i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(path) - 2))
+    w = (s - cum[i]) / max(cum[i + 1] - cum[i], 1e-12)
+    return path[i] + w * (path[i + 1] - path[i])

@@ -1,0 +1,65 @@
+"""Parameters of the ``mader`` method: the authors' ``mader.yaml`` (mit-acl/mader) and the paper
+(Tordesillas & How, T-RO 2021), with the shared dynamics bounds of the SPH Table II comparison."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from swarmnav.params import param
+
+
+@dataclass(frozen=True, slots=True)
+class MaderParams:
+    """MADER (Tordesillas & How, T-RO 2021). Values from ``mader.yaml`` unless marked "ours"."""
+
+    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {"paper": {}}
+
+    # --- dynamics and control ---
+    dt: float = param(0.01, "s", "[0.001, 0.1]", "mader.yaml dc",
+        "control step (the authors' 100 Hz reference, and SPH's step)")
+    v_max: float = param(1.0, "m/s", "(0, inf)", "SPH Table I (shared; mader.yaml v_max is also 1.0 per axis)",
+        "speed bound: per axis in the planner (as MADER), on the norm in the shared dynamics")
+    a_max: float = param(1.5, "m/s^2", "(0, inf)", "SPH Table I (shared; mader.yaml a_max is also 1.5 per axis)",
+        "acceleration bound: per axis in the planner, on the norm in the dynamics")
+    k_p: float = param(5.0, "1/s^2", "[0, inf)", "SPH eq. (13), Table I (the shared tracker)", "position gain")
+    k_v: float = param(3.5, "1/s", "[0, inf)", "SPH eq. (13), Table I (the shared tracker)", "velocity gain")
+    # --- planning (mader.yaml) ---
+    Ra: float = param(8.0, "m", "(0, inf)", "mader.yaml Ra", "planning horizon: radius of the planning sphere")
+    num_pol: int = param(4, "", "[4, 12]", "mader.yaml num_pol", "segments of the cubic B-spline")
+    weight: float = param(1000.0, "1/m^2", "[0, inf)", "mader.yaml weight",
+        "weight of the squared distance of the final point to the local goal")
+    eps_tol: float = param(1e-6, "", "(0, 1]", "mader.yaml epsilon_tol_constraints", "constraint tolerance")
+    xtol_rel: float = param(1e-13, "", "[0, 1)", "mader.yaml xtol_rel", "NLopt relative x tolerance")
+    ftol_rel: float = param(1e-10, "", "[0, 1)", "mader.yaml ftol_rel", "NLopt relative f tolerance")
+    algorithm: str = param("LD_SLSQP", "", None, "mader.yaml's list of NLopt solvers (its default LD_MMA: docs)",
+        "NLopt algorithm (LD_SLSQP, LD_MMA, LD_CCSAQ)")
+    max_eval: int = param(300, "", "[1, 100000]", "ours",
+        "NLopt evaluations per replan: a deterministic stand-in for upper_bound_runtime_snlopt (0.35 s)")
+    factor_alloc: float = param(1.0, "", "[1, 10]", "mader.yaml factor_alloc",
+        "duration = factor x the per-axis minimum time of a double integrator")
+    factor_alloc_close: float = param(1.5, "", "[1, 10]", "mader.yaml factor_alloc_close", "factor near the goal")
+    dist_factor_alloc_close: float = param(2.0, "m", "[0, inf)", "mader.yaml dist_factor_alloc_close",
+        "distance to the goal below which factor_alloc_close applies")
+    replan_time: float = param(0.2, "s", "[0.01, 5]", "ours (mader.yaml runtime bounds 0.05-0.35 s)",
+        "simulated time a replan takes: a plan started at t commits at t + replan_time, from the "
+        "committed trajectory's state at that time (point A)")
+    # --- obstacles and agents (ours: the paper takes polyhedra from its perception) ---
+    sensing_range: float = param(8.0, "m", "(0, inf)", "ours (= Ra)",
+        "an obstacle joins a robot's map once its bounding box is this close")
+    inflation: float = param(0.3, "m", "[0, inf)", "ours (body 0.2 m + 0.1 m)",
+        "obstacles grow by this before their polyhedra are built")
+    agent_inflation: float = param(0.5, "m", "[0, inf)", "ours (two bodies 0.4 m + 0.1 m; MADER: drone_bbox)",
+        "half-size of the box added to another agent's trajectory hull")
+    obstacle_margin: float = param(1.0, "m", "[0, inf)", "ours",
+        "obstacles and agents within this of the seed's bounding box enter the problem")
+    check_margin: float = param(0.05, "m", "[0, inf)", "ours",
+        "check: a new plan fails if it comes within 2 body radii + this of a trajectory committed meanwhile")
+    check_step: float = param(0.05, "s", "(0, 1]", "ours", "time step of the sampled check")
+    # --- initial guess (ours: grid search instead of Octopus Search, docs) ---
+    grid_resolution: float = param(0.2, "m", "(0, inf)", "ours", "cell of the per-robot search grid")
+    max_expand: int = param(200000, "", "[1, 100000000]", "ours", "A* expansion budget")
+    goal_spread: float = param(0.5, "", "[0, 1]", "ours",
+        "per-robot goal = goal + goal_spread * (spawn_i - spawn centroid): each MADER agent has its own goal")
+    goal_tol: float = param(0.05, "m", "[0, inf)", "ours",
+        "a robot whose committed plan ends this close to its goal stops replanning")

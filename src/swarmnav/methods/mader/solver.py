@@ -1,0 +1,233 @@
+"""MADER's optimisation (Tordesillas & How, T-RO 2021, Section V), solved with NLopt as the
+authors' open path does (``mader.yaml``: ``solver: LD_MMA``).
+
+Decision variables: the free control points of a uniform cubic B-spline of ``num_pol``
+segments, and one plane (n, d) per (segment, obstacle) pair. The first three control points
+are fixed by the start state (position, velocity, acceleration); the last three are one free
+point ``q_f`` (zero velocity and acceleration at the end). With ``N + 1 = num_pol + 3`` points
+the free ones are ``q_3 .. q_{N-3}`` and ``q_f``.
+
+    minimise   int ||jerk||^2 dt + weight ||q_f - G||^2
+    subject to n_p . v + d_p >= 1        every vertex v of obstacle p's polyhedron,
+               n_p . c + d_p <= -1       every control point c of segment s(p),
+               |V_i| <= v_max, |A_i| <= a_max   per axis, on the velocity / acceleration
+                                                control points (the B-spline's hull of them).
+
+The jerk of a uniform cubic B-spline is constant on each segment, ``(C_{i+3} - 3 C_{i+2} +
+3 C_{i+1} - C_i) / dt^3``, so the integral is :func:`~swarmnav.planning.bspline.smoothness_cost`
+over ``dt^5``. Every constraint and its Jacobian are array expressions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from swarmnav.planning.bspline import smoothness_cost
+
+try:  # NLopt is a declared dependency; the import is guarded so a missing wheel fails in reset, not at import
+    import nlopt
+except ImportError:  # pragma: no cover
+    nlopt = None
+
+
+@dataclass(frozen=True, slots=True)
+class Problem:
+    """One replan's optimisation problem (see the module docstring)."""
+
+    start: np.ndarray  # (3, D) fixed control points C_0 .. C_2
+    goal: np.ndarray  # (D,) local goal G [m]
+    dt_knot: float  # [s]
+    num_pol: int
+    seg: np.ndarray  # (P,) segment of each plane
+    verts: np.ndarray  # (P, V, D) obstacle vertices of each plane [m]
+    weight: float
+    v_max: float  # [m/s] per axis
+    a_max: float  # [m/s^2] per axis
+
+
+@dataclass(frozen=True, slots=True)
+class Result:
+    ctrl: np.ndarray | None  # (N + 1, D), None if no feasible solution
+    evaluations: int
+    violation: float  # largest constraint value at the returned point (<= tol: feasible)
+    status: str
+
+
+class Mader:
+    """The constraint and cost functions of one :class:`Problem`, on the flat variable vector
+    ``x = [free points (F, D), n (P, D), d (P,)]``."""
+
+    def __init__(self, pb: Problem):
+        self.pb = pb
+        D = pb.start.shape[1]
+        N = pb.num_pol + 2  # index of the last control point
+        F = pb.num_pol - 2  # free points: q_3 .. q_{N-3}, q_f
+        P = len(pb.seg)
+        V = pb.verts.shape[1] if P else 0
+        self.D, self.N, self.F, self.P, self.V = D, N, F, P, V
+        cmap = np.full(N + 1, -1)
+        cmap[3: N - 2] = np.arange(F - 1)
+        cmap[N - 2:] = F - 1
+        self.cmap = cmap
+        self.off_n = F * D
+        self.off_d = F * D + P * D
+        self.nvar = self.off_d + P
+        # ctrl = B x_free + c_fixed, (N + 1) x F selection
+        B = np.zeros((N + 1, F))
+        B[cmap >= 0, cmap[cmap >= 0]] = 1.0
+        self.B = B
+        fixed = np.zeros((N + 1, D))
+        fixed[:3] = pb.start
+        self.fixed = fixed
+        # linear velocity / acceleration rows that depend on a free point
+        dt = pb.dt_knot
+        Mv = (np.eye(N + 1, k=1) - np.eye(N + 1))[:N] / dt  # V_i = (C_{i+1} - C_i) / dt
+        Ma = np.zeros((N - 1, N + 1))
+        for i in range(N - 1):
+            Ma[i, i], Ma[i, i + 1], Ma[i, i + 2] = 1.0 / dt**2, -2.0 / dt**2, 1.0 / dt**2
+        rows, bounds = [], []
+        for M, bound in ((Mv, pb.v_max), (Ma, pb.a_max)):
+            MB = M @ B
+            keep = np.any(np.abs(MB) > 1e-12, axis=1)
+            rows.append((M[keep], MB[keep]))
+            bounds.append(np.full(int(keep.sum()), bound))
+        M = np.vstack([r[0] for r in rows])
+        MB = np.vstack([r[1] for r in rows])
+        b = np.concatenate(bounds)
+        # per axis, both signs: rows (2 L D)
+        L = len(b)
+        Alin = np.zeros((2 * L * D, self.nvar))
+        for k in range(D):
+            Alin[k * L:(k + 1) * L, k: F * D: D] = MB
+            Alin[(D + k) * L:(D + k + 1) * L, k: F * D: D] = -MB
+        self.Alin = Alin
+        cst = M @ fixed  # (L, D)
+        self.blin = np.concatenate([cst[:, k] - b for k in range(D)] + [-cst[:, k] - b for k in range(D)])
+        # plane rows: index arrays of the Jacobian
+        self.m_cp = 4 * P
+        self.m_v = P * V
+        self.m = self.m_cp + self.m_v + len(self.blin)
+        p_of = np.repeat(np.arange(P), 4)
+        k_of = np.tile(np.arange(4), P)
+        self.cp_idx = pb.seg[p_of] + k_of  # control point of each cp row
+        f_of = cmap[self.cp_idx]
+        self.cp_free_rows = np.nonzero(f_of >= 0)[0]
+        self.cp_free_cols = f_of[self.cp_free_rows][:, None] * D + np.arange(D)[None, :]
+        self.cp_p = p_of
+        self.n_cols = self.off_n + np.arange(P)[:, None] * D + np.arange(D)[None, :]  # (P, D)
+        self.evals = 0
+
+    # ------------------------------------------------------------------ pieces
+
+    def unpack(self, x: np.ndarray):
+        F, D, P = self.F, self.D, self.P
+        free = x[: F * D].reshape(F, D)
+        n = x[self.off_n: self.off_d].reshape(P, D)
+        d = x[self.off_d:]
+        return free, n, d
+
+    def ctrl(self, x: np.ndarray) -> np.ndarray:
+        return self.B @ self.unpack(x)[0] + self.fixed
+
+    def pack(self, free: np.ndarray, n: np.ndarray, d: np.ndarray) -> np.ndarray:
+        return np.concatenate([free.ravel(), n.ravel(), d.ravel()])
+
+    def cost(self, x: np.ndarray, grad: np.ndarray) -> float:
+        self.evals += 1
+        pb = self.pb
+        C = self.ctrl(x)
+        js, gs = smoothness_cost(C)
+        s5 = pb.dt_knot ** 5
+        e = C[-1] - pb.goal
+        f = js / s5 + pb.weight * float(e @ e)
+        if grad.size:
+            grad[:] = 0.0
+            gfree = self.B.T @ (gs / s5)
+            gfree[-1] += 2.0 * pb.weight * e
+            grad[: self.F * self.D] = gfree.ravel()
+        return float(f)
+
+    def constraints(self, result: np.ndarray, x: np.ndarray, grad: np.ndarray) -> None:
+        P, V, D = self.P, self.V, self.D
+        C = self.ctrl(x)
+        _, n, d = self.unpack(x)
+        cps = C[self.cp_idx]  # (4P, D)
+        c_cp = np.einsum("rd,rd->r", n[self.cp_p], cps) + d[self.cp_p] + 1.0
+        c_v = (1.0 - np.einsum("pd,pvd->pv", n, self.pb.verts) - d[:, None]).ravel()
+        c_lin = self.Alin @ x + self.blin
+        result[:] = np.concatenate([c_cp, c_v, c_lin])
+        if grad.size:
+            grad[:] = 0.0
+            r = np.arange(self.m_cp)
+            grad[r[:, None], self.n_cols[self.cp_p]] = cps
+            grad[r, self.off_d + self.cp_p] = 1.0
+            fr = self.cp_free_rows
+            grad[fr[:, None], self.cp_free_cols] = n[self.cp_p[fr]]
+            if V:
+                rv = self.m_cp + np.arange(P * V)
+                pv = np.repeat(np.arange(P), V)
+                grad[rv[:, None], self.n_cols[pv]] = -self.pb.verts.reshape(-1, D)
+                grad[rv, self.off_d + pv] = -1.0
+            grad[self.m_cp + self.m_v:] = self.Alin
+
+    def violation(self, x: np.ndarray) -> float:
+        out = np.empty(self.m)
+        self.constraints(out, x, np.zeros(0))
+        return float(out.max()) if out.size else 0.0
+
+
+def solve(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, max_eval: int, tol: float,
+          xtol_rel: float, ftol_rel: float, algorithm: str = "LD_SLSQP", box: float = 12.0,
+          plane_bound: float = 100.0) -> Result:
+    """Solve ``pb`` from the initial guess with NLopt; the best feasible point seen is kept
+    (NLopt may stop on a round-off limit after reaching it)."""
+    prob = Mader(pb)
+    x0 = prob.pack(free0, n0, d0)
+    if not np.all(np.isfinite(x0)):
+        return Result(None, 0, float("inf"), "nan-guess")
+    best = {"x": None, "f": np.inf}
+
+    def f(x, grad):
+        val = prob.cost(x, grad)
+        return val
+
+    def g(result, x, grad):
+        prob.constraints(result, x, grad)
+        if np.all(np.isfinite(result)) and result.max() <= tol:
+            val = prob.cost(x, np.zeros(0))
+            prob.evals -= 1
+            if val < best["f"]:
+                best["x"], best["f"] = x.copy(), val
+    opt = nlopt.opt(getattr(nlopt, algorithm), prob.nvar)
+    opt.set_min_objective(f)
+    # bounds: free points within ``box`` [m] of the start, plane normals within +-plane_bound [1/m]
+    lo, hi = np.full(prob.nvar, -1e4), np.full(prob.nvar, 1e4)
+    F, D = prob.F, prob.D
+    lo[: F * D] = np.tile(pb.start[0] - box, F)
+    hi[: F * D] = np.tile(pb.start[0] + box, F)
+    lo[prob.off_n: prob.off_d], hi[prob.off_n: prob.off_d] = -plane_bound, plane_bound
+    opt.set_lower_bounds(lo)
+    opt.set_upper_bounds(hi)
+    x0 = np.clip(x0, lo, hi)
+    if prob.m:
+        opt.add_inequality_mconstraint(g, np.full(prob.m, tol * 0.5))
+    opt.set_maxeval(int(max_eval))
+    opt.set_xtol_rel(xtol_rel)
+    opt.set_ftol_rel(ftol_rel)
+    status = "ok"
+    try:
+        x = opt.optimize(x0)
+        viol = prob.violation(x)
+        if np.all(np.isfinite(x)) and viol <= tol and prob.cost(x, np.zeros(0)) <= best["f"]:
+            best["x"] = x
+    except Exception as exc:  # noqa: BLE001 - NLopt raises its own classes (roundoff, runtime_error); keep the best seen
+        status = type(exc).__name__
+    if best["x"] is None:
+        return Result(None, prob.evals, float("inf"), status if status != "ok" else "infeasible")
+    x = best["x"]
+    C = prob.ctrl(x)
+    if not np.all(np.isfinite(C)):
+        return Result(None, prob.evals, float("inf"), "nan")
+    return Result(C, prob.evals, prob.violation(x), status)

@@ -1,0 +1,115 @@
+"""MADER (``mader``): the optimisation's derivatives, the hulls, the contract's refusals, fallbacks
+and counted communication. Short horizons: a replan costs NLopt ~0.1-1 s here."""
+
+import numpy as np
+import pytest
+
+import swarmnav
+from swarmnav.errors import ConfigError
+from swarmnav.methods.base import Observation
+from swarmnav.methods.mader import MaderMethod
+from swarmnav.methods.mader import solver as S
+from swarmnav.planning.hulls import obstacle_vertices, seed_planes
+from swarmnav.planning.messages import trajectory_bytes
+from swarmnav.world.obstacles import Box, Circle
+from tests._helpers.cli import run_cli
+
+
+def _problem(rng):
+    start = np.array([[0.0, 0.0], [0.1, 0.0], [0.2, 0.0]])
+    verts = np.stack([obstacle_vertices(Circle((2.0, 0.3), 0.5), 2, 0.3), obstacle_vertices(Circle((3.0, -1.0), 0.4), 2, 0.3)])
+    return S.Problem(start, np.array([5.0, 0.0]), 1.5, 4, np.array([1, 2]), verts, 1000.0, 1.0, 1.5)
+
+
+def test_jacobian_and_gradient_match_finite_differences():
+    rng = np.random.default_rng(0)
+    pr = S.Mader(_problem(rng))
+    x = rng.standard_normal(pr.nvar)
+    out, J = np.empty(pr.m), np.empty((pr.m, pr.nvar))
+    pr.constraints(out, x, J)
+    g = np.empty(pr.nvar)
+    pr.cost(x, g)
+    h = 1e-6
+    for i in range(pr.nvar):
+        e = np.zeros(pr.nvar)
+        e[i] = h
+        a, b = np.empty(pr.m), np.empty(pr.m)
+        pr.constraints(a, x + e, np.zeros(0))
+        pr.constraints(b, x - e, np.zeros(0))
+        np.testing.assert_allclose(J[:, i], (a - b) / (2 * h), atol=1e-5)
+        fd = (pr.cost(x + e, np.zeros(0)) - pr.cost(x - e, np.zeros(0))) / (2 * h)
+        assert g[i] == pytest.approx(fd, rel=1e-5, abs=1e-4)
+
+
+def test_solution_separates_segments_from_obstacles():
+    pb = _problem(None)
+    free0 = np.array([[2.5, 0.0], [5.0, 0.0]])
+    C0 = np.vstack([pb.start, free0[:1], np.repeat(free0[1:], 3, axis=0)])
+    cps = C0[np.array([1, 2])[:, None] + np.arange(4)]
+    n0, d0, _ = seed_planes(cps, pb.verts)
+    res = S.solve(pb, free0, n0, d0, 300, 1e-6, 1e-13, 1e-10)
+    assert res.ctrl is not None and res.violation <= 1e-6
+    # every returned control point of a constrained segment lies outside the obstacle's polygon side
+    for s, v, r in zip(pb.seg, pb.verts, (0.5, 0.4)):  # inflated disc radii r + 0.3 (inside their polygons)
+        seg = res.ctrl[s: s + 4]
+        assert np.all(np.linalg.norm(seg - v.mean(axis=0), axis=1) > r + 0.3 - 1e-6)
+
+
+def test_disc_polygon_contains_the_inflated_disc():
+    v = obstacle_vertices(Circle((1.0, 2.0), 0.5), 2, 0.2)
+    ang = np.linspace(0, 2 * np.pi, 100)
+    pts = np.array([1.0, 2.0]) + 0.7 * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    # inside the convex polygon: every point on the same side of all edges
+    edges = np.roll(v, -1, axis=0) - v
+    cross = edges[None, :, 0] * (pts[:, None, 1] - v[None, :, 1]) - edges[None, :, 1] * (pts[:, None, 0] - v[None, :, 0])
+    assert np.all(cross >= -1e-9)
+    box = obstacle_vertices(Box((0.0, 0.0), (1.0, 2.0)), 3, 0.1, (0.0, 3.0))
+    assert box.shape == (8, 3) and box.min() == pytest.approx(-0.1) and box.max() == pytest.approx(3.1)
+
+
+def test_periodic_box_refused():
+    with pytest.raises(ConfigError):
+        swarmnav.run("mader", "periodic_box:n=4,rho=1.0", seed=1, steps=5)
+    r = run_cli("run", "--method", "mader", "--scenario", "periodic_box:n=4,rho=1.0", "--steps", "5",
+                "--out", "/tmp/mader-periodic-test", "--quiet", "--force")
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_out_of_range_parameter_refused():
+    with pytest.raises(ConfigError):
+        MaderMethod(num_pol=2)
+    with pytest.raises(ConfigError):
+        MaderMethod(replan_time=-1.0)
+
+
+def _fly(m, scene, steps, seed=3):
+    rng = np.random.default_rng(seed)
+    x = scene.spawn_positions(rng)
+    v = np.zeros_like(x)
+    m.reset(scene, x, v, rng)
+    for k in range(steps):
+        a, _ = m.act(Observation(k, k * m.dt, x, v), rng)
+        x, v = m.dynamics.step(x, v, a, m.dt)
+    return x, v
+
+
+def test_forced_solver_failure_is_a_fallback_and_stays_finite():
+    from swarmnav.world.generators import random_forest
+    scene = random_forest(density=0.15, seed=1, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
+    m = MaderMethod()
+    m._force_fail = True
+    x, v = _fly(m, scene, 60)
+    s = m.summary()
+    assert s["mader_fallbacks"] == s["mader_plans"] > 0 and s["mader_commits"] == 0
+    assert np.all(np.isfinite(x)) and np.all(np.isfinite(v))
+
+
+def test_comm_counts_every_commit():
+    from swarmnav.world.generators import random_forest
+    scene = random_forest(density=0.15, seed=1, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
+    m = MaderMethod(max_eval=40)
+    _fly(m, scene, 45)
+    s = m.summary()
+    n = scene.n
+    assert s["comm_messages"] == n + s["mader_commits"]  # the initial hover plans, then each commit
+    assert s["comm_bytes"] == s["comm_messages"] * trajectory_bytes(m.params.num_pol + 3)
