@@ -172,8 +172,8 @@ def _numpy_problem() -> str | None:
     return f"NumPy runs its {' '.join(on)} loops (it was imported before swarmnav)" if on else None
 
 
-def _openblas() -> list[tuple[str, str | None, int | None]]:
-    """(file, kernel name, threads) of every OpenBLAS loaded in this process."""
+def _openblas() -> list[tuple[str, str | None, int | None, str | None]]:
+    """(file, kernel name, threads, build configuration) of every OpenBLAS loaded in this process."""
     return [(Path(p).name, *(f() if f else None for f in _openblas_calls(p))) for p in _openblas_paths(len(sys.modules))]
 
 
@@ -203,15 +203,20 @@ def _openblas_calls(path: str) -> tuple:
         return None
 
     name = find("openblas_get_corename", ctypes.c_char_p)
-    return (lambda: (name() or b"").decode() or None) if name else None, find("openblas_get_num_threads", ctypes.c_int)
+    config = find("openblas_get_config", ctypes.c_char_p)
+    return ((lambda: (name() or b"").decode() or None) if name else None, find("openblas_get_num_threads", ctypes.c_int),
+            (lambda: (config() or b"").decode() or None) if config else None)
 
 
 def _openblas_problems() -> list[str]:
     loaded = _openblas()
     if not loaded:  # NumPy links its BLAS, so it is loaded by now: this one is not OpenBLAS
         return ["NumPy's BLAS is not OpenBLAS, whose kernel portable mode pins"]
+    # A build for one target (no DYNAMIC_ARCH in its configuration, e.g. CasADi's CORE2 copy that
+    # IPOPT's MUMPS calls) runs the same kernels on every machine: only a dispatching build is pinned.
     return [f"OpenBLAS {f} runs the {name} kernels, {threads} thread(s) (loaded before swarmnav)"
-            for f, name, threads in loaded if (name or "").lower() not in _PRESCOTT_NAMES or threads != 1]
+            for f, name, threads, config in loaded
+            if threads != 1 or ((name or "").lower() not in _PRESCOTT_NAMES and "DYNAMIC_ARCH" in (config or "DYNAMIC_ARCH"))]
 
 
 def _numba_problem() -> str | None:

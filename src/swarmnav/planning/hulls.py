@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from swarmnav.world.obstacles import Box, Circle, Cylinder, Polygon, Sphere
 
@@ -72,22 +73,34 @@ def obstacle_vertices(obstacle, dim: int, inflation: float, z_range=(-1e3, 1e3))
                       np.column_stack([flat, np.full(len(flat), z1)])])
 
 
-def pad(sets: list[np.ndarray], dim: int) -> np.ndarray:
-    """Stack vertex sets of different sizes into (P, Vmax, dim), padding with the first vertex."""
+def pad(sets: list[np.ndarray], dim: int, multiple: int = 1) -> np.ndarray:
+    """Stack vertex sets of different sizes into (P, Vmax, dim), padding with each set's centroid
+    (inside the hull, so a padded row is a constraint that is never active; a repeated vertex
+    would be a duplicate, degenerate one)."""
     if not sets:
         return np.zeros((0, 1, dim))
-    vmax = max(len(s) for s in sets)
+    vmax = -(-max(len(s) for s in sets) // multiple) * multiple
     out = np.empty((len(sets), vmax, dim))
     for k, s in enumerate(sets):
         out[k, : len(s)] = s
-        out[k, len(s):] = s[0]
+        out[k, len(s):] = s.mean(axis=0)
     return out
 
 
 def inflate_points(points: np.ndarray, half: float) -> np.ndarray:
-    """Vertices of the Minkowski sum of the points' hull and the cube of half-size ``half``."""
+    """Vertices of the Minkowski sum of the points' hull and the cube of half-size ``half``
+    (only the corners on the hull, by SciPy's Qhull)."""
     dim = points.shape[1]
-    return (points[:, None, :] + half * _square_offsets(dim)[None]).reshape(-1, dim)
+    pts = (points[:, None, :] + half * _square_offsets(dim)[None]).reshape(-1, dim)
+    return hull_vertices(pts)
+
+
+def hull_vertices(pts: np.ndarray) -> np.ndarray:
+    """The points of ``pts`` that are vertices of its convex hull (all of them if the hull is flat)."""
+    try:
+        return pts[np.sort(ConvexHull(pts).vertices)]
+    except QhullError:
+        return pts
 
 
 def segment_points(ctrl: np.ndarray) -> np.ndarray:

@@ -113,3 +113,40 @@ def test_comm_counts_every_commit():
     n = scene.n
     assert s["comm_messages"] == n + s["mader_commits"]  # the initial hover plans, then each commit
     assert s["comm_bytes"] == s["comm_messages"] * trajectory_bytes(m.params.num_pol + 3)
+
+
+@pytest.mark.parametrize("basis", ["bspline", "bezier"])
+def test_ipopt_solution_is_certified_by_its_planes(basis):
+    """IPOPT's answer: every segment's hull points (B-spline or Bezier) lie outside each inflated
+    obstacle polygon, the velocity / acceleration control points within their bounds, and the same
+    problem gives the same bits twice."""
+    pb = _problem(None)
+    free0 = np.array([[2.5, 0.0], [5.0, 0.0]])
+    C0 = np.vstack([pb.start, free0[:1], np.repeat(free0[1:], 3, axis=0)])
+    cps = C0[np.array([1, 2])[:, None] + np.arange(4)]
+    n0, d0, _ = seed_planes(cps, pb.verts)
+    res = S.solve_ipopt(pb, free0, n0, d0, 200, 1e-6, basis)
+    again = S.solve_ipopt(pb, free0, n0, d0, 200, 1e-6, basis)
+    assert res.ctrl is not None and res.violation <= 1e-6
+    np.testing.assert_array_equal(res.ctrl, again.ctrl)
+    M = S.BEZIER if basis == "bezier" else np.eye(4)
+    for s, v in zip(pb.seg, pb.verts):
+        hull = M @ res.ctrl[s: s + 4]
+        # no hull point inside the polygon: each is beyond at least one edge
+        edges = np.roll(v, -1, axis=0) - v
+        cross = edges[None, :, 0] * (hull[:, None, 1] - v[None, :, 1]) - edges[None, :, 1] * (hull[:, None, 0] - v[None, :, 0])
+        assert np.all((cross < 0).any(axis=1))
+    vel = np.diff(res.ctrl, axis=0) / pb.dt_knot
+    acc = np.diff(res.ctrl, n=2, axis=0) / pb.dt_knot**2
+    assert np.abs(vel).max() <= pb.v_max * (1 + 1e-5) and np.abs(acc).max() <= pb.a_max * (1 + 1e-5)
+    assert res.ctrl[-1, 0] > 2.0  # it makes progress towards the local goal (5, 0) between the two discs
+
+
+def test_ipopt_infeasible_problem_returns_no_plan():
+    """A start inside an obstacle cannot be separated from it: no plan (the method falls back)."""
+    start = np.array([[2.0, 0.3], [2.0, 0.3], [2.0, 0.3]])
+    verts = obstacle_vertices(Circle((2.0, 0.3), 0.5), 2, 0.3)[None]
+    pb = S.Problem(start, np.array([5.0, 0.0]), 1.5, 4, np.array([0]), verts, 1000.0, 1.0, 1.5)
+    free0 = np.array([[3.0, 0.3], [5.0, 0.0]])
+    res = S.solve_ipopt(pb, free0, np.array([[1.0, 0.0]]), np.array([0.0]), 200, 1e-6)
+    assert res.ctrl is None and res.violation > 1e-6

@@ -58,6 +58,7 @@ class MaderMethod:
 
     name = "mader"
     dims = (2, 3)
+    periodic = False  # a periodic box has no obstacles to plan around nor a goal: refused in one line
 
     def __init__(self, **overrides: Any):
         p = build(MaderParams, overrides, context="mader")
@@ -74,9 +75,13 @@ class MaderMethod:
         if scenario.periodic:
             raise ConfigError("mader: a periodic box has no obstacles to plan around nor a goal; "
                               "use an open or walled scene")
-        if p.algorithm not in ("LD_SLSQP", "LD_MMA", "LD_CCSAQ"):
-            raise ConfigError(f"mader: algorithm must be LD_SLSQP, LD_MMA or LD_CCSAQ, not {p.algorithm!r}")
-        if S.nlopt is None:  # pragma: no cover
+        if p.algorithm not in ("ipopt", "LD_SLSQP", "LD_MMA", "LD_CCSAQ"):
+            raise ConfigError(f"mader: algorithm must be ipopt, LD_SLSQP, LD_MMA or LD_CCSAQ, not {p.algorithm!r}")
+        if p.basis not in ("bspline", "bezier"):
+            raise ConfigError(f"mader: basis must be bspline or bezier, not {p.basis!r}")
+        if p.algorithm != "ipopt" and p.basis != "bspline":
+            raise ConfigError("mader: basis=bezier needs algorithm=ipopt")
+        if p.algorithm != "ipopt" and S.nlopt is None:  # pragma: no cover
             raise ConfigError("mader: needs the nlopt package (pip install nlopt)")
         n, dim = scenario.n, scenario.dim
         check_map_bytes("mader", f"a {format_extent(scenario.lower, scenario.upper)} world at "
@@ -246,13 +251,20 @@ class MaderMethod:
         segs, sets = self._obstacles(r, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
                                      t_a, dtk)
         # the problem in coordinates centred at A: plane offsets d stay small (SLSQP's conditioning)
-        pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim) - q, p.weight, p.v_max, p.a_max)
+        pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max)
         free0, C0 = free0 - q, C0 - q
-        n0, d0, _ = seed_planes(segment_points(C0)[segs], pb.verts) if len(segs) else (np.zeros((0, dim)), np.zeros(0), 0)
+        hulls = segment_points(C0)
+        if p.basis == "bezier":
+            hulls = np.einsum("ij,sjd->sid", S.BEZIER, hulls)
+        n0, d0, _ = seed_planes(hulls[segs], pb.verts) if len(segs) else (np.zeros((0, dim)), np.zeros(0), 0)
         self.stats["planes"] += len(segs)
         if self._force_fail:
             return None
-        res = S.solve(pb, free0, n0, d0, p.max_eval, p.eps_tol, p.xtol_rel, p.ftol_rel, p.algorithm, p.Ra + 4.0)
+        if p.algorithm == "ipopt":
+            res = S.solve_ipopt(pb, free0, n0, d0, p.max_iter, p.eps_tol, p.basis, p.Ra + 4.0, p.plane_bound)
+        else:
+            res = S.solve(pb, free0, n0, d0, p.max_eval, p.eps_tol, p.xtol_rel, p.ftol_rel, p.algorithm, p.Ra + 4.0,
+                          p.plane_bound)
         self.stats["evals"] += res.evaluations
         if res.ctrl is None:
             return None

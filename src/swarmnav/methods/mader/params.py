@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 from swarmnav.params import param
 
@@ -32,8 +32,14 @@ class MaderParams:
     eps_tol: float = param(1e-6, "", "(0, 1]", "mader.yaml epsilon_tol_constraints", "constraint tolerance")
     xtol_rel: float = param(1e-13, "", "[0, 1)", "mader.yaml xtol_rel", "NLopt relative x tolerance")
     ftol_rel: float = param(1e-10, "", "[0, 1)", "mader.yaml ftol_rel", "NLopt relative f tolerance")
-    algorithm: str = param("LD_SLSQP", "", None, "mader.yaml's list of NLopt solvers (its default LD_MMA: docs)",
-        "NLopt algorithm (LD_SLSQP, LD_MMA, LD_CCSAQ)")
+    algorithm: Literal["ipopt", "LD_SLSQP", "LD_MMA", "LD_CCSAQ"] = param("ipopt", "", None, "ours (docs: NLopt's SLSQP and MMA measured slower and less often feasible)",
+        "solver: ipopt (CasADi), or NLopt's LD_SLSQP, LD_MMA, LD_CCSAQ (mader.yaml's list; its default LD_MMA)")
+    max_iter: int = param(200, "", "[1, 100000]", "ours",
+        "IPOPT iterations per replan: a deterministic stand-in for upper_bound_runtime_snlopt (0.35 s)")
+    basis: Literal["bspline", "bezier"] = param("bspline", "", None, "mader.yaml basis (MINVO there; not built here: docs)",
+        "hull of each segment: bspline (its control points) or bezier (its Bezier points, a tighter hull)")
+    plane_bound: float = param(100.0, "1/m", "(0, inf)", "ours",
+        "bound on each component of a plane normal (the margin 2/|n| stays above 2/(plane_bound sqrt(D)))")
     max_eval: int = param(300, "", "[1, 100000]", "ours",
         "NLopt evaluations per replan: a deterministic stand-in for upper_bound_runtime_snlopt (0.35 s)")
     factor_alloc: float = param(1.0, "", "[1, 10]", "mader.yaml factor_alloc",

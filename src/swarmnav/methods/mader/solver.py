@@ -21,10 +21,13 @@ over ``dt^5``. Every constraint and its Jacobian are array expressions.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from swarmnav.planning.bspline import smoothness_cost
+
+import casadi as ca
 
 try:  # NLopt is a declared dependency; the import is guarded so a missing wheel fails in reset, not at import
     import nlopt
@@ -231,3 +234,90 @@ def solve(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, max_ev
     if not np.all(np.isfinite(C)):
         return Result(None, prob.evals, float("inf"), "nan")
     return Result(C, prob.evals, prob.violation(x), status)
+
+
+# ---------------------------------------------------------------------- IPOPT (CasADi)
+
+#: Bézier control points of one uniform cubic B-spline segment from its four B-spline control
+#: points (the Bézier hull is inside the B-spline hull: MADER's ``basis: BEZIER``).
+BEZIER = np.array([[1.0, 4.0, 1.0, 0.0], [0.0, 4.0, 2.0, 0.0], [0.0, 2.0, 4.0, 0.0], [0.0, 1.0, 4.0, 1.0]]) / 6.0
+_IPOPT_CACHE: dict[tuple, Any] = {}
+
+
+def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float):
+    """The compiled CasADi/IPOPT problem for a shape (cached): variables ``x = [free (F, D),
+    n (P, D), d (P,)]``, parameters ``[C_0..C_2, G, dt_knot, v_max, a_max, weight, verts (P, V, D),
+    segment (P,)]``. The segment of each plane is a parameter, so one shape serves every
+    assignment of planes to segments."""
+    key = (D, num_pol, P, V, basis, max_iter, tol)
+    hit = _IPOPT_CACHE.get(key)
+    if hit is not None:
+        return hit
+    N, F = num_pol + 2, num_pol - 2
+    x = ca.SX.sym("x", F * D + P * D + P)
+    par = ca.SX.sym("p", 3 * D + D + 4 + P * V * D + P)
+    start = ca.reshape(par[: 3 * D], D, 3).T
+    G = par[3 * D: 4 * D].T
+    dtk, vmax, amax, weight = par[4 * D], par[4 * D + 1], par[4 * D + 2], par[4 * D + 3]
+    o = 4 * D + 4
+    verts = ca.reshape(par[o: o + P * V * D], D, P * V).T  # row p V + v
+    seg = par[o + P * V * D:]
+    free = ca.reshape(x[: F * D], D, F).T
+    C = ca.vertcat(start, free[: F - 1, :], free[F - 1, :], free[F - 1, :], free[F - 1, :])  # (N + 1, D)
+    jerk = C[3:, :] - 3 * C[2:-1, :] + 3 * C[1:-2, :] - C[:-3, :]
+    f = ca.sumsqr(jerk) / dtk**5 + weight * ca.sumsqr(C[N, :] - G)
+    n = ca.reshape(x[F * D: F * D + P * D], D, P).T
+    d = x[F * D + P * D:]
+    M = ca.DM(BEZIER if basis == "bezier" else np.eye(4))
+    segs = [ca.mtimes(M, C[s: s + 4, :]) for s in range(num_pol)]  # (4, D) hull points of each segment
+    g_cp, g_v = [], []
+    for p in range(P):
+        pts = sum((ca.if_else(seg[p] == s, 1.0, 0.0) * segs[s] for s in range(num_pol)), ca.SX.zeros(4, D))
+        g_cp.append(ca.mtimes(pts, n[p, :].T) + d[p])  # <= -1
+        g_v.append(ca.mtimes(verts[p * V:(p + 1) * V, :], n[p, :].T) + d[p])  # >= 1
+    vel = (C[1:, :] - C[:-1, :]) / dtk
+    acc = (C[2:, :] - 2 * C[1:-1, :] + C[:-2, :]) / dtk**2
+    g = ca.vertcat(*g_cp, *g_v, ca.vec(vel) / vmax, ca.vec(acc) / amax)
+    m_cp, m_v, m_l = 4 * P, V * P, (N + N - 1) * D
+    lbg = np.concatenate([np.full(m_cp, -np.inf), np.ones(m_v), -np.ones(m_l)])
+    ubg = np.concatenate([-np.ones(m_cp), np.full(m_v, np.inf), np.ones(m_l)])
+    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": int(max_iter),
+            "ipopt.tol": float(tol), "ipopt.mu_strategy": "adaptive"}
+    solver = ca.nlpsol("mader", "ipopt", {"x": x, "p": par, "f": f, "g": g}, opts)
+    _IPOPT_CACHE[key] = (solver, lbg, ubg)
+    return _IPOPT_CACHE[key]
+
+
+def solve_ipopt(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, max_iter: int, tol: float,
+                basis: str = "bspline", box: float = 12.0, plane_bound: float = 100.0) -> Result:
+    """Solve ``pb`` with IPOPT (interior point, exact Hessian, MUMPS) through CasADi. The plane
+    normals are bounded by ``plane_bound`` [1/m] (the separation's margin is 2 / |n|, so the
+    bound admits gaps down to 2 / (plane_bound sqrt(D)) m): without a bound the barrier pushes the
+    planes' scale to infinity. Feasible means every constraint within ``tol``."""
+    D = pb.start.shape[1]
+    P = len(pb.seg)
+    V = pb.verts.shape[1] if P else 0
+    F = pb.num_pol - 2
+    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol)
+    par = np.concatenate([pb.start.ravel(), pb.goal, [pb.dt_knot, pb.v_max, pb.a_max, pb.weight],
+                          pb.verts.reshape(-1), pb.seg.astype(float)])
+    x0 = np.concatenate([free0.ravel(), n0.ravel(), d0])
+    if not np.all(np.isfinite(x0)) or not np.all(np.isfinite(par)):
+        return Result(None, 0, float("inf"), "nan-guess")
+    lbx, ubx = np.full(x0.size, -np.inf), np.full(x0.size, np.inf)
+    lbx[: F * D], ubx[: F * D] = np.tile(pb.start[0] - box, F), np.tile(pb.start[0] + box, F)
+    lbx[F * D: F * D + P * D], ubx[F * D: F * D + P * D] = -plane_bound, plane_bound
+    reach = plane_bound * (np.sqrt(D) * (box + np.abs(pb.verts).max() if P else box) + 1.0)
+    lbx[F * D + P * D:], ubx[F * D + P * D:] = -reach, reach
+    sol = solver(x0=np.clip(x0, lbx, ubx), p=par, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx)
+    stats = solver.stats()
+    x = np.asarray(sol["x"]).ravel()
+    g = np.asarray(sol["g"]).ravel()
+    viol = float(max(np.max(lbg - g, initial=0.0), np.max(g - ubg, initial=0.0)))
+    iters = int(stats.get("iter_count", 0))
+    status = str(stats.get("return_status", "unknown"))
+    if not np.all(np.isfinite(x)) or viol > tol:
+        return Result(None, iters, viol, status)
+    free = x[: F * D].reshape(F, D)
+    C = np.vstack([pb.start, free[: F - 1], np.repeat(free[F - 1:], 3, axis=0)])
+    return Result(C, iters, viol, status)
