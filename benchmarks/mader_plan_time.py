@@ -23,7 +23,7 @@ def main() -> None:
     seed = int(sys.argv[3]) if len(sys.argv) > 3 else 1
     scene = random_forest(density=density, seed=seed, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
     over = dict(a.split("=", 1) for a in sys.argv[4:])
-    over = {k: (v if k in ("algorithm", "basis") else float(v)) for k, v in over.items()}
+    over = {k: (v if k in ("algorithm", "basis", "knots") else float(v)) for k, v in over.items()}
     m = MaderMethod(**over)
     rng = np.random.default_rng(seed)
     x = scene.spawn_positions(rng)

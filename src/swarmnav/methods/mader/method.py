@@ -35,7 +35,7 @@ from swarmnav.methods.base import Observation, check_map_bytes, format_extent
 from swarmnav.methods.mader import solver as S
 from swarmnav.methods.mader.params import MaderParams
 from swarmnav.params import build
-from swarmnav.planning.bspline import boundary_points, evaluate
+from swarmnav.planning import bspline, clamped
 from swarmnav.planning.hulls import inflate_points, interval_points, obstacle_vertices, pad, seed_planes, segment_points
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
@@ -79,8 +79,10 @@ class MaderMethod:
             raise ConfigError(f"mader: algorithm must be ipopt, LD_SLSQP, LD_MMA or LD_CCSAQ, not {p.algorithm!r}")
         if p.basis not in ("bspline", "bezier"):
             raise ConfigError(f"mader: basis must be bspline or bezier, not {p.basis!r}")
-        if p.algorithm != "ipopt" and p.basis != "bspline":
-            raise ConfigError("mader: basis=bezier needs algorithm=ipopt")
+        if p.basis != "bspline" and (p.algorithm != "ipopt" or p.knots != "uniform"):
+            raise ConfigError("mader: basis=bezier needs algorithm=ipopt and knots=uniform")
+        if p.algorithm != "ipopt" and p.knots != "uniform":
+            raise ConfigError(f"mader: algorithm={p.algorithm} needs knots=uniform (the NLopt path is uniform only)")
         if p.algorithm != "ipopt" and S.nlopt is None:  # pragma: no cover
             raise ConfigError("mader: needs the nlopt package (pip install nlopt)")
         n, dim = scenario.n, scenario.dim
@@ -164,19 +166,25 @@ class MaderMethod:
         p = self.params
         self.ctrl[r], self.dtk[r], self.t0[r], self.commit_step[r] = ctrl, dtk, step * p.dt, step
         dur = (ctrl.shape[0] - 3) * dtk
-        self.board.publish(r, lambda tau, c=ctrl, h=dtk: evaluate(c, h, tau), step * p.dt, dur, ctrl.shape[0])
+        self.board.publish(r, lambda tau, c=ctrl, h=dtk: self._eval(c, h, tau), step * p.dt, dur, ctrl.shape[0])
         length = int(math.ceil(dur / p.dt)) + 1
         if length > self.ref_q.shape[1]:  # grow the buffers, holding each robot's last sample
             extra = length - self.ref_q.shape[1]
             self.ref_q = np.concatenate([self.ref_q, np.repeat(self.ref_q[:, -1:], extra, axis=1)], axis=1)
             self.ref_v = np.concatenate([self.ref_v, np.zeros((self.ref_v.shape[0], extra, self.dim))], axis=1)
             self.ref_a = np.concatenate([self.ref_a, np.zeros((self.ref_a.shape[0], extra, self.dim))], axis=1)
-        q, vv, aa = evaluate(ctrl, dtk, p.dt * np.arange(length))
+        q, vv, aa = self._eval(ctrl, dtk, p.dt * np.arange(length))
         self.ref_q[r, :length], self.ref_v[r, :length], self.ref_a[r, :length] = q, vv, aa
         self.ref_k0[r], self.ref_len[r] = step, length
 
+    def _eval(self, ctrl: np.ndarray, dtk: float, tau: np.ndarray):
+        """Position, velocity, acceleration of a plan at times ``tau`` [s] from its start."""
+        if self.params.knots == "clamped":
+            return clamped.evaluate(ctrl, dtk, tau)
+        return bspline.evaluate(ctrl, dtk, tau)
+
     def _state(self, r: int, t: float):
-        q, v, a = evaluate(self.ctrl[r], self.dtk[r], np.array([t - self.t0[r]]))
+        q, v, a = self._eval(self.ctrl[r], self.dtk[r], np.array([t - self.t0[r]]))
         return q[0], v[0], a[0]
 
     def _check_commit(self, r: int, k: int) -> None:
@@ -190,7 +198,7 @@ class MaderMethod:
             ctrl, dtk = pend["ctrl"], pend["dtk"]
             dur = (ctrl.shape[0] - 3) * dtk
             t = k * p.dt + np.arange(0.0, dur + p.check_step, p.check_step)
-            mine = evaluate(ctrl, dtk, t - k * p.dt)[0]
+            mine = self._eval(ctrl, dtk, t - k * p.dt)[0]
             theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
             gap = np.linalg.norm(theirs - mine[None], axis=2).min()
             if gap < 2 * self.body + p.check_margin:
@@ -239,7 +247,10 @@ class MaderMethod:
         T = factor * float(min_time(G - q, p.v_max, p.a_max).max())
         T = max(T, p.num_pol * 4 * p.dt, float(np.abs(v).max()) / p.a_max)
         dtk = T / p.num_pol
-        start = boundary_points(q, v, a, dtk)
+        if p.knots == "clamped":
+            start = clamped.boundary_points(q, v, a, dtk, p.num_pol)
+        else:
+            start = bspline.boundary_points(q, v, a, dtk)
         F = p.num_pol - 2
         frac = np.arange(1, F + 1) / F  # free interior points spread along the path, q_f at G
         free0 = np.array([_along(path, cum, horizon * f) for f in frac])
@@ -261,7 +272,7 @@ class MaderMethod:
         if self._force_fail:
             return None
         if p.algorithm == "ipopt":
-            res = S.solve_ipopt(pb, free0, n0, d0, p.max_iter, p.eps_tol, p.basis, p.Ra + 4.0, p.plane_bound)
+            res = S.solve_ipopt(pb, free0, n0, d0, p.max_iter, p.eps_tol, p.basis, p.Ra + 4.0, p.plane_bound, p.knots)
         else:
             res = S.solve(pb, free0, n0, d0, p.max_eval, p.eps_tol, p.xtol_rel, p.ftol_rel, p.algorithm, p.Ra + 4.0,
                           p.plane_bound)

@@ -36,6 +36,9 @@ class MaderParams:
         "solver: ipopt (CasADi), or NLopt's LD_SLSQP, LD_MMA, LD_CCSAQ (mader.yaml's list; its default LD_MMA)")
     max_iter: int = param(200, "", "[1, 100000]", "ours",
         "IPOPT iterations per replan: a deterministic stand-in for upper_bound_runtime_snlopt (0.35 s)")
+    knots: Literal["clamped", "uniform"] = param("clamped", "", None, "MADER paper Section IV (clamped uniform B-splines)",
+        "knot vector: clamped (the curve starts at C_0, C_1 = q + v dt / 3) or uniform (the shared "
+        "planning/bspline.py spline, whose start points lie v dt around the robot)")
     basis: Literal["bspline", "bezier"] = param("bspline", "", None, "mader.yaml basis (MINVO there; not built here: docs)",
         "hull of each segment: bspline (its control points) or bezier (its Bezier points, a tighter hull)")
     plane_bound: float = param(100.0, "1/m", "(0, inf)", "ours",

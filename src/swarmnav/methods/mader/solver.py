@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmnav.planning import clamped
 from swarmnav.planning.bspline import smoothness_cost
 
 import casadi as ca
@@ -244,12 +245,12 @@ BEZIER = np.array([[1.0, 4.0, 1.0, 0.0], [0.0, 4.0, 2.0, 0.0], [0.0, 2.0, 4.0, 0
 _IPOPT_CACHE: dict[tuple, Any] = {}
 
 
-def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float):
+def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float, knots: str):
     """The compiled CasADi/IPOPT problem for a shape (cached): variables ``x = [free (F, D),
     n (P, D), d (P,)]``, parameters ``[C_0..C_2, G, dt_knot, v_max, a_max, weight, verts (P, V, D),
     segment (P,)]``. The segment of each plane is a parameter, so one shape serves every
     assignment of planes to segments."""
-    key = (D, num_pol, P, V, basis, max_iter, tol)
+    key = (D, num_pol, P, V, basis, max_iter, tol, knots)
     hit = _IPOPT_CACHE.get(key)
     if hit is not None:
         return hit
@@ -264,7 +265,13 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
     seg = par[o + P * V * D:]
     free = ca.reshape(x[: F * D], D, F).T
     C = ca.vertcat(start, free[: F - 1, :], free[F - 1, :], free[F - 1, :], free[F - 1, :])  # (N + 1, D)
-    jerk = C[3:, :] - 3 * C[2:-1, :] + 3 * C[1:-2, :] - C[:-3, :]
+    if knots == "clamped":  # derivative control points of the clamped spline (planning/clamped.py)
+        Mv, Ma, Mj = (ca.DM(m) for m in clamped.derivative_matrices(num_pol))
+        jerk, vel, acc = ca.mtimes(Mj, C), ca.mtimes(Mv, C) / dtk, ca.mtimes(Ma, C) / dtk**2
+    else:
+        jerk = C[3:, :] - 3 * C[2:-1, :] + 3 * C[1:-2, :] - C[:-3, :]
+        vel = (C[1:, :] - C[:-1, :]) / dtk
+        acc = (C[2:, :] - 2 * C[1:-1, :] + C[:-2, :]) / dtk**2
     f = ca.sumsqr(jerk) / dtk**5 + weight * ca.sumsqr(C[N, :] - G)
     n = ca.reshape(x[F * D: F * D + P * D], D, P).T
     d = x[F * D + P * D:]
@@ -275,8 +282,6 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
         pts = sum((ca.if_else(seg[p] == s, 1.0, 0.0) * segs[s] for s in range(num_pol)), ca.SX.zeros(4, D))
         g_cp.append(ca.mtimes(pts, n[p, :].T) + d[p])  # <= -1
         g_v.append(ca.mtimes(verts[p * V:(p + 1) * V, :], n[p, :].T) + d[p])  # >= 1
-    vel = (C[1:, :] - C[:-1, :]) / dtk
-    acc = (C[2:, :] - 2 * C[1:-1, :] + C[:-2, :]) / dtk**2
     g = ca.vertcat(*g_cp, *g_v, ca.vec(vel) / vmax, ca.vec(acc) / amax)
     m_cp, m_v, m_l = 4 * P, V * P, (N + N - 1) * D
     lbg = np.concatenate([np.full(m_cp, -np.inf), np.ones(m_v), -np.ones(m_l)])
@@ -289,7 +294,8 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
 
 
 def solve_ipopt(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, max_iter: int, tol: float,
-                basis: str = "bspline", box: float = 12.0, plane_bound: float = 100.0) -> Result:
+                basis: str = "bspline", box: float = 12.0, plane_bound: float = 100.0,
+                knots: str = "uniform") -> Result:
     """Solve ``pb`` with IPOPT (interior point, exact Hessian, MUMPS) through CasADi. The plane
     normals are bounded by ``plane_bound`` [1/m] (the separation's margin is 2 / |n|, so the
     bound admits gaps down to 2 / (plane_bound sqrt(D)) m): without a bound the barrier pushes the
@@ -298,7 +304,7 @@ def solve_ipopt(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, 
     P = len(pb.seg)
     V = pb.verts.shape[1] if P else 0
     F = pb.num_pol - 2
-    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol)
+    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol, knots)
     par = np.concatenate([pb.start.ravel(), pb.goal, [pb.dt_knot, pb.v_max, pb.a_max, pb.weight],
                           pb.verts.reshape(-1), pb.seg.astype(float)])
     x0 = np.concatenate([free0.ravel(), n0.ravel(), d0])
