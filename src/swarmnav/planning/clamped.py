@@ -83,3 +83,22 @@ def evaluate(ctrl: np.ndarray, dt: float, tau: np.ndarray) -> tuple[np.ndarray, 
         v[out] = 0.0
         a[out] = 0.0
     return q, v, a
+
+
+@functools.cache
+def bezier_matrices(num_seg: int) -> np.ndarray:
+    """(S, 4, 4): the Bézier control points of segment ``s`` are ``M[s] @ C[s:s+4]``. Their hull
+    holds the segment too and is tighter than the hull of ``C[s:s+4]`` (MADER's ``basis: BEZIER``).
+    Found exactly: the segment's basis functions at u = 0, 1/3, 2/3, 1, mapped through the inverse
+    cubic Bernstein matrix (the matrices do not depend on the span duration)."""
+    t = knots(num_seg, 1.0)
+    u = np.array([0.0, 1.0, 2.0, 3.0]) / 3.0
+    bern = np.stack([(1 - u) ** 3, 3 * u * (1 - u) ** 2, 3 * u**2 * (1 - u), u**3], axis=1)
+    out = np.empty((num_seg, 4, 4))
+    for s in range(num_seg):
+        x = s + u
+        x[-1] = min(x[-1], num_seg - 1e-12)  # the right end of the last span, inside the base interval
+        vals = BSpline.design_matrix(x, t, 3).toarray()[:, s: s + 4]  # (4 times, 4 control points)
+        out[s] = np.linalg.solve(bern, vals)
+    out.setflags(write=False)
+    return out

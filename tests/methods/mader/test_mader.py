@@ -9,6 +9,7 @@ from swarmnav.errors import ConfigError
 from swarmnav.methods.base import Observation
 from swarmnav.methods.mader import MaderMethod
 from swarmnav.methods.mader import solver as S
+from swarmnav.planning import clamped
 from swarmnav.planning.hulls import obstacle_vertices, seed_planes
 from swarmnav.planning.messages import trajectory_bytes
 from swarmnav.world.obstacles import Box, Circle
@@ -80,6 +81,18 @@ def test_out_of_range_parameter_refused():
         MaderMethod(num_pol=2)
     with pytest.raises(ConfigError):
         MaderMethod(replan_time=-1.0)
+    with pytest.raises(ConfigError):
+        MaderMethod(knots="open")
+
+
+@pytest.mark.parametrize("over", [{"basis": "bezier"}, {"algorithm": "LD_SLSQP"}])
+def test_combinations_the_solver_cannot_do_are_refused_in_one_line(over):
+    """Bezier hulls are built for uniform knots only, and the NLopt path is uniform only: the default
+    clamped knots with either is refused at the CLI with exit 2."""
+    args = [a for k, v in over.items() for a in ("--set", f"{k}={v}")]
+    r = run_cli("run", "--method", "mader", "--scenario", "random_forest:density=0.15,seed=1", "--steps", "3",
+                *args, "--out", "/tmp/mader-combo-test", "--quiet", "--force")
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "knots=uniform" in r.stderr
 
 
 def _fly(m, scene, steps, seed=3):
@@ -93,21 +106,25 @@ def _fly(m, scene, steps, seed=3):
     return x, v
 
 
-def test_forced_solver_failure_is_a_fallback_and_stays_finite():
+def test_infeasible_problems_are_counted_fallbacks_and_the_swarm_stays_finite():
+    """Obstacles grown by 20 m (and known from 50 m) swallow every robot's start, so no plane separates segment 0 from
+    them: every replan is a counted fallback, nothing is committed, the robots hold their hover
+    plans and stay finite."""
     from swarmnav.world.generators import random_forest
-    scene = random_forest(density=0.15, seed=1, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
-    m = MaderMethod()
-    m._force_fail = True
+    scene = random_forest(density=0.45, seed=1, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
+    m = MaderMethod(inflation=20.0, sensing_range=50.0)
+    x0 = scene.spawn_positions(np.random.default_rng(3))
     x, v = _fly(m, scene, 60)
     s = m.summary()
     assert s["mader_fallbacks"] == s["mader_plans"] > 0 and s["mader_commits"] == 0
     assert np.all(np.isfinite(x)) and np.all(np.isfinite(v))
+    assert np.abs(x - x0).max() < 1e-9  # hover plans: nobody moved
 
 
 def test_comm_counts_every_commit():
     from swarmnav.world.generators import random_forest
     scene = random_forest(density=0.15, seed=1, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
-    m = MaderMethod(max_eval=40)
+    m = MaderMethod()
     _fly(m, scene, 45)
     s = m.summary()
     n = scene.n
@@ -115,8 +132,8 @@ def test_comm_counts_every_commit():
     assert s["comm_bytes"] == s["comm_messages"] * trajectory_bytes(m.params.num_pol + 3)
 
 
-@pytest.mark.parametrize("basis", ["bspline", "bezier"])
-def test_ipopt_solution_is_certified_by_its_planes(basis):
+@pytest.mark.parametrize("basis, knots", [("bspline", "uniform"), ("bezier", "uniform"), ("bspline", "clamped")])
+def test_ipopt_solution_is_certified_by_its_planes(basis, knots):
     """IPOPT's answer: every segment's hull points (B-spline or Bezier) lie outside each inflated
     obstacle polygon, the velocity / acceleration control points within their bounds, and the same
     problem gives the same bits twice."""
@@ -125,8 +142,11 @@ def test_ipopt_solution_is_certified_by_its_planes(basis):
     C0 = np.vstack([pb.start, free0[:1], np.repeat(free0[1:], 3, axis=0)])
     cps = C0[np.array([1, 2])[:, None] + np.arange(4)]
     n0, d0, _ = seed_planes(cps, pb.verts)
-    res = S.solve_ipopt(pb, free0, n0, d0, 200, 1e-6, basis)
-    again = S.solve_ipopt(pb, free0, n0, d0, 200, 1e-6, basis)
+    if knots == "clamped":
+        pb = S.Problem(clamped.boundary_points(pb.start[1], np.array([0.1, 0.0]), np.zeros(2), pb.dt_knot, 4),
+                       pb.goal, pb.dt_knot, pb.num_pol, pb.seg, pb.verts, pb.weight, pb.v_max, pb.a_max)
+    res = S.solve_ipopt(pb, free0, n0, d0, 200, 1e-6, basis, knots=knots)
+    again = S.solve_ipopt(pb, free0, n0, d0, 200, 1e-6, basis, knots=knots)
     assert res.ctrl is not None and res.violation <= 1e-6
     np.testing.assert_array_equal(res.ctrl, again.ctrl)
     M = S.BEZIER if basis == "bezier" else np.eye(4)
@@ -136,8 +156,12 @@ def test_ipopt_solution_is_certified_by_its_planes(basis):
         edges = np.roll(v, -1, axis=0) - v
         cross = edges[None, :, 0] * (hull[:, None, 1] - v[None, :, 1]) - edges[None, :, 1] * (hull[:, None, 0] - v[None, :, 0])
         assert np.all((cross < 0).any(axis=1))
-    vel = np.diff(res.ctrl, axis=0) / pb.dt_knot
-    acc = np.diff(res.ctrl, n=2, axis=0) / pb.dt_knot**2
+    if knots == "clamped":
+        Mv, Ma, _ = clamped.derivative_matrices(4)
+        vel, acc = Mv @ res.ctrl / pb.dt_knot, Ma @ res.ctrl / pb.dt_knot**2
+    else:
+        vel = np.diff(res.ctrl, axis=0) / pb.dt_knot
+        acc = np.diff(res.ctrl, n=2, axis=0) / pb.dt_knot**2
     assert np.abs(vel).max() <= pb.v_max * (1 + 1e-5) and np.abs(acc).max() <= pb.a_max * (1 + 1e-5)
     assert res.ctrl[-1, 0] > 2.0  # it makes progress towards the local goal (5, 0) between the two discs
 

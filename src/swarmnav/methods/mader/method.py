@@ -79,8 +79,8 @@ class MaderMethod:
             raise ConfigError(f"mader: algorithm must be ipopt, LD_SLSQP, LD_MMA or LD_CCSAQ, not {p.algorithm!r}")
         if p.basis not in ("bspline", "bezier"):
             raise ConfigError(f"mader: basis must be bspline or bezier, not {p.basis!r}")
-        if p.basis != "bspline" and (p.algorithm != "ipopt" or p.knots != "uniform"):
-            raise ConfigError("mader: basis=bezier needs algorithm=ipopt and knots=uniform")
+        if p.basis != "bspline" and p.algorithm != "ipopt":
+            raise ConfigError("mader: basis=bezier needs algorithm=ipopt")
         if p.algorithm != "ipopt" and p.knots != "uniform":
             raise ConfigError(f"mader: algorithm={p.algorithm} needs knots=uniform (the NLopt path is uniform only)")
         if p.algorithm != "ipopt" and S.nlopt is None:  # pragma: no cover
@@ -200,8 +200,13 @@ class MaderMethod:
             t = k * p.dt + np.arange(0.0, dur + p.check_step, p.check_step)
             mine = self._eval(ctrl, dtk, t - k * p.dt)[0]
             theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
-            gap = np.linalg.norm(theirs - mine[None], axis=2).min()
-            if gap < 2 * self.body + p.check_margin:
+            if p.check_norm == "box":  # the optimisation's own measure: the box of agent_inflation
+                gap = np.abs(theirs - mine[None]).max(axis=2).min()
+                need = p.agent_inflation
+            else:
+                gap = np.linalg.norm(theirs - mine[None], axis=2).min()
+                need = 2 * self.body + p.check_margin
+            if gap < need:
                 self.stats["check_fails"] += 1
                 self.stats["fallbacks"] += 1
                 return
@@ -247,6 +252,12 @@ class MaderMethod:
         T = factor * float(min_time(G - q, p.v_max, p.a_max).max())
         T = max(T, p.num_pol * 4 * p.dt, float(np.abs(v).max()) / p.a_max)
         dtk = T / p.num_pol
+        if p.knots == "clamped" and p.cap_span:
+            # the start fixes V_1 = v + a dt / 2 (planning/clamped.py): a span so long that V_1 leaves
+            # the per-axis bound makes every problem infeasible; shorten it to where V_1 = +-v_max
+            room = np.where(a > 0, p.v_max - v, np.where(a < 0, p.v_max + v, np.inf))
+            cap = float(np.min(2.0 * np.maximum(room, 0.0) / np.maximum(np.abs(a), 1e-12)))
+            dtk = max(min(dtk, cap), 4 * p.dt)
         if p.knots == "clamped":
             start = clamped.boundary_points(q, v, a, dtk, p.num_pol)
         else:
@@ -265,8 +276,7 @@ class MaderMethod:
         pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max)
         free0, C0 = free0 - q, C0 - q
         hulls = segment_points(C0)
-        if p.basis == "bezier":
-            hulls = np.einsum("ij,sjd->sid", S.BEZIER, hulls)
+        hulls = np.einsum("sij,sjd->sid", S.hull_matrices(p.num_pol, p.basis, p.knots), hulls)
         n0, d0, _ = seed_planes(hulls[segs], pb.verts) if len(segs) else (np.zeros((0, dim)), np.zeros(0), 0)
         self.stats["planes"] += len(segs)
         if self._force_fail:

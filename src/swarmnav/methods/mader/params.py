@@ -25,7 +25,8 @@ class MaderParams:
     k_p: float = param(5.0, "1/s^2", "[0, inf)", "SPH eq. (13), Table I (the shared tracker)", "position gain")
     k_v: float = param(3.5, "1/s", "[0, inf)", "SPH eq. (13), Table I (the shared tracker)", "velocity gain")
     # --- planning (mader.yaml) ---
-    Ra: float = param(8.0, "m", "(0, inf)", "mader.yaml Ra", "planning horizon: radius of the planning sphere")
+    Ra: float = param(4.0, "m", "(0, inf)", "mader.yaml: Ra \"should be < fov_depth\" (4.5 m); its value 8.0 breaks that rule",
+        "planning horizon: radius of the planning sphere (chosen on forest 1 of density 0.25: docs)")
     num_pol: int = param(4, "", "[4, 12]", "mader.yaml num_pol", "segments of the cubic B-spline")
     weight: float = param(1000.0, "1/m^2", "[0, inf)", "mader.yaml weight",
         "weight of the squared distance of the final point to the local goal")
@@ -64,6 +65,11 @@ class MaderParams:
         "obstacles and agents within this of the seed's bounding box enter the problem")
     check_margin: float = param(0.05, "m", "[0, inf)", "ours",
         "check: a new plan fails if it comes within 2 body radii + this of a trajectory committed meanwhile")
+    check_norm: Literal["box", "euclidean"] = param("box", "", None, "ours",
+        "check measure: box = no sample of the new plan within the agent_inflation box of a trajectory "
+        "committed meanwhile (what the optimisation's hulls need); euclidean = 2 body radii + check_margin")
+    cap_span: bool = param(True, "", None, "ours",
+        "clamped knots: shorten the knot span so the start's fixed second velocity point v + a dt/2 stays within v_max")
     check_step: float = param(0.05, "s", "(0, 1]", "ours", "time step of the sampled check")
     # --- initial guess (ours: grid search instead of Octopus Search, docs) ---
     grid_resolution: float = param(0.2, "m", "(0, inf)", "ours", "cell of the per-robot search grid")

@@ -245,6 +245,16 @@ BEZIER = np.array([[1.0, 4.0, 1.0, 0.0], [0.0, 4.0, 2.0, 0.0], [0.0, 2.0, 4.0, 0
 _IPOPT_CACHE: dict[tuple, Any] = {}
 
 
+def hull_matrices(num_pol: int, basis: str, knots: str) -> np.ndarray:
+    """(S, 4, 4): the hull points of segment ``s`` are ``M[s] @ C[s:s+4]``: the control points
+    themselves (``bspline``) or the segment's Bézier points (``bezier``, for either knot vector)."""
+    if basis == "bspline":
+        return np.broadcast_to(np.eye(4), (num_pol, 4, 4))
+    if knots == "clamped":
+        return clamped.bezier_matrices(num_pol)
+    return np.broadcast_to(BEZIER, (num_pol, 4, 4))
+
+
 def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float, knots: str):
     """The compiled CasADi/IPOPT problem for a shape (cached): variables ``x = [free (F, D),
     n (P, D), d (P,)]``, parameters ``[C_0..C_2, G, dt_knot, v_max, a_max, weight, verts (P, V, D),
@@ -275,8 +285,8 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
     f = ca.sumsqr(jerk) / dtk**5 + weight * ca.sumsqr(C[N, :] - G)
     n = ca.reshape(x[F * D: F * D + P * D], D, P).T
     d = x[F * D + P * D:]
-    M = ca.DM(BEZIER if basis == "bezier" else np.eye(4))
-    segs = [ca.mtimes(M, C[s: s + 4, :]) for s in range(num_pol)]  # (4, D) hull points of each segment
+    segs = [ca.mtimes(ca.DM(M), C[s: s + 4, :])  # (4, D) hull points of each segment
+            for s, M in enumerate(hull_matrices(num_pol, basis, knots))]
     g_cp, g_v = [], []
     for p in range(P):
         pts = sum((ca.if_else(seg[p] == s, 1.0, 0.0) * segs[s] for s in range(num_pol)), ca.SX.zeros(4, D))
