@@ -85,14 +85,16 @@ def test_out_of_range_parameter_refused():
         MaderMethod(knots="open")
 
 
-@pytest.mark.parametrize("over", [{"basis": "bezier"}, {"algorithm": "LD_SLSQP"}])
-def test_combinations_the_solver_cannot_do_are_refused_in_one_line(over):
-    """Bezier hulls are built for uniform knots only, and the NLopt path is uniform only: the default
-    clamped knots with either is refused at the CLI with exit 2."""
+@pytest.mark.parametrize("over, says", [({"algorithm": "LD_SLSQP"}, "knots=uniform"),
+                                        ({"algorithm": "LD_SLSQP", "knots": "uniform", "basis": "bezier"}, "algorithm=ipopt")])
+def test_combinations_the_solver_cannot_do_are_refused_in_one_line(over, says):
+    """The NLopt path is uniform knots and B-spline hulls only: other combinations are refused at
+    the CLI with exit 2 and a line that says what is needed."""
     args = [a for k, v in over.items() for a in ("--set", f"{k}={v}")]
     r = run_cli("run", "--method", "mader", "--scenario", "random_forest:density=0.15,seed=1", "--steps", "3",
                 *args, "--out", "/tmp/mader-combo-test", "--quiet", "--force")
-    assert r.returncode == 2 and "Traceback" not in r.stderr and "knots=uniform" in r.stderr
+    assert r.returncode == 2 and "Traceback" not in r.stderr and says in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
 
 
 def _fly(m, scene, steps, seed=3):

@@ -200,13 +200,13 @@ class MaderMethod:
             t = k * p.dt + np.arange(0.0, dur + p.check_step, p.check_step)
             mine = self._eval(ctrl, dtk, t - k * p.dt)[0]
             theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
-            if p.check_norm == "box":  # the optimisation's own measure: the box of agent_inflation
-                gap = np.abs(theirs - mine[None]).max(axis=2).min()
-                need = p.agent_inflation
+            if p.check_norm == "box":  # the optimisation's own measure: the box of each pair's inflation
+                gaps = np.abs(theirs - mine[None]).max(axis=2)  # (J, T)
+                need = self._pair_inflation(gaps[:, 0])[:, None]
             else:
-                gap = np.linalg.norm(theirs - mine[None], axis=2).min()
+                gaps = np.linalg.norm(theirs - mine[None], axis=2)
                 need = 2 * self.body + p.check_margin
-            if gap < need:
+            if np.any(gaps < need):
                 self.stats["check_fails"] += 1
                 self.stats["fallbacks"] += 1
                 return
@@ -301,6 +301,15 @@ class MaderMethod:
                 return None
         return ctrl, dtk
 
+    def _pair_inflation(self, gap: np.ndarray) -> np.ndarray:
+        """Inflation [m] of other agents' hulls whose per-axis gap to this robot is ``gap`` [m] now:
+        ``agent_inflation``, or ``crowd_shrink`` x the gap for a pair already closer than that
+        (a start no plane could separate otherwise; 0 = off)."""
+        p = self.params
+        if p.crowd_shrink <= 0.0:
+            return np.full(np.shape(gap), p.agent_inflation)
+        return np.minimum(p.agent_inflation, p.crowd_shrink * np.asarray(gap))
+
     def _obstacles(self, r: int, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):
         """(segment of each plane, vertex set of each plane): for each segment s, the known obstacle
         polyhedra meeting its box [lo[s], hi[s]], and each other agent's committed trajectory hull
@@ -312,15 +321,17 @@ class MaderMethod:
             for o in np.nonzero(near)[0]:
                 segs.append(s)
                 sets.append(self.polys[o])
+        me = self._state(r, t_a)[0]
         for j in range(len(self.ctrl)):
             if j == r:
                 continue
+            infl = float(self._pair_inflation(np.abs(self._state(j, t_a)[0] - me).max()))
             for s in range(p.num_pol):
                 pts = interval_points(self.ctrl[j], self.dtk[j], self.t0[j], t_a + s * dtk, t_a + (s + 1) * dtk)
-                if np.any(pts.min(axis=0) - p.agent_inflation > hi[s]) or np.any(pts.max(axis=0) + p.agent_inflation < lo[s]):
+                if np.any(pts.min(axis=0) - infl > hi[s]) or np.any(pts.max(axis=0) + infl < lo[s]):
                     continue
                 segs.append(s)
-                sets.append(inflate_points(_unique_rows(pts), p.agent_inflation))
+                sets.append(inflate_points(_unique_rows(pts), infl))
         return np.array(segs, dtype=np.int64), sets
 
 

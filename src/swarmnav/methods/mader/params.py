@@ -65,6 +65,9 @@ class MaderParams:
         "obstacles and agents within this of the seed's bounding box enter the problem")
     check_margin: float = param(0.05, "m", "[0, inf)", "ours",
         "check: a new plan fails if it comes within 2 body radii + this of a trajectory committed meanwhile")
+    crowd_shrink: float = param(0.0, "", "[0, 1]", "ours",
+        "a pair already closer (per axis) than agent_inflation is kept apart by this fraction of its current "
+        "gap instead, so a crowded start stays feasible (0 = off: such a robot cannot plan)")
     check_norm: Literal["box", "euclidean"] = param("box", "", None, "ours",
         "check measure: box = no sample of the new plan within the agent_inflation box of a trajectory "
         "committed meanwhile (what the optimisation's hulls need); euclidean = 2 body radii + check_margin")
