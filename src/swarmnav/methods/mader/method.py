@@ -72,13 +72,6 @@ class MaderMethod:
     def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
               rng: np.random.Generator) -> None:
         p = self.params
-        if scenario.periodic:
-            raise ConfigError("mader: a periodic box has no obstacles to plan around nor a goal; "
-                              "use an open or walled scene")
-        if p.algorithm not in ("ipopt", "LD_SLSQP", "LD_MMA", "LD_CCSAQ"):
-            raise ConfigError(f"mader: algorithm must be ipopt, LD_SLSQP, LD_MMA or LD_CCSAQ, not {p.algorithm!r}")
-        if p.basis not in ("bspline", "bezier"):
-            raise ConfigError(f"mader: basis must be bspline or bezier, not {p.basis!r}")
         if p.basis != "bspline" and p.algorithm != "ipopt":
             raise ConfigError("mader: basis=bezier needs algorithm=ipopt")
         if p.algorithm != "ipopt" and p.knots != "uniform":
@@ -270,7 +263,7 @@ class MaderMethod:
         lo, hi = seed.min(axis=0) - p.obstacle_margin, seed.max(axis=0) + p.obstacle_margin
         C0 = np.vstack([start, free0[:-1], np.repeat(free0[-1:], 3, axis=0)])
         sp = segment_points(C0)
-        segs, sets = self._obstacles(r, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
+        segs, sets = self._obstacles(r, q, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
                                      t_a, dtk)
         # the problem in coordinates centred at A: plane offsets d stay small (SLSQP's conditioning)
         pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max)
@@ -295,7 +288,7 @@ class MaderMethod:
         if np.any(lo2 < lo) or np.any(hi2 > hi):
             big_lo = np.minimum(lo, lo2 - p.obstacle_margin)
             big_hi = np.maximum(hi, hi2 + p.obstacle_margin)
-            segs2, _ = self._obstacles(r, np.repeat(big_lo[None], p.num_pol, 0), np.repeat(big_hi[None], p.num_pol, 0),
+            segs2, _ = self._obstacles(r, q, np.repeat(big_lo[None], p.num_pol, 0), np.repeat(big_hi[None], p.num_pol, 0),
                                        t_a, dtk)
             if len(segs2) > len(segs):
                 return None
@@ -310,7 +303,7 @@ class MaderMethod:
             return np.full(np.shape(gap), p.agent_inflation)
         return np.minimum(p.agent_inflation, p.crowd_shrink * np.asarray(gap))
 
-    def _obstacles(self, r: int, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):
+    def _obstacles(self, r: int, me: np.ndarray, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):
         """(segment of each plane, vertex set of each plane): for each segment s, the known obstacle
         polyhedra meeting its box [lo[s], hi[s]], and each other agent's committed trajectory hull
         over the segment's interval, grown by ``agent_inflation``, where it meets the box."""
@@ -321,11 +314,12 @@ class MaderMethod:
             for o in np.nonzero(near)[0]:
                 segs.append(s)
                 sets.append(self.polys[o])
-        me = self._state(r, t_a)[0]
         for j in range(len(self.ctrl)):
             if j == r:
                 continue
-            infl = float(self._pair_inflation(np.abs(self._state(j, t_a)[0] - me).max()))
+            infl = p.agent_inflation
+            if p.crowd_shrink > 0.0:  # the pair's gap at point A (me: this robot's start there)
+                infl = float(self._pair_inflation(np.abs(self._state(j, t_a)[0] - me).max()))
             for s in range(p.num_pol):
                 pts = interval_points(self.ctrl[j], self.dtk[j], self.t0[j], t_a + s * dtk, t_a + (s + 1) * dtk)
                 if np.any(pts.min(axis=0) - infl > hi[s]) or np.any(pts.max(axis=0) + infl < lo[s]):
