@@ -86,6 +86,7 @@ def test_out_of_range_parameter_refused():
 
 
 @pytest.mark.parametrize("over, says", [({"algorithm": "LD_SLSQP"}, "knots=uniform"),
+                                        ({"algorithm": "LD_SLSQP", "knots": "uniform", "clearance": "ball"}, "clearance=box"),
                                         ({"algorithm": "LD_SLSQP", "knots": "uniform", "basis": "bezier"}, "algorithm=ipopt")])
 def test_combinations_the_solver_cannot_do_are_refused_in_one_line(over, says):
     """The NLopt path is uniform knots and B-spline hulls only: other combinations are refused at
@@ -176,3 +177,28 @@ def test_ipopt_infeasible_problem_returns_no_plan():
     free0 = np.array([[3.0, 0.3], [5.0, 0.0]])
     res = S.solve_ipopt(pb, free0, np.array([[1.0, 0.0]]), np.array([0.0]), 200, 1e-6)
     assert res.ctrl is None and res.violation > 1e-6
+
+
+def test_ipopt_ball_clearance_keeps_the_euclidean_distance():
+    """clearance=ball: the obstacle polygons are not grown; each plane's normal bound keeps every
+    constrained segment's control points at least the plane's radius from the polygon (so from the
+    disc it circumscribes), in Euclidean distance, and the plan still makes progress."""
+    discs = [((2.0, 0.3), 0.5), ((3.0, -1.0), 0.4)]
+    verts = np.stack([obstacle_vertices(Circle(c, r), 2, 0.0) for c, r in discs])
+    start = np.array([[0.0, 0.0], [0.1, 0.0], [0.2, 0.0]])
+    rad = np.array([0.3, 0.45])
+    pb = S.Problem(start, np.array([5.0, 0.0]), 1.5, 4, np.array([1, 2]), verts, 1000.0, 1.0, 1.5, rad)
+    free0 = np.array([[2.5, 0.0], [5.0, 0.0]])
+    C0 = np.vstack([pb.start, free0[:1], np.repeat(free0[1:], 3, axis=0)])
+    n0, d0, _ = seed_planes(C0[np.array([1, 2])[:, None] + np.arange(4)], pb.verts)
+    res = S.solve_ipopt(pb, free0, n0, d0, 200, 1e-6)
+    assert res.ctrl is not None and res.violation <= 1e-6
+    for s, (c, r), rr in zip(pb.seg, discs, rad):
+        seg = res.ctrl[s: s + 4]
+        assert np.all(np.linalg.norm(seg - np.array(c), axis=1) >= r + rr - 1e-5)
+    assert res.ctrl[-1, 0] > 2.0
+    # the same problem without the radii lets the hull touch the bare polygon: the bound is what keeps the gap
+    bare = S.solve_ipopt(S.Problem(*[getattr(pb, f) for f in ("start", "goal", "dt_knot", "num_pol", "seg", "verts",
+                                                               "weight", "v_max", "a_max")]), free0, n0, d0, 200, 1e-6)
+    gaps = [np.linalg.norm(bare.ctrl[s: s + 4] - np.array(c), axis=1).min() - r for s, (c, r) in zip(pb.seg, discs)]
+    assert min(gaps) < 0.3

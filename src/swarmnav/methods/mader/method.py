@@ -36,7 +36,7 @@ from swarmnav.methods.mader import solver as S
 from swarmnav.methods.mader.params import MaderParams
 from swarmnav.params import build
 from swarmnav.planning import bspline, clamped
-from swarmnav.planning.hulls import inflate_points, interval_points, obstacle_vertices, pad, seed_planes, segment_points
+from swarmnav.planning.hulls import hull_vertices, inflate_points, interval_points, obstacle_vertices, pad, seed_planes, segment_points
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
 from swarmnav.planning.tracker import track
@@ -74,6 +74,8 @@ class MaderMethod:
         p = self.params
         if p.basis != "bspline" and p.algorithm != "ipopt":
             raise ConfigError("mader: basis=bezier needs algorithm=ipopt")
+        if p.algorithm != "ipopt" and p.clearance != "box":
+            raise ConfigError(f"mader: algorithm={p.algorithm} needs clearance=box (the NLopt path has no ball bound)")
         if p.algorithm != "ipopt" and p.knots != "uniform":
             raise ConfigError(f"mader: algorithm={p.algorithm} needs knots=uniform (the NLopt path is uniform only)")
         if p.algorithm != "ipopt" and S.nlopt is None:  # pragma: no cover
@@ -89,9 +91,11 @@ class MaderMethod:
         obstacles = scenario.solid_obstacles
         self.maps = OccupancyMaps(obstacles, scenario.bounds, n, p.grid_resolution, p.inflation, p.sensing_range)
         zr = (scenario.lower[2], scenario.upper[2]) if dim == 3 else (-1e3, 1e3)
-        self.polys = [obstacle_vertices(o, dim, p.inflation, zr) for o in obstacles]
-        self.poly_lo = np.array([v.min(axis=0) for v in self.polys]).reshape(-1, dim)
-        self.poly_hi = np.array([v.max(axis=0) for v in self.polys]).reshape(-1, dim)
+        ball = p.clearance == "ball"  # ball: the planes keep the clearance, the polyhedra are not grown
+        self.polys = [obstacle_vertices(o, dim, 0.0 if ball else p.inflation, zr) for o in obstacles]
+        grow = p.inflation if ball else 0.0
+        self.poly_lo = np.array([v.min(axis=0) - grow for v in self.polys]).reshape(-1, dim)
+        self.poly_hi = np.array([v.max(axis=0) + grow for v in self.polys]).reshape(-1, dim)
         x = np.asarray(positions, dtype=float)
         self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
         self.comm = CommLog()
@@ -193,8 +197,8 @@ class MaderMethod:
             t = k * p.dt + np.arange(0.0, dur + p.check_step, p.check_step)
             mine = self._eval(ctrl, dtk, t - k * p.dt)[0]
             theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
-            if p.check_norm == "box":  # the optimisation's own measure: the box of each pair's inflation
-                gaps = np.abs(theirs - mine[None]).max(axis=2)  # (J, T)
+            if p.check_norm == "box":  # the optimisation's own measure: each pair's inflation
+                gaps = self._gap(theirs - mine[None])  # (J, T)
                 need = self._pair_inflation(gaps[:, 0])[:, None]
             else:
                 gaps = np.linalg.norm(theirs - mine[None], axis=2)
@@ -263,10 +267,10 @@ class MaderMethod:
         lo, hi = seed.min(axis=0) - p.obstacle_margin, seed.max(axis=0) + p.obstacle_margin
         C0 = np.vstack([start, free0[:-1], np.repeat(free0[-1:], 3, axis=0)])
         sp = segment_points(C0)
-        segs, sets = self._obstacles(r, q, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
+        segs, sets, rad = self._obstacles(r, q, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
                                      t_a, dtk)
         # the problem in coordinates centred at A: plane offsets d stay small (SLSQP's conditioning)
-        pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max)
+        pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max, rad)
         free0, C0 = free0 - q, C0 - q
         hulls = segment_points(C0)
         hulls = np.einsum("sij,sjd->sid", S.hull_matrices(p.num_pol, p.basis, p.knots), hulls)
@@ -288,11 +292,18 @@ class MaderMethod:
         if np.any(lo2 < lo) or np.any(hi2 > hi):
             big_lo = np.minimum(lo, lo2 - p.obstacle_margin)
             big_hi = np.maximum(hi, hi2 + p.obstacle_margin)
-            segs2, _ = self._obstacles(r, q, np.repeat(big_lo[None], p.num_pol, 0), np.repeat(big_hi[None], p.num_pol, 0),
+            segs2, _, _ = self._obstacles(r, q, np.repeat(big_lo[None], p.num_pol, 0), np.repeat(big_hi[None], p.num_pol, 0),
                                        t_a, dtk)
             if len(segs2) > len(segs):
                 return None
         return ctrl, dtk
+
+    def _gap(self, diff: np.ndarray) -> np.ndarray:
+        """Gap [m] of displacements ``diff`` (..., D) in the clearance's measure: per axis for a box,
+        Euclidean for a ball."""
+        if self.params.clearance == "ball":
+            return np.linalg.norm(diff, axis=-1)
+        return np.abs(diff).max(axis=-1)
 
     def _pair_inflation(self, gap: np.ndarray) -> np.ndarray:
         """Inflation [m] of other agents' hulls whose per-axis gap to this robot is ``gap`` [m] now:
@@ -308,25 +319,28 @@ class MaderMethod:
         polyhedra meeting its box [lo[s], hi[s]], and each other agent's committed trajectory hull
         over the segment's interval, grown by ``agent_inflation``, where it meets the box."""
         p = self.params
-        segs, sets = [], []
+        ball = p.clearance == "ball"
+        segs, sets, rad = [], [], []
         for s in range(p.num_pol):
             near = self.maps.known[r] & np.all(self.poly_lo <= hi[s], axis=1) & np.all(self.poly_hi >= lo[s], axis=1)
             for o in np.nonzero(near)[0]:
                 segs.append(s)
                 sets.append(self.polys[o])
+                rad.append(p.inflation)
         for j in range(len(self.ctrl)):
             if j == r:
                 continue
             infl = p.agent_inflation
             if p.crowd_shrink > 0.0:  # the pair's gap at point A (me: this robot's start there)
-                infl = float(self._pair_inflation(np.abs(self._state(j, t_a)[0] - me).max()))
+                infl = float(self._pair_inflation(self._gap(self._state(j, t_a)[0] - me)))
             for s in range(p.num_pol):
                 pts = interval_points(self.ctrl[j], self.dtk[j], self.t0[j], t_a + s * dtk, t_a + (s + 1) * dtk)
                 if np.any(pts.min(axis=0) - infl > hi[s]) or np.any(pts.max(axis=0) + infl < lo[s]):
                     continue
                 segs.append(s)
-                sets.append(inflate_points(_unique_rows(pts), infl))
-        return np.array(segs, dtype=np.int64), sets
+                sets.append(hull_vertices(_unique_rows(pts)) if ball else inflate_points(_unique_rows(pts), infl))
+                rad.append(infl)
+        return np.array(segs, dtype=np.int64), sets, (np.array(rad) if ball else None)
 
 
 def _unique_rows(pts: np.ndarray) -> np.ndarray:

@@ -65,12 +65,17 @@ class MaderParams:
         "obstacles and agents within this of the seed's bounding box enter the problem")
     check_margin: float = param(0.05, "m", "[0, inf)", "ours",
         "check: a new plan fails if it comes within 2 body radii + this of a trajectory committed meanwhile")
+    clearance: Literal["box", "ball"] = param("box", "", None, "MADER paper (drone_bbox); ball: ours",
+        "shape of the clearance kept from obstacles (inflation) and other agents (agent_inflation): box = their "
+        "polyhedra grown by a cube of that half-size, as MADER (a diagonal pair needs sqrt(D) x the gap); ball = "
+        "each plane's normal bounded so the sets stay that far apart in Euclidean distance")
     crowd_shrink: float = param(0.0, "", "[0, 1]", "ours",
-        "a pair already closer (per axis) than agent_inflation is kept apart by this fraction of its current "
+        "a pair already closer (per axis with clearance=box) than agent_inflation is kept apart by this fraction of its current "
         "gap instead, so a crowded start stays feasible (0 = off: such a robot cannot plan)")
     check_norm: Literal["box", "euclidean"] = param("box", "", None, "ours",
-        "check measure: box = no sample of the new plan within the agent_inflation box of a trajectory "
-        "committed meanwhile (what the optimisation's hulls need); euclidean = 2 body radii + check_margin")
+        "check measure: box = no sample of the new plan within the agent_inflation of a trajectory "
+        "committed meanwhile, in the optimisation's own measure (per axis, or Euclidean with clearance=ball); "
+        "euclidean = 2 body radii + check_margin")
     cap_span: bool = param(True, "", None, "ours",
         "clamped knots: shorten the knot span so the start's fixed second velocity point v + a dt/2 stays within v_max")
     check_step: float = param(0.05, "s", "(0, 1]", "ours", "time step of the sampled check")

@@ -49,6 +49,7 @@ class Problem:
     weight: float
     v_max: float  # [m/s] per axis
     a_max: float  # [m/s^2] per axis
+    radius: np.ndarray | None = None  # (P,) clearance of each plane's pair [m] (clearance=ball), None: none
 
 
 @dataclass(frozen=True, slots=True)
@@ -255,24 +256,29 @@ def hull_matrices(num_pol: int, basis: str, knots: str) -> np.ndarray:
     return np.broadcast_to(BEZIER, (num_pol, 4, 4))
 
 
-def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float, knots: str):
+def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float, knots: str,
+                  ball: bool = False):
     """The compiled CasADi/IPOPT problem for a shape (cached): variables ``x = [free (F, D),
     n (P, D), d (P,)]``, parameters ``[C_0..C_2, G, dt_knot, v_max, a_max, weight, verts (P, V, D),
-    segment (P,)]``. The segment of each plane is a parameter, so one shape serves every
-    assignment of planes to segments."""
-    key = (D, num_pol, P, V, basis, max_iter, tol, knots)
+    segment (P,)]`` and, with ``ball``, ``radius (P,)``. The segment of each plane is a parameter,
+    so one shape serves every assignment of planes to segments.
+
+    ``ball``: each plane also keeps ``|n_p| <= 2 / radius_p`` (a convex bound): with the margins
+    +-1 the two sets are then at least ``radius_p`` apart along n, so the Euclidean distance
+    between them is at least ``radius_p`` -- a ball of that radius instead of a box."""
+    key = (D, num_pol, P, V, basis, max_iter, tol, knots, ball)
     hit = _IPOPT_CACHE.get(key)
     if hit is not None:
         return hit
     N, F = num_pol + 2, num_pol - 2
     x = ca.SX.sym("x", F * D + P * D + P)
-    par = ca.SX.sym("p", 3 * D + D + 4 + P * V * D + P)
+    par = ca.SX.sym("p", 3 * D + D + 4 + P * V * D + P + (P if ball else 0))
     start = ca.reshape(par[: 3 * D], D, 3).T
     G = par[3 * D: 4 * D].T
     dtk, vmax, amax, weight = par[4 * D], par[4 * D + 1], par[4 * D + 2], par[4 * D + 3]
     o = 4 * D + 4
     verts = ca.reshape(par[o: o + P * V * D], D, P * V).T  # row p V + v
-    seg = par[o + P * V * D:]
+    seg = par[o + P * V * D: o + P * V * D + P]
     free = ca.reshape(x[: F * D], D, F).T
     C = ca.vertcat(start, free[: F - 1, :], free[F - 1, :], free[F - 1, :], free[F - 1, :])  # (N + 1, D)
     if knots == "clamped":  # derivative control points of the clamped spline (planning/clamped.py)
@@ -296,6 +302,10 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
     m_cp, m_v, m_l = 4 * P, V * P, (N + N - 1) * D
     lbg = np.concatenate([np.full(m_cp, -np.inf), np.ones(m_v), -np.ones(m_l)])
     ubg = np.concatenate([-np.ones(m_cp), np.full(m_v, np.inf), np.ones(m_l)])
+    if ball and P:
+        rad = par[o + P * V * D + P:]
+        g = ca.vertcat(g, ca.sum2(n * n) * (rad * rad) / 4.0)  # |n_p|^2 r_p^2 / 4 <= 1
+        lbg, ubg = np.concatenate([lbg, np.full(P, -np.inf)]), np.concatenate([ubg, np.ones(P)])
     opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": int(max_iter),
             "ipopt.tol": float(tol), "ipopt.mu_strategy": "adaptive"}
     solver = ca.nlpsol("mader", "ipopt", {"x": x, "p": par, "f": f, "g": g}, opts)
@@ -314,9 +324,10 @@ def solve_ipopt(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, 
     P = len(pb.seg)
     V = pb.verts.shape[1] if P else 0
     F = pb.num_pol - 2
-    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol, knots)
+    ball = pb.radius is not None
+    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol, knots, ball)
     par = np.concatenate([pb.start.ravel(), pb.goal, [pb.dt_knot, pb.v_max, pb.a_max, pb.weight],
-                          pb.verts.reshape(-1), pb.seg.astype(float)])
+                          pb.verts.reshape(-1), pb.seg.astype(float)] + ([np.asarray(pb.radius, float)] if ball else []))
     x0 = np.concatenate([free0.ravel(), n0.ravel(), d0])
     if not np.all(np.isfinite(x0)) or not np.all(np.isfinite(par)):
         return Result(None, 0, float("inf"), "nan-guess")
