@@ -202,3 +202,20 @@ def test_ipopt_ball_clearance_keeps_the_euclidean_distance():
                                                                "weight", "v_max", "a_max")]), free0, n0, d0, 200, 1e-6)
     gaps = [np.linalg.norm(bare.ctrl[s: s + 4] - np.array(c), axis=1).min() - r for s, (c, r) in zip(pb.seg, discs)]
     assert min(gaps) < 0.3
+
+
+def test_ipopt_norm_limits_bound_the_derivative_control_points_in_norm():
+    """limits=norm: every velocity and acceleration control point (so, by the hull property, the
+    whole curve) within v_max and a_max in Euclidean norm, the dynamics' own bound; a diagonal
+    local goal makes the per-axis build exceed it."""
+    start = np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    out = {}
+    for norm in (False, True):
+        pb = S.Problem(start, np.array([4.0, 4.0]), 0.6, 4, np.zeros(0, dtype=np.int64), np.zeros((0, 1, 2)), 1000.0,
+                       1.0, 1.5, None, norm)
+        res = S.solve_ipopt(pb, np.array([[2.0, 2.0], [4.0, 4.0]]), np.zeros((0, 2)), np.zeros(0), 200, 1e-6)
+        assert res.ctrl is not None
+        out[norm] = (np.linalg.norm(np.diff(res.ctrl, axis=0) / 0.6, axis=1).max(),
+                     np.linalg.norm(np.diff(res.ctrl, n=2, axis=0) / 0.36, axis=1).max())
+    assert out[True][0] <= 1.0 + 1e-5 and out[True][1] <= 1.5 + 1e-5
+    assert out[False][0] > 1.05 or out[False][1] > 1.55  # per axis: the diagonal exceeds the norm

@@ -74,6 +74,8 @@ class MaderMethod:
         p = self.params
         if p.basis != "bspline" and p.algorithm != "ipopt":
             raise ConfigError("mader: basis=bezier needs algorithm=ipopt")
+        if p.algorithm != "ipopt" and p.limits != "axis":
+            raise ConfigError(f"mader: algorithm={p.algorithm} needs limits=axis (the NLopt path bounds each axis)")
         if p.algorithm != "ipopt" and p.clearance != "box":
             raise ConfigError(f"mader: algorithm={p.algorithm} needs clearance=box (the NLopt path has no ball bound)")
         if p.algorithm != "ipopt" and p.knots != "uniform":
@@ -252,8 +254,14 @@ class MaderMethod:
         if p.knots == "clamped" and p.cap_span:
             # the start fixes V_1 = v + a dt / 2 (planning/clamped.py): a span so long that V_1 leaves
             # the per-axis bound makes every problem infeasible; shorten it to where V_1 = +-v_max
-            room = np.where(a > 0, p.v_max - v, np.where(a < 0, p.v_max + v, np.inf))
-            cap = float(np.min(2.0 * np.maximum(room, 0.0) / np.maximum(np.abs(a), 1e-12)))
+            if p.limits == "norm":  # the largest span with |v + a dt / 2| <= v_max (a quadratic in dt / 2)
+                aa_, va_, vv_ = float(a @ a), float(v @ a), float(v @ v)
+                disc = va_ * va_ - aa_ * (vv_ - p.v_max**2)
+                cap = (2.0 * (-va_ + math.sqrt(max(disc, 0.0))) / aa_) if aa_ > 1e-24 and vv_ < p.v_max**2 else (
+                    math.inf if aa_ <= 1e-24 else 0.0)
+            else:
+                room = np.where(a > 0, p.v_max - v, np.where(a < 0, p.v_max + v, np.inf))
+                cap = float(np.min(2.0 * np.maximum(room, 0.0) / np.maximum(np.abs(a), 1e-12)))
             dtk = max(min(dtk, cap), 4 * p.dt)
         if p.knots == "clamped":
             start = clamped.boundary_points(q, v, a, dtk, p.num_pol)
@@ -270,7 +278,8 @@ class MaderMethod:
         segs, sets, rad = self._obstacles(r, q, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
                                      t_a, dtk)
         # the problem in coordinates centred at A: plane offsets d stay small (SLSQP's conditioning)
-        pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max, rad)
+        pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max, rad,
+                       p.limits == "norm")
         free0, C0 = free0 - q, C0 - q
         hulls = segment_points(C0)
         hulls = np.einsum("sij,sjd->sid", S.hull_matrices(p.num_pol, p.basis, p.knots), hulls)

@@ -69,6 +69,9 @@ class MaderParams:
         "shape of the clearance kept from obstacles (inflation) and other agents (agent_inflation): box = their "
         "polyhedra grown by a cube of that half-size, as MADER (a diagonal pair needs sqrt(D) x the gap); ball = "
         "each plane's normal bounded so the sets stay that far apart in Euclidean distance")
+    limits: Literal["axis", "norm"] = param("axis", "", None, "MADER paper (per axis); norm: ours",
+        "velocity and acceleration bounds of the plan: axis = |V_i|, |A_i| per axis (MADER), which lets a diagonal "
+        "plan ask sqrt(D) x what the shared norm-saturated dynamics give; norm = their Euclidean norm (the dynamics' own)")
     crowd_shrink: float = param(0.0, "", "[0, 1]", "ours",
         "a pair already closer (per axis with clearance=box) than agent_inflation is kept apart by this fraction of its current "
         "gap instead, so a crowded start stays feasible (0 = off: such a robot cannot plan)")

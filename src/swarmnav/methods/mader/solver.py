@@ -50,6 +50,7 @@ class Problem:
     v_max: float  # [m/s] per axis
     a_max: float  # [m/s^2] per axis
     radius: np.ndarray | None = None  # (P,) clearance of each plane's pair [m] (clearance=ball), None: none
+    norm_limits: bool = False  # True: |V_i| <= v_max, |A_i| <= a_max in Euclidean norm (limits=norm), else per axis
 
 
 @dataclass(frozen=True, slots=True)
@@ -257,7 +258,7 @@ def hull_matrices(num_pol: int, basis: str, knots: str) -> np.ndarray:
 
 
 def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float, knots: str,
-                  ball: bool = False):
+                  ball: bool = False, norm_limits: bool = False):
     """The compiled CasADi/IPOPT problem for a shape (cached): variables ``x = [free (F, D),
     n (P, D), d (P,)]``, parameters ``[C_0..C_2, G, dt_knot, v_max, a_max, weight, verts (P, V, D),
     segment (P,)]`` and, with ``ball``, ``radius (P,)``. The segment of each plane is a parameter,
@@ -266,7 +267,7 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
     ``ball``: each plane also keeps ``|n_p| <= 2 / radius_p`` (a convex bound): with the margins
     +-1 the two sets are then at least ``radius_p`` apart along n, so the Euclidean distance
     between them is at least ``radius_p`` -- a ball of that radius instead of a box."""
-    key = (D, num_pol, P, V, basis, max_iter, tol, knots, ball)
+    key = (D, num_pol, P, V, basis, max_iter, tol, knots, ball, norm_limits)
     hit = _IPOPT_CACHE.get(key)
     if hit is not None:
         return hit
@@ -298,9 +299,15 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
         pts = sum((ca.if_else(seg[p] == s, 1.0, 0.0) * segs[s] for s in range(num_pol)), ca.SX.zeros(4, D))
         g_cp.append(ca.mtimes(pts, n[p, :].T) + d[p])  # <= -1
         g_v.append(ca.mtimes(verts[p * V:(p + 1) * V, :], n[p, :].T) + d[p])  # >= 1
-    g = ca.vertcat(*g_cp, *g_v, ca.vec(vel) / vmax, ca.vec(acc) / amax)
-    m_cp, m_v, m_l = 4 * P, V * P, (N + N - 1) * D
-    lbg = np.concatenate([np.full(m_cp, -np.inf), np.ones(m_v), -np.ones(m_l)])
+    if norm_limits:  # the hull of the derivative control points inside a ball: the curve's norm bounded
+        lim = ca.vertcat(ca.sum2(vel * vel) / vmax**2, ca.sum2(acc * acc) / amax**2)
+        m_l, lim_lo = vel.shape[0] + acc.shape[0], -np.inf
+    else:
+        lim = ca.vertcat(ca.vec(vel) / vmax, ca.vec(acc) / amax)
+        m_l, lim_lo = vel.shape[0] * D + acc.shape[0] * D, -1.0
+    g = ca.vertcat(*g_cp, *g_v, lim)
+    m_cp, m_v = 4 * P, V * P
+    lbg = np.concatenate([np.full(m_cp, -np.inf), np.ones(m_v), np.full(m_l, lim_lo)])
     ubg = np.concatenate([-np.ones(m_cp), np.full(m_v, np.inf), np.ones(m_l)])
     if ball and P:
         rad = par[o + P * V * D + P:]
@@ -325,7 +332,7 @@ def solve_ipopt(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, 
     V = pb.verts.shape[1] if P else 0
     F = pb.num_pol - 2
     ball = pb.radius is not None
-    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol, knots, ball)
+    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol, knots, ball, pb.norm_limits)
     par = np.concatenate([pb.start.ravel(), pb.goal, [pb.dt_knot, pb.v_max, pb.a_max, pb.weight],
                           pb.verts.reshape(-1), pb.seg.astype(float)] + ([np.asarray(pb.radius, float)] if ball else []))
     x0 = np.concatenate([free0.ravel(), n0.ravel(), d0])
