@@ -315,13 +315,18 @@ class MaderMethod:
         return np.abs(diff).max(axis=-1)
 
     def _pair_inflation(self, gap: np.ndarray) -> np.ndarray:
-        """Inflation [m] of other agents' hulls whose per-axis gap to this robot is ``gap`` [m] now:
-        ``agent_inflation``, or ``crowd_shrink`` x the gap for a pair already closer than that
-        (a start no plane could separate otherwise; 0 = off)."""
+        """Inflation [m] of other agents' hulls whose gap to this robot is ``gap`` [m] now (in the
+        clearance's measure): ``agent_inflation``; with ``crowd_shrink`` = s > 0, a pair already
+        closer than that keeps at least the contact distance 2 body radii while it has it (the
+        most s x gap asks less), and a pair already in contact gets no closer than s x gap (a
+        crowded start no plane could separate otherwise)."""
         p = self.params
+        gap = np.asarray(gap, dtype=float)
         if p.crowd_shrink <= 0.0:
             return np.full(np.shape(gap), p.agent_inflation)
-        return np.minimum(p.agent_inflation, p.crowd_shrink * np.asarray(gap))
+        contact = 2.0 * self.body
+        keep = np.where(gap >= contact, np.maximum(p.crowd_shrink * gap, contact), p.crowd_shrink * gap)
+        return np.minimum(p.agent_inflation, keep)
 
     def _obstacles(self, r: int, me: np.ndarray, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):
         """(segment of each plane, vertex set of each plane): for each segment s, the known obstacle
