@@ -317,15 +317,15 @@ class MaderMethod:
     def _pair_inflation(self, gap: np.ndarray) -> np.ndarray:
         """Inflation [m] of other agents' hulls whose gap to this robot is ``gap`` [m] now (in the
         clearance's measure): ``agent_inflation``; with ``crowd_shrink`` = s > 0, a pair already
-        closer than that keeps at least the contact distance 2 body radii while it has it (the
-        most s x gap asks less), and a pair already in contact gets no closer than s x gap (a
-        crowded start no plane could separate otherwise)."""
+        closer than that keeps at least the contact distance 2 body radii + ``check_margin`` while
+        it has it (the most s x gap asks less), and a pair already closer gets no closer than
+        s x gap (a crowded start no plane could separate otherwise)."""
         p = self.params
         gap = np.asarray(gap, dtype=float)
         if p.crowd_shrink <= 0.0:
             return np.full(np.shape(gap), p.agent_inflation)
-        contact = 2.0 * self.body
-        keep = np.where(gap >= contact, np.maximum(p.crowd_shrink * gap, contact), p.crowd_shrink * gap)
+        floor = 2.0 * self.body + p.check_margin
+        keep = np.where(gap >= floor, np.maximum(p.crowd_shrink * gap, floor), p.crowd_shrink * gap)
         return np.minimum(p.agent_inflation, keep)
 
     def _obstacles(self, r: int, me: np.ndarray, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):

@@ -73,8 +73,8 @@ class MaderParams:
         "velocity and acceleration bounds of the plan: axis = |V_i|, |A_i| per axis (MADER), which lets a diagonal "
         "plan ask sqrt(D) x what the shared norm-saturated dynamics give; norm = their Euclidean norm (the dynamics' own)")
     crowd_shrink: float = param(0.0, "", "[0, 1]", "ours",
-        "a pair already closer than agent_inflation keeps max(crowd_shrink x gap, 2 body radii) while it is beyond "
-        "contact, and crowd_shrink x gap once in contact, so a crowded start stays feasible (0 = off: such a robot "
+        "a pair already closer than agent_inflation keeps max(crowd_shrink x gap, 2 body radii + check_margin) while "
+        "it has that, and crowd_shrink x gap once closer, so a crowded start stays feasible (0 = off: such a robot "
         "cannot plan)")
     check_norm: Literal["box", "euclidean"] = param("box", "", None, "ours",
         "check measure: box = no sample of the new plan within the agent_inflation of a trajectory "
