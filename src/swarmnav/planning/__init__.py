@@ -9,9 +9,10 @@
   rate, and the tracking law of SPH eq. (13) that follows them;
 - :mod:`~swarmnav.planning.messages`: what the robots broadcast (positions, trajectories), each
   message counted with its size in bytes, so the ``comm_mbps`` metric is measured from the
-  messages a planner actually sent.
+  messages a planner actually sent;
 - :mod:`~swarmnav.planning.plan_log`: the trajectories a planner committed, sampled for replay
-  (what its optional ``plans()`` hook returns).
+  (what its optional ``plans()`` hook returns);
+- :mod:`~swarmnav.planning.goals`: per-robot goal slots around the scene's goal.
 
 A planner is its paper's cost terms and decisions on top of these parts.
 """

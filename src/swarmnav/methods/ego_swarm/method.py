@@ -31,7 +31,6 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.methods.base import Observation, check_map_bytes, format_extent
@@ -40,6 +39,7 @@ from swarmnav.methods.ego_swarm.params import EgoSwarmParams
 from swarmnav.params import build
 from swarmnav.planning.bspline import SplinePlan, boundary_points
 from swarmnav.planning.esdf_free import occupied
+from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
 from swarmnav.planning.plan_log import PlanLog, sample_rows
@@ -65,25 +65,6 @@ class BrakePlan:
         dec = -self.a_max * self.v / speed
         moving = (tau < self.duration).astype(float)
         return self.q + self.v * tau + 0.5 * dec * tau * tau, self.v + dec * tau, dec * moving
-
-
-def goal_slots(goal: np.ndarray, spawn: np.ndarray, radius: float) -> np.ndarray:
-    """Per-robot goals: ``n`` points filling a disc of ``radius`` around ``goal`` (a sunflower
-    spiral in the horizontal plane), assigned to the robots so that the sum of squared distances
-    between spawn offsets and goal offsets is least (EGO-Swarm gives each drone its own goal)."""
-    n, dim = spawn.shape
-    k = np.arange(n)
-    r = radius * np.sqrt((k + 0.5) / n)
-    th = k * math.pi * (3.0 - math.sqrt(5.0))
-    off = np.zeros((n, dim))
-    off[:, 0], off[:, 1] = r * np.cos(th), r * np.sin(th)
-    rel = spawn - spawn.mean(axis=0)
-    scale = radius / max(float(np.max(np.linalg.norm(rel[:, :2], axis=1))), 1e-9)
-    cost = np.sum((rel[:, None, :] * scale - off[None, :, :]) ** 2, axis=2)
-    rows, cols = linear_sum_assignment(cost)
-    out = np.empty((n, dim))
-    out[rows] = goal + off[cols]
-    return out
 
 
 class EgoSwarm:

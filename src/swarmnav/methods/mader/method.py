@@ -37,6 +37,7 @@ from swarmnav.methods.mader.params import MaderParams
 from swarmnav.params import build
 from swarmnav.planning import bspline, clamped
 from swarmnav.planning.hulls import hull_vertices, inflate_points, interval_points, obstacle_vertices, pad, seed_planes, segment_points
+from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
 from swarmnav.planning.tracker import track
@@ -99,7 +100,7 @@ class MaderMethod:
         self.poly_lo = np.array([v.min(axis=0) - grow for v in self.polys]).reshape(-1, dim)
         self.poly_hi = np.array([v.max(axis=0) + grow for v in self.polys]).reshape(-1, dim)
         x = np.asarray(positions, dtype=float)
-        self.goals = scenario.goal_array + p.goal_spread * (x - x.mean(axis=0))
+        self.goals = goal_slots(scenario.goal_array, x, p.goal_disc)
         self.comm = CommLog()
         self.board = TrajectoryBoard(n, self.comm)
         self.L = max(1, int(round(p.replan_time / p.dt)))  # replan latency [steps]
@@ -316,16 +317,19 @@ class MaderMethod:
 
     def _pair_inflation(self, gap: np.ndarray) -> np.ndarray:
         """Inflation [m] of other agents' hulls whose gap to this robot is ``gap`` [m] now (in the
-        clearance's measure): ``agent_inflation``; with ``crowd_shrink`` = s > 0, a pair already
-        closer than that keeps at least the contact distance 2 body radii + ``check_margin`` while
-        it has it (the most s x gap asks less), and a pair already closer gets no closer than
-        s x gap (a crowded start no plane could separate otherwise)."""
+        clearance's measure): ``agent_inflation``. With ``crowd_shrink`` = s > 0, a pair already
+        closer than that (the tracker lags its plan) keeps max(s x gap, 2 body radii +
+        check_margin / 2); a pair between contact and that floor cannot plan apart from the other
+        (a fallback: it waits for the tracker to catch up); and a pair already in contact gets no
+        closer than s x gap (a spawn with overlapping bodies no plane could separate otherwise).
+        Shrinking never plans a pair below the floor, so repeated replans cannot creep into contact."""
         p = self.params
         gap = np.asarray(gap, dtype=float)
         if p.crowd_shrink <= 0.0:
             return np.full(np.shape(gap), p.agent_inflation)
-        floor = 2.0 * self.body + p.check_margin
-        keep = np.where(gap >= floor, np.maximum(p.crowd_shrink * gap, floor), p.crowd_shrink * gap)
+        contact = 2.0 * self.body
+        floor = contact + 0.5 * p.check_margin
+        keep = np.where(gap >= contact, np.maximum(p.crowd_shrink * gap, floor), p.crowd_shrink * gap)
         return np.minimum(p.agent_inflation, keep)
 
     def _obstacles(self, r: int, me: np.ndarray, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):

@@ -72,10 +72,10 @@ class MaderParams:
     limits: Literal["axis", "norm"] = param("axis", "", None, "MADER paper (per axis); norm: ours",
         "velocity and acceleration bounds of the plan: axis = |V_i|, |A_i| per axis (MADER), which lets a diagonal "
         "plan ask sqrt(D) x what the shared norm-saturated dynamics give; norm = their Euclidean norm (the dynamics' own)")
-    crowd_shrink: float = param(0.0, "", "[0, 1]", "ours",
-        "a pair already closer than agent_inflation keeps max(crowd_shrink x gap, 2 body radii + check_margin) while "
-        "it has that, and crowd_shrink x gap once closer, so a crowded start stays feasible (0 = off: such a robot "
-        "cannot plan)")
+    crowd_shrink: float = param(0.0, "", "[0, 1)", "ours",
+        "a pair already closer than agent_inflation keeps max(crowd_shrink x gap, 2 body radii + check_margin / 2) "
+        "(none between contact and that floor: a fallback), and crowd_shrink x gap if already in contact, so a "
+        "crowded start stays feasible (0 = off: such a robot cannot plan)")
     check_norm: Literal["box", "euclidean"] = param("box", "", None, "ours",
         "check measure: box = no sample of the new plan within the agent_inflation of a trajectory "
         "committed meanwhile, in the optimisation's own measure (per axis, or Euclidean with clearance=ball); "
@@ -86,7 +86,9 @@ class MaderParams:
     # --- initial guess (ours: grid search instead of Octopus Search, docs) ---
     grid_resolution: float = param(0.2, "m", "(0, inf)", "ours", "cell of the per-robot search grid")
     max_expand: int = param(200000, "", "[1, 100000000]", "ours", "A* expansion budget")
-    goal_spread: float = param(0.5, "", "[0, 1]", "ours",
-        "per-robot goal = goal + goal_spread * (spawn_i - spawn centroid): each MADER agent has its own goal")
+    goal_disc: float = param(2.4, "m", "[0, inf)", "ours (EGO-Swarm's, planning/goals.py)",
+        "per-robot goals fill a disc of this radius around the scene's goal (within the 3 m arrival radius), "
+        "assigned to the spawn layout: each MADER agent has its own goal, and 15 slots in 2.4 m stay ~1 m apart, "
+        "beyond agent_inflation")
     goal_tol: float = param(0.05, "m", "[0, inf)", "ours",
         "a robot whose committed plan ends this close to its goal stops replanning")
