@@ -219,3 +219,21 @@ def test_ipopt_norm_limits_bound_the_derivative_control_points_in_norm():
                      np.linalg.norm(np.diff(res.ctrl, n=2, axis=0) / 0.36, axis=1).max())
     assert out[True][0] <= 1.0 + 1e-5 and out[True][1] <= 1.5 + 1e-5
     assert out[False][0] > 1.05 or out[False][1] > 1.55  # per axis: the diagonal exceeds the norm
+
+
+def test_plans_hook_records_every_commit_from_point_a():
+    """MADER's plans() (docs/methods/contract.md): one record per broadcast (the hover plans of
+    the start and every commit), each starting at the point A the replan planned from: the
+    committed trajectory at the commit step, which the robot tracks within centimetres."""
+    res = swarmnav.run("mader", "random_forest:density=0.15,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0",
+                       seed=3, steps=150)
+    pl, m = res.plans, res.metrics
+    n = res.positions.shape[1]
+    assert len(pl) == n + m["mader_commits"] and m["mader_commits"] > n
+    assert sorted(pl.robot[pl.step == 0]) == list(range(n))
+    gaps = []
+    for j in range(len(pl)):
+        pts, t = pl.trajectory(j)
+        assert t[0] == pytest.approx(pl.step[j] * res.config["dt"], abs=1e-5)
+        gaps.append(np.linalg.norm(pts[0] - res.positions[pl.step[j], pl.robot[j]]))
+    assert np.median(gaps) < 0.02 and max(gaps) < 0.2, (np.median(gaps), max(gaps))

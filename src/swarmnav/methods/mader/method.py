@@ -40,6 +40,7 @@ from swarmnav.planning.hulls import hull_vertices, inflate_points, interval_poin
 from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
+from swarmnav.planning.plan_log import PlanLog, sample_times
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
 
@@ -114,6 +115,7 @@ class MaderMethod:
         self.ref_a = np.zeros((n, 1, dim))
         self.ref_k0 = np.zeros(n, dtype=np.int64)
         self.ref_len = np.ones(n, dtype=np.int64)
+        self._log_plans = PlanLog(dim)
         for r in range(n):  # at rest where it stands
             self.ctrl.append(np.repeat(x[r][None], p.num_pol + 3, axis=0))
             self._commit(r, self.ctrl[r], 1.0, 0)
@@ -153,6 +155,11 @@ class MaderMethod:
             **self.comm.summary(self._steps * self.params.dt),
         }
 
+    def plans(self) -> dict[str, np.ndarray]:
+        """Every committed trajectory (the initial hover plans too), sampled every 0.1 s
+        (:class:`~swarmnav.planning.plan_log.PlanLog`; docs/methods/contract.md)."""
+        return self._log_plans.arrays()
+
     def timings(self) -> dict[str, float]:
         """Wall-clock planning time per robot per replan [ms] (not reproducible: not metrics)."""
         plan = np.array(self._plan_ms) if self._plan_ms else np.zeros(1)
@@ -176,6 +183,8 @@ class MaderMethod:
         q, vv, aa = self._eval(ctrl, dtk, p.dt * np.arange(length))
         self.ref_q[r, :length], self.ref_v[r, :length], self.ref_a[r, :length] = q, vv, aa
         self.ref_k0[r], self.ref_len[r] = step, length
+        tau = sample_times(dur)
+        self._log_plans.add(step, r, step * p.dt + tau, self._eval(ctrl, dtk, tau)[0])
 
     def _eval(self, ctrl: np.ndarray, dtk: float, tau: np.ndarray):
         """Position, velocity, acceleration of a plan at times ``tau`` [s] from its start."""
