@@ -236,4 +236,4 @@ def test_plans_hook_records_every_commit_from_point_a():
         pts, t = pl.trajectory(j)
         assert t[0] == pytest.approx(pl.step[j] * res.config["dt"], abs=1e-5)
         gaps.append(np.linalg.norm(pts[0] - res.positions[pl.step[j], pl.robot[j]]))
-    assert np.median(gaps) < 0.02 and max(gaps) < 0.2, (np.median(gaps), max(gaps))
+    assert np.median(gaps) < 0.005 and max(gaps) < 0.05, (np.median(gaps), max(gaps))  # measured: 0.1 mm, 1.4 mm
