@@ -85,9 +85,13 @@ def test_out_of_range_parameter_refused():
         MaderMethod(knots="open")
 
 
-@pytest.mark.parametrize("over, says", [({"algorithm": "LD_SLSQP"}, "knots=uniform"),
-                                        ({"algorithm": "LD_SLSQP", "knots": "uniform", "clearance": "ball"}, "clearance=box"),
-                                        ({"algorithm": "LD_SLSQP", "knots": "uniform", "basis": "bezier"}, "algorithm=ipopt")])
+_NLOPT = {"algorithm": "LD_SLSQP", "preset": "paper"}  # box clearance, per-axis limits
+
+
+@pytest.mark.parametrize("over, says", [(_NLOPT, "knots=uniform"),
+                                        ({"algorithm": "LD_SLSQP"}, "limits=axis"),
+                                        ({**_NLOPT, "knots": "uniform", "clearance": "ball"}, "clearance=box"),
+                                        ({**_NLOPT, "knots": "uniform", "basis": "bezier"}, "algorithm=ipopt")])
 def test_combinations_the_solver_cannot_do_are_refused_in_one_line(over, says):
     """The NLopt path is uniform knots and B-spline hulls only: other combinations are refused at
     the CLI with exit 2 and a line that says what is needed."""

@@ -13,7 +13,19 @@ from swarmnav.params import param
 class MaderParams:
     """MADER (Tordesillas & How, T-RO 2021). Values from ``mader.yaml`` unless marked "ours"."""
 
-    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {"paper": {}}
+    #: ``swarmnav`` is the default build: MADER with our three named parts on (a Euclidean clearance,
+    #: limits on the norm the shared dynamics bound, feasible crowded starts); ``paper`` is MADER's box
+    #: clearance and per-axis limits. Both keep the readings the paper leaves open (docs/methods/mader.md).
+    PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
+        "swarmnav": {},
+        "paper": {"clearance": "box", "limits": "axis", "crowd_shrink": 0.0},
+    }
+    DEFAULT_BUILD: ClassVar[str] = "swarmnav"
+    PRESET_DOCS: ClassVar[dict[str, str]] = {
+        "swarmnav": "our build: MADER with clearance=ball, limits=norm, crowd_shrink=0.9 (chosen on training forests "
+                    "1-2, docs/methods/mader.md)",
+        "paper": "MADER's box clearance and per-axis limits, with the readings the paper leaves open",
+    }
 
     # --- dynamics and control ---
     dt: float = param(0.01, "s", "[0.001, 0.1]", "mader.yaml dc",
@@ -65,14 +77,14 @@ class MaderParams:
         "obstacles and agents within this of the seed's bounding box enter the problem")
     check_margin: float = param(0.05, "m", "[0, inf)", "ours",
         "check: a new plan fails if it comes within 2 body radii + this of a trajectory committed meanwhile")
-    clearance: Literal["box", "ball"] = param("box", "", None, "MADER paper (drone_bbox); ball: ours",
+    clearance: Literal["box", "ball"] = param("ball", "", None, "MADER paper (drone_bbox); ball: ours",
         "shape of the clearance kept from obstacles (inflation) and other agents (agent_inflation): box = their "
         "polyhedra grown by a cube of that half-size, as MADER (a diagonal pair needs sqrt(D) x the gap); ball = "
         "each plane's normal bounded so the sets stay that far apart in Euclidean distance")
-    limits: Literal["axis", "norm"] = param("axis", "", None, "MADER paper (per axis); norm: ours",
+    limits: Literal["axis", "norm"] = param("norm", "", None, "MADER paper (per axis); norm: ours",
         "velocity and acceleration bounds of the plan: axis = |V_i|, |A_i| per axis (MADER), which lets a diagonal "
         "plan ask sqrt(D) x what the shared norm-saturated dynamics give; norm = their Euclidean norm (the dynamics' own)")
-    crowd_shrink: float = param(0.0, "", "[0, 1)", "ours",
+    crowd_shrink: float = param(0.9, "", "[0, 1)", "ours",
         "a pair already closer than agent_inflation keeps max(crowd_shrink x gap, 2 body radii + check_margin / 2) "
         "(none between contact and that floor: a fallback), and crowd_shrink x gap if already in contact, so a "
         "crowded start stays feasible (0 = off: such a robot cannot plan)")
