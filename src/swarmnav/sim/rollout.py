@@ -136,51 +136,54 @@ def run(
         if scn.contact == "crash" else None
     if referee is not None:
         events += referee.judge(0, P[0], C[0], pos)
-    for k in range(steps):
-        cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
-        pos, vel = m.dynamics.step(pos, vel, cmd, dt)
-        if referee is not None:
-            referee.hold(pos, vel)
-        if direct and _plain(pos, vel, d):
-            finite = _finite_into(pos, vel, P[k + 1], V[k + 1])
-        else:
-            finite = _all_finite(pos, vel)
-            if finite:
-                if period is not None:  # the world is a torus whatever the method's dynamics
-                    pos = lo + np.mod(pos - lo, period)
-                P[k + 1], V[k + 1] = lift(pos), vlift(vel)
-        if not finite:
-            raise DivergedError(f"{m.name} diverged at step {k + 1} (t = {(k + 1) * dt:g} s): non-finite "
-                                f"positions or velocities; check the parameters ({_changed(m.params)})")
-        if no_obstacles:
-            C[k + 1] = clear(P[k + 1])
-        else:  # written in place (a row of C is a contiguous float64 buffer): the same values
-            distance_into(P[k + 1], C[k + 1])
-        if walled:
-            _inside_walls(P[k + 1], w_lo, w_hi, C[k + 1])
-        labels = info.get("labels")
-        lab[k + 1] = lab[k] if labels is None else labels
-        r = info.get("roles")
-        if r is not None:
-            if roles is None:
-                roles = np.zeros((steps + 1, N), dtype=np.uint8)
-            roles[k + 1] = r
-        elif roles is not None:
-            roles[k + 1] = roles[k]
-        evs = info.get("events")
-        if evs:
-            for ev in evs:
-                events.append({"step": k, **ev})
-        if referee is not None:
-            events += referee.judge(k + 1, P[k + 1], C[k + 1], pos)
-        if bar is not None and (k % 10 == 9 or k == steps - 1):
-            bar(k + 1)
-        if info.get("done") or (referee is not None and referee.crashed.all()):  # the method's task is complete: record this state and stop
-            P, V, C, lab = P[: k + 2].copy(), V[: k + 2].copy(), C[: k + 2].copy(), lab[: k + 2].copy()
-            roles = None if roles is None else roles[: k + 2].copy()
-            if bar is not None:
-                bar(steps)
-            break
+    # a diverging state is reported in one line (DivergedError below), not by NumPy's floating-point
+    # warnings on the way there (an overflow in a power, inf - inf): they only repeat it
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for k in range(steps):
+            cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
+            pos, vel = m.dynamics.step(pos, vel, cmd, dt)
+            if referee is not None:
+                referee.hold(pos, vel)
+            if direct and _plain(pos, vel, d):
+                finite = _finite_into(pos, vel, P[k + 1], V[k + 1])
+            else:
+                finite = _all_finite(pos, vel)
+                if finite:
+                    if period is not None:  # the world is a torus whatever the method's dynamics
+                        pos = lo + np.mod(pos - lo, period)
+                    P[k + 1], V[k + 1] = lift(pos), vlift(vel)
+            if not finite:
+                raise DivergedError(f"{m.name} diverged at step {k + 1} (t = {(k + 1) * dt:g} s): non-finite "
+                                    f"positions or velocities; check the parameters ({_changed(m.params)})")
+            if no_obstacles:
+                C[k + 1] = clear(P[k + 1])
+            else:  # written in place (a row of C is a contiguous float64 buffer): the same values
+                distance_into(P[k + 1], C[k + 1])
+            if walled:
+                _inside_walls(P[k + 1], w_lo, w_hi, C[k + 1])
+            labels = info.get("labels")
+            lab[k + 1] = lab[k] if labels is None else labels
+            r = info.get("roles")
+            if r is not None:
+                if roles is None:
+                    roles = np.zeros((steps + 1, N), dtype=np.uint8)
+                roles[k + 1] = r
+            elif roles is not None:
+                roles[k + 1] = roles[k]
+            evs = info.get("events")
+            if evs:
+                for ev in evs:
+                    events.append({"step": k, **ev})
+            if referee is not None:
+                events += referee.judge(k + 1, P[k + 1], C[k + 1], pos)
+            if bar is not None and (k % 10 == 9 or k == steps - 1):
+                bar(k + 1)
+            if info.get("done") or (referee is not None and referee.crashed.all()):  # the method's task is complete: record this state and stop
+                P, V, C, lab = P[: k + 2].copy(), V[: k + 2].copy(), C[: k + 2].copy(), lab[: k + 2].copy()
+                roles = None if roles is None else roles[: k + 2].copy()
+                if bar is not None:
+                    bar(steps)
+                break
     wall = time.perf_counter() - t0
     lab[0] = lab[1]  # the structure in force at k = 0 is the one decided at the first step
     if roles is not None:
