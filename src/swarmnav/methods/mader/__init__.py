@@ -5,7 +5,7 @@ from swarmnav.methods.mader.method import MaderMethod
 from swarmnav.methods.mader.params import MaderParams
 from swarmnav.methods.registry import register
 
-register("mader", MaderMethod, "MADER: B-spline hulls, separating planes as decision variables (NLopt SLSQP), "
+register("mader", MaderMethod, "MADER: B-spline hulls, separating planes as decision variables (IPOPT via CasADi), "
          "asynchronous check-recheck commits.", params=MaderParams)
 
 __all__ = ["MaderMethod", "MaderParams"]

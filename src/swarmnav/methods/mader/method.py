@@ -10,7 +10,7 @@ Each robot replans continuously and asynchronously. A replan started at step ``k
 3. the problem (solver.py): the convex hull of each segment's B-spline control points must be
    separated by a plane from every obstacle polyhedron the robot knows near the seed and from
    every other agent's committed trajectory hull over that segment's time interval (the
-   snapshot of ``k_in``); the planes are decision variables; NLopt's MMA solves it;
+   snapshot of ``k_in``); the planes are decision variables; IPOPT (CasADi) solves it, or NLopt;
 4. check (at ``t_in + replan_time``): the new plan is tested against every trajectory another
    robot committed after ``k_in`` (it could not be in the problem); a conflict, or a failed
    optimisation, keeps the committed trajectory (a fallback) and the robot replans again.
