@@ -1,5 +1,6 @@
-"""MADER's optimisation (Tordesillas & How, T-RO 2021, Section V), solved with NLopt as the
-authors' open path does (``mader.yaml``: ``solver: LD_MMA``).
+"""MADER's optimisation (Tordesillas & How, T-RO 2021, Section V), solved with IPOPT through
+CasADi (:func:`solve_ipopt`, the default), or with NLopt as the authors' open path does
+(``mader.yaml``: ``solver: LD_MMA``; :func:`solve`, uniform knots only).
 
 Decision variables: the free control points of a uniform cubic B-spline of ``num_pol``
 segments, and one plane (n, d) per (segment, obstacle) pair. The first three control points
