@@ -2,6 +2,25 @@
 
 from __future__ import annotations
 
+from swarmnav.errors import ConfigError
+
+#: Control steps a plan may take (our bound; a planner keeps each plan sampled at the control
+#: rate, 1e5 steps of references are 72 MB for 15 robots in 2-D).
+MAX_PLAN_STEPS = 100_000
+
+
+def check_plan_steps(method: str, horizon: str, length: float, v_max: float, a_max: float, dt: float,
+                     factor: float = 1.0) -> None:
+    """Refuse (ConfigError) bounds whose plan cannot fit in :data:`MAX_PLAN_STEPS` steps of ``dt``:
+    ``factor`` x (a plan of ``length`` [m] (parameter ``horizon``) at ``v_max``, then a stop at
+    ``a_max``). Near-zero bounds (v_max = 1e-200 m/s) would stretch a plan past any memory and
+    turn its timing into inf or NaN; each value alone is within its declared range."""
+    seconds = factor * (length / v_max + v_max / a_max)
+    if not seconds / dt <= MAX_PLAN_STEPS:
+        raise ConfigError(f"{method}: a plan of {horizon} = {length:g} m at v_max = {v_max:g} m/s, then a stop at "
+                          f"a_max = {a_max:g} m/s^2, lasts {seconds:.3g} s, {seconds / dt:.3g} control steps of dt "
+                          f"(at most {MAX_PLAN_STEPS:.0e}); raise v_max or a_max")
+
 
 class ReplanSchedule:
     """Replans every ``every`` control steps: ``every = max(1, round(T_p / dt))``.

@@ -11,12 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
-from swarmnav.errors import ConfigError
 from swarmnav.params import param
+from swarmnav.planning.schedule import check_plan_steps
 
-#: Control steps a plan may take (our bound; each robot keeps its plan sampled at the control
-#: rate): a plan of planning_horizon at v_max, then a stop at a_max, must fit.
-MAX_PLAN_STEPS = 100_000
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,11 +112,5 @@ class EgoSwarmParams:
 
     def __post_init__(self) -> None:
         # single values are checked against their declared ranges by params.build; here the
-        # relation that keeps a plan finite: near-zero bounds (e.g. v_max = 1e-200 m/s) would
-        # stretch it past any memory and overflow the time re-allocation
-        seconds = self.planning_horizon / self.v_max + self.v_max / self.a_max
-        if not seconds / self.dt <= MAX_PLAN_STEPS:
-            raise ConfigError(f"ego-swarm: a plan of planning_horizon = {self.planning_horizon:g} m at v_max = "
-                              f"{self.v_max:g} m/s, then a stop at a_max = {self.a_max:g} m/s^2, lasts {seconds:.3g} s, "
-                              f"{seconds / self.dt:.3g} control steps of dt (at most {MAX_PLAN_STEPS:.0e}); "
-                              "raise v_max or a_max")
+        # relation that keeps a plan finite
+        check_plan_steps("ego-swarm", "planning_horizon", self.planning_horizon, self.v_max, self.a_max, self.dt)

@@ -40,7 +40,7 @@ from swarmnav.planning.hulls import hull_vertices, inflate_points, interval_poin
 from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
-from swarmnav.planning.plan_log import PlanLog, sample_times
+from swarmnav.planning.plan_log import PlanLog, sample_rows
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
 
@@ -183,8 +183,8 @@ class MaderMethod:
         q, vv, aa = self._eval(ctrl, dtk, p.dt * np.arange(length))
         self.ref_q[r, :length], self.ref_v[r, :length], self.ref_a[r, :length] = q, vv, aa
         self.ref_k0[r], self.ref_len[r] = step, length
-        tau = sample_times(dur)
-        self._log_plans.add(step, r, step * p.dt + tau, self._eval(ctrl, dtk, tau)[0])
+        rows = sample_rows(length, p.dt)  # the reference just sampled, every 0.1 s: no second evaluation
+        self._log_plans.add(step, r, (step + rows) * p.dt, q[rows])
 
     def _eval(self, ctrl: np.ndarray, dtk: float, tau: np.ndarray):
         """Position, velocity, acceleration of a plan at times ``tau`` [s] from its start."""

@@ -6,12 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
-from swarmnav.errors import ConfigError
 from swarmnav.params import param
+from swarmnav.planning.schedule import check_plan_steps
 
-#: Control steps a plan may take (our bound, as EGO-Swarm's: each committed plan is sampled at the
-#: control rate): a plan of Ra at v_max, stretched by factor_alloc_close, then a stop at a_max, must fit.
-MAX_PLAN_STEPS = 100_000
 
 
 @dataclass(frozen=True, slots=True)
@@ -111,10 +108,6 @@ class MaderParams:
         "a robot whose committed plan ends this close to its goal stops replanning")
 
     def __post_init__(self) -> None:
-        # the relation that keeps a plan finite: near-zero bounds (v_max = 5e-324 m/s) stretch it
-        # past any memory and turn its knot span into NaN
-        seconds = max(self.factor_alloc, self.factor_alloc_close) * (self.Ra / self.v_max + self.v_max / self.a_max)
-        if not seconds / self.dt <= MAX_PLAN_STEPS:
-            raise ConfigError(f"mader: a plan of Ra = {self.Ra:g} m at v_max = {self.v_max:g} m/s, then a stop at "
-                              f"a_max = {self.a_max:g} m/s^2, lasts {seconds:.3g} s, {seconds / self.dt:.3g} control "
-                              f"steps of dt (at most {MAX_PLAN_STEPS:.0e}); raise v_max or a_max")
+        # the relation that keeps a plan finite (v_max = 5e-324 m/s made its knot span NaN)
+        check_plan_steps("mader", "Ra", self.Ra, self.v_max, self.a_max, self.dt,
+                         max(self.factor_alloc, self.factor_alloc_close))
