@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from swarmnav.cli import main
-from swarmnav.sim import RunResult, run
+from swarmnav.sim import RunResult
 from swarmnav.viz.headless import Browser, find_chromium
+from _helpers.viewer import viewer_runs
 
 pytestmark = pytest.mark.skipif(find_chromium() is None, reason="Debian's chromium is not installed (CI installs it)")
 
@@ -27,20 +27,8 @@ READBACK = 1e-4
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     """A planar HES run with a split and a merge, and a 3-D APF run, each with its viewer."""
-    out = {}
-    for name, method, scene, steps in (("planar", "hes", "default_corridor", 400),
-                                       ("solid", "apf", "sph_cluttered_3d", 60)):
-        d = tmp_path_factory.mktemp(name)
-        run(method, scene, seed=1, steps=steps).save(d)
-        assert main(["view", str(d)]) == 0
-        out[name] = d
-    return out
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with Browser(1100, 700) as b:
-        yield b
+    return viewer_runs(tmp_path_factory, (("planar", "hes", "default_corridor", 400),
+                                          ("solid", "apf", "sph_cluttered_3d", 60)))
 
 
 def _open(b: Browser, d) -> dict:

@@ -11,9 +11,9 @@ import pytest
 from PIL import Image
 from scipy.spatial import cKDTree
 
-from swarmnav.cli import main
-from swarmnav.sim import RunResult, run
+from swarmnav.sim import RunResult
 from swarmnav.viz.headless import Browser, find_chromium
+from _helpers.viewer import viewer_runs
 
 pytestmark = pytest.mark.skipif(find_chromium() is None, reason="Debian's chromium is not installed (CI installs it)")
 
@@ -26,20 +26,8 @@ ON_LINE = 3.0
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    out = {}
-    for name, method, scene, steps in (("ego", "ego-swarm", FOREST, 300), ("apf", "apf", "default_corridor", 30),
-                                       ("ego3d", "ego-swarm", "sph_cluttered_3d", 80)):
-        d = tmp_path_factory.mktemp(name)
-        run(method, scene, seed=1, steps=steps).save(d)
-        assert main(["view", str(d)]) == 0
-        out[name] = d
-    return out
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with Browser(1100, 700) as b:
-        yield b
+    return viewer_runs(tmp_path_factory, (("ego", "ego-swarm", FOREST, 300), ("apf", "apf", "default_corridor", 30),
+                                          ("ego3d", "ego-swarm", "sph_cluttered_3d", 80)))
 
 
 def _open(b: Browser, d) -> None:
