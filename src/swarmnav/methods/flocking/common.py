@@ -76,8 +76,8 @@ def local_minima(ring: np.ndarray, within: float, nbrs: np.ndarray | None = None
     index (the same tie rule). A robot inside an obstacle reads 0 on every ray: no minimum.
     """
     if nbrs is None:
-        prev = np.roll(ring, 1, axis=1)
-        nxt = np.roll(ring, -1, axis=1)
+        prev = np.concatenate([ring[:, -1:], ring[:, :-1]], axis=1)  # circular neighbours
+        nxt = np.concatenate([ring[:, 1:], ring[:, :1]], axis=1)
         is_min = (ring < prev) & (ring <= nxt) & (ring < within)
     else:
         r_n = ring[:, nbrs]  # (N, R, k)

@@ -97,8 +97,8 @@ def sigma_norm(z2: np.ndarray, eps: float) -> np.ndarray:
 def bump(z: np.ndarray, h: float) -> np.ndarray:
     """The bump function rho_h: 1 on [0, h), ``(1 + cos(pi (z - h) / (1 - h))) / 2`` on [h, 1], 0 beyond (and below 0)."""
     z = np.asarray(z, dtype=float)
-    mid = 0.5 * (1.0 + np.cos(np.pi * (z - h) / (1.0 - h)))
-    return np.where(z < 0, 0.0, np.where(z < h, 1.0, np.where(z <= 1.0, mid, 0.0)))
+    t = np.clip((z - h) / (1.0 - h), 0.0, 1.0)  # 0 below h (value 1), 1 from z = 1 on (value 0 exactly)
+    return 0.5 * (1.0 + np.cos(np.pi * t)) * (z >= 0)
 
 
 def sigma_1(z: np.ndarray) -> np.ndarray:
