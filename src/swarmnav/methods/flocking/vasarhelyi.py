@@ -75,8 +75,10 @@ class VasarhelyiParams:
     v_shill: float = param(13.6, "m/s", "[0, inf)", _V18, "speed of the shill agents v_shill")
     p_shill: float = param(3.55, "1/s", "(0, inf)", _V18, "gain of the wall braking curve p_shill")
     a_shill: float = param(3.02, "m/s^2", "(0, inf)", _V18, "acceleration of the wall braking curve a_shill")
-    length_scale: float = param(0.06, "", "(0, inf)", "ours", "L: the paper's lengths x L (25 m -> 1.5 m)")
-    time_scale: float = param(0.24, "", "(0, inf)", "ours", "T: times x T, so speeds x L/T (4 m/s -> 1 m/s)")
+    length_scale: float = param(0.07, "", "(0, inf)", "ours: chosen on training forests 1-10",
+                                "L: the paper's lengths x L (25 m -> 1.75 m)")
+    time_scale: float = param(0.28, "", "(0, inf)", "ours: L / T = 1/4",
+                              "T: times x T, so speeds x L/T (4 m/s -> 1 m/s)")
     body_radius: float = param(0.2, "m", "[0, inf)", "ours",
                                "taken off every obstacle distance (the paper's agents are points: 0 in paper)")
     r_slow: float = param(2.0, "m", "(0, inf)", "ours", "self-propulsion toward the goal slows linearly inside r_slow")
