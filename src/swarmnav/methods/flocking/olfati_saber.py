@@ -56,7 +56,7 @@ class OlfatiSaberParams:
     DEFAULT_BUILD: ClassVar[str] = "swarmnav"
     PRESET_DOCS: ClassVar[dict[str, str]] = {
         "swarmnav": "Algorithm 3 with the paper's ratios r = 1.2 d, d' = 0.6 d, r' = 1.2 d' on a lattice scaled to "
-                    "the scenes (d = 1.5 m); nothing else of ours",
+                    "the scenes (d = 1.2 m, chosen on training forests 1-10); nothing else of ours",
         "paper": "Algorithm 3 with the paper's Section VIII lengths read as metres (d = 7 m) and the readings its "
                  "silence forces (static gamma-agent at the goal, beta-agents from the range ring, our gains)",
     }
@@ -64,10 +64,10 @@ class OlfatiSaberParams:
     dt: float = param(0.02, "s", "[0.0001, 1]", "ours", "control step (the paper is continuous-time; 50 Hz)")
     v_max: float = param(1.0, "m/s", "(0, inf)", "SPH Table I", "vehicle speed bound (the Table II vehicle)")
     a_max: float = param(1.5, "m/s^2", "(0, inf)", "SPH Table I", "vehicle acceleration bound")
-    d: float = param(1.5, "m", "(0, inf)", "ours (ratio: OS06 Sec. VIII)", "desired inter-agent distance d")
-    r: float = param(1.8, "m", "(0, inf)", "OS06 Sec. VIII: r = 1.2 d", "interaction range r of alpha-agents")
-    d_obs: float = param(0.9, "m", "(0, inf)", "OS06 Sec. VIII: d' = 0.6 d", "desired distance d' to obstacles")
-    r_obs: float = param(1.08, "m", "(0, inf)", "OS06 Sec. VIII: r' = 1.2 d'", "range r' within which obstacles act")
+    d: float = param(1.2, "m", "(0, inf)", "ours: chosen on training forests 1-10", "desired inter-agent distance d")
+    r: float = param(1.44, "m", "(0, inf)", "OS06 Sec. VIII: r = 1.2 d", "interaction range r of alpha-agents")
+    d_obs: float = param(0.72, "m", "(0, inf)", "OS06 Sec. VIII: d' = 0.6 d", "desired distance d' to obstacles")
+    r_obs: float = param(0.864, "m", "(0, inf)", "OS06 Sec. VIII: r' = 1.2 d'", "range r' within which obstacles act")
     eps: float = param(0.1, "", "(0, inf)", "OS06 Sec. VIII", "sigma-norm parameter epsilon")
     a: float = param(5.0, "", "(0, inf)", "OS06 Sec. VIII", "action function phi: a, 0 < a <= b")
     b: float = param(5.0, "", "(0, inf)", "OS06 Sec. VIII", "action function phi: b")
