@@ -144,3 +144,22 @@ def test_bad_input_is_refused_in_one_line_with_exit_2(args, says, tmp_path):
                 "--out", str(tmp_path / "o"), "--quiet", "--force")
     assert r.returncode == 2 and "Traceback" not in r.stderr and says in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("preset", ["swarmnav", "paper"])
+def test_no_shill_agent_acts_beyond_the_sensing_cap(preset):
+    """The sensor reads no farther than ``shill_reach``: there the braking curve already allows the
+    largest relative speed a shill agent can have, v_shill + v_max, so its term is zero."""
+    from swarmnav.methods.flocking.vasarhelyi import shill_reach
+
+    p = registry.make("vasarhelyi", preset=preset).params
+    s = Scaled.of(p)
+    reach = shill_reach(s, p)
+    assert braking(reach - p.body_radius - s.r0_shill, s.a_shill, s.p_shill) >= s.v_shill + p.v_max
+    rng = np.random.default_rng(0)
+    v = rng.normal(size=(50, 2))
+    v *= p.v_max / np.linalg.norm(v, axis=1, keepdims=True)  # every speed the vehicle can have
+    normal = rng.normal(size=(50, 2))
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    assert np.all(shill(v, np.arange(50), np.full(50, reach - p.body_radius), normal, s) == 0)
+    assert np.any(shill(v, np.arange(50), np.full(50, 0.9 * (reach - p.body_radius)), normal, s) != 0)

@@ -122,6 +122,17 @@ def braking(r: np.ndarray, a: float, p: float) -> np.ndarray:
     return np.where(r <= 0, 0.0, np.where(lin < a / p, lin, root))
 
 
+def shill_reach(s: Scaled, p: VasarhelyiParams) -> float:
+    """Distance [m] beyond which a shill agent cannot act: its relative speed is at most
+    ``v_shill + v_max``, and the braking curve reaches that at ``r0_shill + D^-1(v_shill + v_max)``
+    (plus the body radius taken off). Sensing no farther changes no command and saves most of
+    the ray casting (3.8 m instead of 20 m in the default build)."""
+    v = s.v_shill + p.v_max
+    knee = s.a_shill / s.p_shill  # D's linear branch ends at this speed
+    r = v / s.p_shill if v < knee else (v * v + knee * knee) / (2.0 * s.a_shill)
+    return float(s.r0_shill + p.body_radius + r) * (1.0 + 1e-9) + 1e-9
+
+
 def repulsion(diff: np.ndarray, s: Scaled) -> np.ndarray:
     """Sum over j of  (N, d) [m/s] from ``diff[i, j] = r_j - r_i`` (N, N, d), diagonal left out."""
     dist = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
@@ -173,7 +184,7 @@ class Vasarhelyi:
         p = self.params
         self.goal = scenario.goal_array
         self._period = (scenario.upper - scenario.lower) if scenario.periodic else None
-        self._sensor = RangeSensor(scenario, p.n_rays, p.n_rays_3d, p.lidar_range)
+        self._sensor = RangeSensor(scenario, p.n_rays, p.n_rays_3d, min(p.lidar_range, shill_reach(self.scaled, p)))
         self._board = StateBoard(p.broadcast_hz, p.dt)
         self._steps = 0
         self._shill = 0
@@ -189,7 +200,7 @@ class Vasarhelyi:
         vd = s.v_flock * g / np.maximum(gn, p.r_slow)[:, None]
         vd += repulsion(diff, s)
         vd += friction(diff, hv[None, :, :] - v[:, None, :], s)
-        agent, dist, normal = self._sensor.surface_points(x, np.inf)
+        agent, dist, normal = self._sensor.surface_points(x, np.inf)  # within shill_reach
         vd += shill(v, agent, dist - p.body_radius, normal, s)
         self._shill += len(agent)
         return vd
