@@ -40,3 +40,17 @@ def test_broadcasts_are_held_between_sends_and_counted():
         assert np.all(hx == (k // 5) * 5)  # the last broadcast
     s = board.summary()
     assert s["comm_messages"] == 3 * 4 and s["comm_bytes"] == 3 * 4 * STATE_BYTES == 3 * 4 * 88
+
+
+def test_sphere_minima_match_a_per_ray_reference():
+    from swarmnav.methods.apf import fibonacci_sphere
+    from swarmnav.methods.flocking.common import sphere_neighbours
+
+    dirs = fibonacci_sphere(256)
+    nbrs = sphere_neighbours(dirs)
+    rng = np.random.default_rng(1)
+    ring = np.round(rng.uniform(0, 5, (4, 256)), 1)  # rounded: ties occur
+    agent, ray = local_minima(ring, 3.0, nbrs)
+    want = [(a, k) for a in range(4) for k in range(256) if ring[a, k] < 3.0
+            and all(ring[a, k] < ring[a, j] if j < k else ring[a, k] <= ring[a, j] for j in nbrs[k])]
+    assert list(zip(agent.tolist(), ray.tolist())) == want and len(want) > 10

@@ -79,12 +79,13 @@ def local_minima(ring: np.ndarray, within: float, nbrs: np.ndarray | None = None
         prev = np.concatenate([ring[:, -1:], ring[:, :-1]], axis=1)  # circular neighbours
         nxt = np.concatenate([ring[:, 1:], ring[:, :1]], axis=1)
         is_min = (ring < prev) & (ring <= nxt) & (ring < within)
-    else:
-        r_n = ring[:, nbrs]  # (N, R, k)
-        r_k = ring[:, :, None]
-        lower = nbrs[None, :, :] < np.arange(ring.shape[1])[None, :, None]
-        ok = np.where(lower, r_k < r_n, r_k <= r_n)
-        is_min = ok.all(axis=2) & (ring < within)
+    else:  # only the rays closer than ``within`` can be minima: test those against their neighbours
+        agent, ray = np.nonzero(ring < within)
+        r_k = ring[agent, ray][:, None]
+        r_n = ring[agent[:, None], nbrs[ray]]  # (K, k)
+        lower = nbrs[ray] < ray[:, None]
+        keep = np.where(lower, r_k < r_n, r_k <= r_n).all(axis=1)
+        return agent[keep], ray[keep]
     agent, ray = np.nonzero(is_min)
     return agent, ray
 
