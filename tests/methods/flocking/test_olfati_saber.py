@@ -9,8 +9,17 @@ import pytest
 
 from swarmnav.methods import registry
 from swarmnav.methods.base import Observation
-from swarmnav.methods.flocking.olfati_saber import (OlfatiSaberParams, action, alpha_term, beta_term, bump,
-                                                    gamma_term, phi_alpha, phi_beta, sigma_norm)
+from swarmnav.methods.flocking.olfati_saber import (
+    OlfatiSaberParams,
+    action,
+    alpha_term,
+    beta_term,
+    bump,
+    gamma_term,
+    phi_alpha,
+    phi_beta,
+    sigma_norm,
+)
 from swarmnav.world import from_dict
 from tests._helpers.cli import run_cli
 

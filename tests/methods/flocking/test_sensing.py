@@ -4,7 +4,12 @@ in sight, at the wall's distance, pointing at it; and the held broadcasts counte
 import numpy as np
 import pytest
 
-from swarmnav.methods.flocking.common import STATE_BYTES, RangeSensor, StateBoard, local_minima
+from swarmnav.methods.flocking.common import (
+    STATE_BYTES,
+    RangeSensor,
+    StateBoard,
+    local_minima,
+)
 from swarmnav.world import from_dict
 
 

@@ -9,7 +9,14 @@ import pytest
 
 from swarmnav.methods import registry
 from swarmnav.methods.base import Observation
-from swarmnav.methods.flocking.vasarhelyi import Scaled, VasarhelyiParams, braking, friction, repulsion, shill
+from swarmnav.methods.flocking.vasarhelyi import (
+    Scaled,
+    VasarhelyiParams,
+    braking,
+    friction,
+    repulsion,
+    shill,
+)
 from swarmnav.world import from_dict
 from tests._helpers.cli import run_cli
 
@@ -155,11 +162,11 @@ def test_no_shill_agent_acts_beyond_the_sensing_cap(preset):
     p = registry.make("vasarhelyi", preset=preset).params
     s = Scaled.of(p)
     reach = shill_reach(s, p)
-    assert braking(reach - p.body_radius - s.r0_shill, s.a_shill, s.p_shill) >= s.v_shill + p.v_max
+    assert braking(reach - p.shill_offset - s.r0_shill, s.a_shill, s.p_shill) >= s.v_shill + p.v_max
     rng = np.random.default_rng(0)
     v = rng.normal(size=(50, 2))
     v *= p.v_max / np.linalg.norm(v, axis=1, keepdims=True)  # every speed the vehicle can have
     normal = rng.normal(size=(50, 2))
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    assert np.all(shill(v, np.arange(50), np.full(50, reach - p.body_radius), normal, s) == 0)
-    assert np.any(shill(v, np.arange(50), np.full(50, 0.9 * (reach - p.body_radius)), normal, s) != 0)
+    assert np.all(shill(v, np.arange(50), np.full(50, reach - p.shill_offset), normal, s) == 0)
+    assert np.any(shill(v, np.arange(50), np.full(50, 0.9 * (reach - p.shill_offset)), normal, s) != 0)

@@ -111,7 +111,7 @@ def pair_differences(x: np.ndarray, others: np.ndarray | None = None,
 class StateBoard:
     """Every robot's position and velocity as the others last received them (module docstring)."""
 
-    __slots__ = ("rate_hz", "dt", "log", "x", "v", "_steps")
+    __slots__ = ("_steps", "dt", "log", "rate_hz", "v", "x")
 
     def __init__(self, rate_hz: float, dt: float):
         self.rate_hz = float(rate_hz)

@@ -129,7 +129,7 @@ def alpha_term(diff: np.ndarray, dv: np.ndarray, p: OlfatiSaberParams) -> np.nda
     the diagonal (a robot and itself) is left out."""
     d2 = np.einsum("ijk,ijk->ij", diff, diff)
     z = sigma_norm(d2, p.eps)
-    n_ij = diff / np.sqrt(1.0 + p.eps * d2)[:, :, None]  # 
+    n_ij = diff / np.sqrt(1.0 + p.eps * d2)[:, :, None]
     w = phi_alpha(z, p)
     adj = bump(z / sigma_norm(p.r * p.r, p.eps), p.h_alpha)  # a_ij
     np.fill_diagonal(w, 0.0)

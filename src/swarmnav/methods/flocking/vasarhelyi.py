@@ -49,12 +49,12 @@ class VasarhelyiParams:
 
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "swarmnav": {},
-        "paper": {"length_scale": 1.0, "time_scale": 1.0, "body_radius": 0.0},
+        "paper": {"length_scale": 1.0, "time_scale": 1.0, "shill_offset": 0.0},
     }
     DEFAULT_BUILD: ClassVar[str] = "swarmnav"
     PRESET_DOCS: ClassVar[dict[str, str]] = {
         "swarmnav": "the paper's optimised set mapped onto our scenes by a similarity transform (length_scale, "
-                    "time_scale: v_flock 4 -> 1 m/s) and obstacle distances from the robot's body (body_radius)",
+                    "time_scale: v_flock 4 -> 1 m/s) and obstacle distances from the robot's body (shill_offset)",
         "paper": "the paper's optimised set for v_flock = 4 m/s in SI units, point agents, with the readings its "
                  "silence forces (self-propulsion toward the goal, velocity tracking time tau)",
     }
@@ -79,8 +79,8 @@ class VasarhelyiParams:
                                 "L: the paper's lengths x L (25 m -> 1.75 m)")
     time_scale: float = param(0.28, "", "(0, inf)", "ours: L / T = 1/4",
                               "T: times x T, so speeds x L/T (4 m/s -> 1 m/s)")
-    body_radius: float = param(0.2, "m", "[0, inf)", "ours",
-                               "taken off every obstacle distance (the paper's agents are points: 0 in paper)")
+    shill_offset: float = param(0.2, "m", "[0, inf)", "ours",
+                               "taken off every obstacle distance: the robot body radius (the paper's agents are points: 0 in paper)")
     r_slow: float = param(2.0, "m", "(0, inf)", "ours", "self-propulsion toward the goal slows linearly inside r_slow")
     broadcast_hz: float = param(10.0, "Hz", "[0.01, 1000]", "ours", "rate of each robot's position+velocity message")
     n_rays: int = param(360, "", "[4, 36000]", "HES Table A1", "rays of the range ring (as APF)")
@@ -106,7 +106,7 @@ class Scaled:
     a_shill: float
 
     @staticmethod
-    def of(p: VasarhelyiParams) -> "Scaled":
+    def of(p: VasarhelyiParams) -> Scaled:
         L, T = p.length_scale, p.time_scale
         v, a = L / T, L / (T * T)
         return Scaled(p.v_flock * v, p.r0_rep * L, p.p_rep / T, p.r0_frict * L, p.c_frict, p.v_frict * v,
@@ -130,7 +130,7 @@ def shill_reach(s: Scaled, p: VasarhelyiParams) -> float:
     v = s.v_shill + p.v_max
     knee = s.a_shill / s.p_shill  # D's linear branch ends at this speed
     r = v / s.p_shill if v < knee else (v * v + knee * knee) / (2.0 * s.a_shill)
-    return float(s.r0_shill + p.body_radius + r) * (1.0 + 1e-9) + 1e-9
+    return float(s.r0_shill + p.shill_offset + r) * (1.0 + 1e-9) + 1e-9
 
 
 def repulsion(diff: np.ndarray, s: Scaled) -> np.ndarray:
@@ -201,7 +201,7 @@ class Vasarhelyi:
         vd += repulsion(diff, s)
         vd += friction(diff, hv[None, :, :] - v[:, None, :], s)
         agent, dist, normal = self._sensor.surface_points(x, np.inf)  # within shill_reach
-        vd += shill(v, agent, dist - p.body_radius, normal, s)
+        vd += shill(v, agent, dist - p.shill_offset, normal, s)
         self._shill += len(agent)
         return vd
 
