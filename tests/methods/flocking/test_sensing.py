@@ -59,3 +59,17 @@ def test_sphere_minima_match_a_per_ray_reference():
     want = [(a, k) for a in range(4) for k in range(256) if ring[a, k] < 3.0
             and all(ring[a, k] < ring[a, j] if j < k else ring[a, k] <= ring[a, j] for j in nbrs[k])]
     assert list(zip(agent.tolist(), ray.tolist())) == want and len(want) > 10
+
+
+@pytest.mark.parametrize("method", ["olfati-saber", "vasarhelyi"])
+def test_as_an_env_baseline_it_flies_as_in_swarmnav_run(method):
+    """Through swarmnav.env (its own dt and saturated dynamics) the method flies the rollout's run:
+    the held broadcasts and the sensing depend only on the step and the state."""
+    import swarmnav
+    import swarmnav.env as E
+
+    res = E.evaluate(method, "default_corridor", [1], horizon=10.0, terminate_at_goal=False)[0]
+    ref = swarmnav.run(method, "default_corridor", seed=1, horizon=10.0)
+    assert res.positions.shape == ref.positions.shape
+    np.testing.assert_allclose(res.positions, ref.positions, atol=1e-8)  # up to the normalised action
+    assert np.linalg.norm(ref.positions[-1] - ref.positions[0], axis=1).mean() > 3.0
