@@ -17,6 +17,7 @@ neighbours' broadcast states, and pair differences.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from swarmnav.methods.apf import fibonacci_sphere
 from swarmnav.planning.messages import FLOAT, HEADERS, INT, CommLog
@@ -79,15 +80,29 @@ def local_minima(ring: np.ndarray, within: float, nbrs: np.ndarray | None = None
         prev = np.concatenate([ring[:, -1:], ring[:, :-1]], axis=1)  # circular neighbours
         nxt = np.concatenate([ring[:, 1:], ring[:, :1]], axis=1)
         is_min = (ring < prev) & (ring <= nxt) & (ring < within)
-    else:  # only the rays closer than ``within`` can be minima: test those against their neighbours
-        agent, ray = np.nonzero(ring < within)
-        r_k = ring[agent, ray][:, None]
-        r_n = ring[agent[:, None], nbrs[ray]]  # (K, k)
-        lower = nbrs[ray] < ray[:, None]
-        keep = np.where(lower, r_k < r_n, r_k <= r_n).all(axis=1)
-        return agent[keep], ray[keep]
+    else:
+        is_min = np.zeros(ring.shape, dtype=np.bool_)
+        _sphere_minima(np.ascontiguousarray(ring), nbrs, float(within), is_min)
     agent, ray = np.nonzero(is_min)
     return agent, ray
+
+
+@njit(cache=True)
+def _sphere_minima(ring, nbrs, within, out):
+    """``out[a, k]`` <- ray k of robot a is a minimum of the sphere (:func:`local_minima`'s rule)."""
+    n, n_rays = ring.shape
+    for a in range(n):
+        for k in range(n_rays):
+            r = ring[a, k]
+            if not r < within:
+                continue
+            ok = True
+            for t in range(nbrs.shape[1]):
+                j = nbrs[k, t]
+                if (j < k and not r < ring[a, j]) or (j > k and not r <= ring[a, j]):
+                    ok = False
+                    break
+            out[a, k] = ok
 
 
 def sphere_neighbours(dirs: np.ndarray, k: int = 6) -> np.ndarray:
