@@ -170,3 +170,13 @@ def test_no_shill_agent_acts_beyond_the_sensing_cap(preset):
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
     assert np.all(shill(v, np.arange(50), np.full(50, reach - p.shill_offset), normal, s) == 0)
     assert np.any(shill(v, np.arange(50), np.full(50, 0.9 * (reach - p.shill_offset)), normal, s) != 0)
+
+
+@pytest.mark.parametrize("setting", ["time_scale=5e-324", "p_shill=1e-300"])
+def test_extreme_valid_values_run_or_fail_in_one_line(setting, tmp_path):
+    """Found by a fuzz of the valid ranges: T*T underflowed to a ZeroDivisionError, (a / p)^2 to an
+    OverflowError. Now the parameters overflow to inf and a diverged run ends in one line."""
+    r = run_cli("run", "--method", "vasarhelyi", "--scenario", "default_corridor", "--steps", "3", "--set", setting,
+                "--out", str(tmp_path / "o"), "--quiet", "--force")
+    assert r.returncode in (0, 2) and "Traceback" not in r.stderr
+    assert r.returncode == 0 or len(r.stderr.strip().splitlines()) == 1

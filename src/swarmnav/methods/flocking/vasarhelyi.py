@@ -107,16 +107,18 @@ class Scaled:
 
     @staticmethod
     def of(p: VasarhelyiParams) -> Scaled:
-        L, T = p.length_scale, p.time_scale
-        v, a = L / T, L / (T * T)
-        return Scaled(p.v_flock * v, p.r0_rep * L, p.p_rep / T, p.r0_frict * L, p.c_frict, p.v_frict * v,
-                      p.p_frict / T, p.a_frict * a, p.r0_shill * L, p.v_shill * v, p.p_shill / T, p.a_shill * a)
+        L, T = np.float64(p.length_scale), np.float64(p.time_scale)  # extreme scales: inf, not an exception
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            v, a = L / T, L / (T * T)
+            return Scaled(p.v_flock * v, p.r0_rep * L, p.p_rep / T, p.r0_frict * L, p.c_frict, p.v_frict * v,
+                          p.p_frict / T, p.a_frict * a, p.r0_shill * L, p.v_shill * v, p.p_shill / T, p.a_shill * a)
 
 
 def braking(r: np.ndarray, a: float, p: float) -> np.ndarray:
     """The braking curve ``D(r, a, p)`` [m/s]: 0 for r <= 0, ``r p`` while ``r p < a / p``,
     ``sqrt(2 a r - a^2 / p^2)`` beyond (continuous at ``r = a / p^2``, non-decreasing in r)."""
     r = np.asarray(r, dtype=float)
+    a, p = np.float64(a), np.float64(p)  # NumPy scalars: an extreme parameter overflows to inf, not OverflowError
     lin = r * p
     root = np.sqrt(np.maximum(2.0 * a * r - (a / p) ** 2, 0.0))
     return np.where(r <= 0, 0.0, np.where(lin < a / p, lin, root))
@@ -127,10 +129,11 @@ def shill_reach(s: Scaled, p: VasarhelyiParams) -> float:
     ``v_shill + v_max``, and the braking curve reaches that at ``r0_shill + D^-1(v_shill + v_max)``
     (plus the body radius taken off). Sensing no farther changes no command and saves most of
     the ray casting (3.8 m instead of 20 m in the default build)."""
-    v = s.v_shill + p.v_max
-    knee = s.a_shill / s.p_shill  # D's linear branch ends at this speed
-    r = v / s.p_shill if v < knee else (v * v + knee * knee) / (2.0 * s.a_shill)
-    return float(s.r0_shill + p.shill_offset + r) * (1.0 + 1e-9) + 1e-9
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        v = np.float64(s.v_shill) + p.v_max
+        knee = np.float64(s.a_shill) / s.p_shill  # D's linear branch ends at this speed
+        r = v / s.p_shill if v < knee else (v * v + knee * knee) / (2.0 * s.a_shill)
+        return float(s.r0_shill + p.shill_offset + r) * (1.0 + 1e-9) + 1e-9
 
 
 def repulsion(diff: np.ndarray, s: Scaled) -> np.ndarray:
