@@ -55,7 +55,7 @@ class SphParams:
         "swarmnav": "ours, the default: guard on a 2-D scene, retime on a 3-D scene (by_dim), each chosen on "
                     "training forests and checked on held-out forests and unseen scenes",
         "paper": "Table I and the paper's algorithm, with our readings where it is silent (docs/methods/sph.md): "
-                 "the build every SPH reproduction spec flies unless its variant names another",
+                 "the paper rows of docs/reproduction.md (--set preset=paper)",
         "headroom": "ours: paper with the tracking kept below what the swarm forces can hold (plan at 0.8 v_max, "
                     "pull capped at a_max)",
         "queue": "ours: headroom with yielding in narrow places (methods/sph/parts/yielding.py)",
