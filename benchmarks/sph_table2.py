@@ -1,8 +1,8 @@
 """Reproduce SPH Table II: print the measured row per density next to the paper's.
 
     # 1. run the trials (20 forests per density; resumable; ~10 min each on 2 cores)
-    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --workers 1 --out out/sph-forest-issue6-100hz
-    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set dt=0.02 --workers 1 --out out/sph-forest-issue6b  # 50 Hz
+    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set preset=paper --workers 1 --out out/sph-forest-issue6-100hz
+    swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set preset=paper --set dt=0.02 --workers 1 --out out/sph-forest-issue6b  # 50 Hz
     swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=apf --workers 1 --out out/sph-forest-apf-issue6
     swarmnav experiment sph-forest --set "density=0.15|0.25|0.35|0.45" --set method=hes --workers 1 --out out/sph-forest-hes
     # 2. tabulate

@@ -16,7 +16,7 @@ LONE = {"name": "lone", "swarm": {"n": 1, "spawn": [-0.1, -0.1, 0.1, 0.1]}, "goa
 def cruise_reference_speed(**params):
     """(mean reference speed [m/s] of the lone robot's replans between 4 s and 8 s of an open
     flight, the 9 s run)."""
-    m = registry.make("sph", **params)
+    m = registry.make("sph", **{"preset": "paper", **params})  # the paper build unless a preset is named
     speeds = []
     orig = m._replan
 

@@ -30,7 +30,7 @@ def _reset(method, scn):
 
 def test_a_2000_km_world_is_refused_in_one_line_before_allocating():
     with pytest.raises(ConfigError) as e:
-        _reset(registry.make("sph"), from_dict(HUGE))
+        _reset(registry.make("sph", preset="paper"), from_dict(HUGE))
     assert str(e.value) == HUGE_LINE
 
 
@@ -38,13 +38,13 @@ def test_cli_huge_world_exits_2_with_one_line(tmp_path):
     f = tmp_path / "big.toml"
     f.write_text("[world]\nbounds = [-1000000.0, -1000000.0, 1000000.0, 1000000.0]\n[swarm]\nn = 5\n"
                  "spawn = [0.0, 0.0, 4.0, 4.0]\n[goal]\nposition = [20.0, 2.0]\n")
-    p = run_cli("run", "--method", "sph", "--scenario-file", f, "--out", tmp_path / "o")
+    p = run_cli("run", "--method", "sph", "--scenario-file", f, "--out", tmp_path / "o", "--set", "preset=paper")
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert p.stderr.splitlines() == ["swarmnav: error: " + HUGE_LINE]
     err = io.StringIO()  # a coarser map and a larger limit say so in the message
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
         code = main(["run", "--method", "sph", "--scenario-file", str(f), "--out", str(tmp_path / "o"),
-                     "--set", "grid_resolution=1", "--set", "max_map_bytes=4e9"])
+                     "--set", "preset=paper", "--set", "grid_resolution=1", "--set", "max_map_bytes=4e9"])
     assert code == 2 and err.getvalue().count("\n") == 1
     assert "at 0.1 m (ESDF) and 1 m (grid) resolution needs 2.92 PiB of maps (limit 3.73 GiB" in err.getvalue()
 
@@ -73,9 +73,9 @@ def test_the_count_is_what_the_maps_allocate_and_the_limit_is_exact(scene, param
 
 def test_yielding_and_more_robots_need_more():
     scn = load_scenario("default_corridor")
-    paper = map_bytes(scn, registry.make("sph").params)
+    paper = map_bytes(scn, registry.make("sph", preset="paper").params)
     assert map_bytes(scn, registry.make("sph", preset="queue").params) > paper
-    assert map_bytes(scn.with_n(40), registry.make("sph").params) > paper
+    assert map_bytes(scn.with_n(40), registry.make("sph", preset="paper").params) > paper
     big = copy.deepcopy(HUGE)
     big["world"]["bounds"] = [0.0, 0.0, 1e308, 10.0]  # a node count beyond a float: still one line
     with pytest.raises(ConfigError, match="needs over 1e308 B of maps"):

@@ -17,8 +17,9 @@ from swarmnav.world import from_dict
 from _helpers.sph import LONE, cruise_reference_speed
 
 
-def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_values():
-    assert registry.make("sph", preset="paper").params == registry.make("sph").params
+def test_swarmnav_is_the_default_build_and_released_has_the_launch_file_values():
+    assert registry.make("sph", preset="swarmnav").params == registry.make("sph").params
+    assert registry.make("sph", preset="paper").params != registry.make("sph").params
     p = registry.make("sph", preset="released").params
     # water_swarm/launch/sph.launch: k_rep, k_fri, k_p, k_d, v_max, a_max, planv_max, plana_max, updateInterval
     assert (p.k_rep, p.k_vis, p.k_p, p.k_v, p.v_max, p.a_max) == (1.1, 1.8, 15.0, 6.5, 2.5, 3.5)
@@ -26,7 +27,7 @@ def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_valu
     assert (p.kernel, p.env_law, p.clip, p.k_force, p.env_safe) == ("released", "released", "axis", 1000.0, 0.4)
     # Table I values the launch file does not change stay
     assert (p.h, p.k_den, p.rho0, p.T_p) == (10.0, 1.0, 1e6, 0.2)
-    # headroom: the default build with the planner at 0.8 v_max and the position pull capped at a_max
+    # headroom: the paper build with the planner at 0.8 v_max and the position pull capped at a_max
     h = registry.make("sph", preset="headroom").params
     assert (h.plan_v_max, h.ref_reset, h.k_p * h.ref_reset) == (0.8, 0.3, pytest.approx(h.a_max))
     # guard: queue with the final approach's pull at Table I's bound and the band guard
@@ -37,8 +38,14 @@ def test_paper_preset_is_the_default_build_and_released_has_the_launch_file_valu
     r = registry.make("sph", preset="retime").params
     assert (r.retime, q.retime) == (0.8, 0.0)
     assert dataclasses.replace(r, retime=0.0) == q
+    # the default build holds both sets and flies the one of the scene's dimension (by_dim)
+    d = registry.make("sph").params
+    assert d.by_dim and not any(registry.make("sph", preset=k).params.by_dim
+                                for k in ("paper", "headroom", "queue", "guard", "retime", "released"))
+    assert dataclasses.replace(d, retime=0.0, by_dim=False) == g
+    assert dataclasses.replace(d, goal_reset=0.0, band_guard=False, by_dim=False) == r
     # the released 3-D controller has no SPH term in z; the paper's Algorithm 1 acts in every axis
-    assert (p.swarm_vertical, q.swarm_vertical, registry.make("sph").params.swarm_vertical) == (False, True, True)
+    assert (p.swarm_vertical, q.swarm_vertical, registry.make("sph", preset="paper").params.swarm_vertical) == (False, True, True)
     # an explicit value applies on top of the preset
     assert registry.make("sph", preset="released", k_p=7.0).params.k_p == 7.0
     with pytest.raises(swarmnav.ConfigError, match="unknown preset 'relased'"):
@@ -110,3 +117,22 @@ def test_planner_speed_bound_sets_the_reference_speed():
     assert speed == pytest.approx(0.8, abs=0.05)
     cruise = np.linalg.norm(res.velocities[400:800, 0], axis=1)
     assert cruise.max() <= 1.0 + 1e-9 and cruise.mean() == pytest.approx(0.8, abs=0.06)
+
+
+@pytest.mark.parametrize("scene, same_as", [
+    ("sph_narrow", "guard"),
+    ("random_forest_3d:density=0.15,seed=1,n=6,length=8", "retime"),
+])
+def test_default_build_flies_the_recommended_set_of_the_scenes_dimension(scene, same_as):
+    """Oracle: the default build (by_dim) on a 2-D scene gives guard's arrays bit for bit, on a
+    3-D scene retime's; the stored parameters are the declared ones."""
+    from swarmnav.sim import run
+    from swarmnav.world import load_scenario
+
+    scn = load_scenario(scene)
+    default = run("sph", scn, seed=3, steps=400)
+    other = run("sph", scn, seed=3, steps=400, preset=same_as)
+    np.testing.assert_array_equal(default.positions, other.positions)
+    np.testing.assert_array_equal(default.velocities, other.velocities)
+    assert not np.array_equal(default.positions, run("sph", scn, seed=3, steps=400, preset="paper").positions)
+    assert default.config["params"]["by_dim"] is True and default.config["params"]["band_guard"] is True

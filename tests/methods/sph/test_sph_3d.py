@@ -61,7 +61,7 @@ def flight():
     scn = loads(SCENE)
     assert scn.dim == 3
     dt = registry.make("sph").dt
-    res = swarmnav.run("sph", scn, seed=3, steps=round(40.0 / dt))
+    res = swarmnav.run("sph", scn, seed=3, steps=round(40.0 / dt), preset="paper")
     return scn, res
 
 

@@ -72,7 +72,7 @@ def test_knot_seeding_runs_the_reference_at_v_max():
 def test_reference_lag_is_bounded_at_each_replan():
     # A robot held at its start (a_max tiny) falls behind; with ref_clamp every replan starts
     # ref_reset from it, so its lag right after a replan never exceeds ref_reset (0.5 m).
-    m = registry.make("sph", a_max=1e-6)
+    m = registry.make("sph", a_max=1e-6, preset="paper")
     lags = []
     orig = m._replan
 
@@ -131,10 +131,10 @@ def test_plan_once_narrow_passage_keeps_the_body_clearance():
     # time alone, k_p x lag (metres) beats the ESDF force 2 k_env (d_thr - d) <= 10 m/s^2 and
     # robots are dragged into the blocks.
     dt = registry.make("sph").dt
-    res = swarmnav.run("sph", "sph_narrow", seed=1, steps=round(25.0 / dt), plan_once=True)
+    res = swarmnav.run("sph", "sph_narrow", seed=1, steps=round(25.0 / dt), plan_once=True, preset="paper")
     assert res.metrics["min_robot_obstacle_distance"] > 0.2
     assert res.metrics["min_inter_robot_distance"] > 0.4
-    old = swarmnav.run("sph", "sph_narrow", seed=1, steps=round(25.0 / dt), plan_once=True, once_hold=0.0)
+    old = swarmnav.run("sph", "sph_narrow", seed=1, steps=round(25.0 / dt), plan_once=True, once_hold=0.0, preset="paper")
     assert old.metrics["min_robot_obstacle_distance"] < 0.2
 
 

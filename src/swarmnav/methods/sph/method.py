@@ -29,7 +29,7 @@ import numpy as np
 from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.methods.base import Observation, check_map_bytes, format_extent
 from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
-from swarmnav.methods.sph.params import SphParams
+from swarmnav.methods.sph.params import SphParams, for_dim
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.parts.guard import band_guard
 from swarmnav.methods.sph.parts.retime import retimed
@@ -106,7 +106,7 @@ class Sph:
 
     def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
               rng: np.random.Generator) -> None:
-        p = self.params
+        p = self.flown = for_dim(self.params, scenario.dim)  # by_dim: the set of the scene's dimension
         self.scenario = scenario
         self.geom = scenario.geometry
         n = scenario.n
@@ -145,7 +145,7 @@ class Sph:
         self._log_plans = PlanLog(scenario.dim)
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
-        p = self.params
+        p = self.flown
         x, v = obs.positions, obs.velocities
         n = x.shape[0]
         t0 = time.perf_counter()
@@ -252,7 +252,7 @@ class Sph:
         return self.references.at(step, np.round(self._hold).astype(np.int64))
 
     def _replan(self, step: int, x: np.ndarray, v: np.ndarray, clearance: np.ndarray) -> None:
-        p = self.params
+        p = self.flown
         n, dim = x.shape
         if self.references.empty:
             start_q, start_v, start_a = x.copy(), v.copy(), np.zeros_like(x)
@@ -302,7 +302,7 @@ class Sph:
 
     def _guide(self, pts: np.ndarray, reaches_end: bool) -> np.ndarray:
         """Initial interior control points C_3 .. C_{K-3} from path points ``pts`` (ctrl_spacing apart)."""
-        p = self.params
+        p = self.flown
         if p.ctrl_seed == "knots":
             # C_2 already stands for the path point one knot ahead (q + v dt, eq. 12) and, with a
             # moving end, C_{K-2} for the one a knot before the end: seed the interior points
@@ -313,7 +313,7 @@ class Sph:
 
     def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, others: np.ndarray | None = None):
         """One robot's replan: update its map, grid search to its goal, optimise the spline."""
-        p = self.params
+        p = self.flown
         self.maps.observe(r, q)
         goal = self.goals[r]
         path = self.maps.search(r, q, goal, p.max_expand, others, p.plan_neighbours)

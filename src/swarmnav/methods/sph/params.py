@@ -2,35 +2,46 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Literal
 
 from swarmnav.params import param
+
+
+#: The paper build's values of the parameters in which it differs from the default build
+#: (``swarmnav``); every other preset starts from it.
+PAPER: dict[str, Any] = {"plan_v_max": 0.0, "ref_reset": 0.5, "yield_range": 0.0, "goal_reset": 0.0,
+                         "band_guard": False, "retime": 0.0, "by_dim": False}
 
 
 @dataclass(frozen=True, slots=True)
 class SphParams:
     """SPH swarm navigation (Li et al., RA-L 2025). Table I values unless marked "our choice"."""
 
-    #: Named parameter sets (``--set preset=NAME``). ``paper`` is the default build: Table I and
-    #: our choices below. ``released`` is the authors' released code (SmartGroupSystems/SPH-planning,
-    #: ``water_swarm/launch/sph.launch`` and the C++ it configures): its controller gains and bounds,
-    #: its 50 Hz update, its kernel evaluation, its ESDF force law, its planner limits and its
-    #: replanning (docs/methods/sph.md, *Presets*). ``headroom`` is ``paper`` with the tracking
+    #: Named parameter sets (``--set preset=NAME``). ``swarmnav`` is the default build: our
+    #: recommended sets by dimension (``guard`` in 2-D, ``retime`` in 3-D, chosen on training forests
+    #: and checked on held-out forests and unseen scenes: docs/methods/sph.md, *Presets*). ``paper``
+    #: is Table I and our readings where the paper is silent. ``released`` is the authors' released
+    #: code (SmartGroupSystems/SPH-planning, ``water_swarm/launch/sph.launch`` and the C++ it
+    #: configures): its controller gains and bounds, its 50 Hz update, its kernel evaluation, its ESDF
+    #: force law, its planner limits and its replanning. ``headroom`` is ``paper`` with the tracking
     #: kept below what the swarm forces can hold: the planner plans at 0.8 v_max, so a robot the swarm
     #: held back can catch up, and the position pull is capped at a_max (ref_reset = a_max / k_p).
     #: ``queue`` is ``headroom`` with yielding in narrow places (parts/yielding.py): two robots near an
     #: obstacle pass one after the other. ``guard`` (the 2-D Table II set) is ``queue`` with a
     #: stronger pull on the final approach and no tracking into an obstacle; ``retime`` (the 3-D
     #: Table II set) is ``queue`` with local plans re-timed where the spline cuts its path short.
+    #: Every preset but ``swarmnav`` starts from ``paper`` (PAPER below).
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
-        "paper": {},
-        "headroom": {"plan_v_max": 0.8, "ref_reset": 0.3},
-        "queue": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2},
-        "guard": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "goal_reset": 0.5,
+        "swarmnav": {},
+        "paper": PAPER,
+        "headroom": {**PAPER, "plan_v_max": 0.8, "ref_reset": 0.3},
+        "queue": {**PAPER, "plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2},
+        "guard": {**PAPER, "plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "goal_reset": 0.5,
                   "band_guard": True},
-        "retime": {"plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "retime": 0.8},
+        "retime": {**PAPER, "plan_v_max": 0.8, "ref_reset": 0.3, "yield_range": 1.2, "retime": 0.8},
         "released": {
+            **PAPER,
             "k_rep": 1.1, "k_vis": 1.8, "k_p": 15.0, "k_v": 6.5, "v_max": 2.5, "a_max": 3.5,
             "plan_v_max": 1.2, "plan_a_max": 1.5, "dt": 0.02, "kernel": "released",
             "env_law": "released", "clip": "axis",
@@ -38,13 +49,13 @@ class SphParams:
             "swarm_vertical": False,
         },
     }
-    #: The preset the defaults are. Our recommended sets (``guard`` in 2-D, ``retime`` in 3-D) are not
-    #: the default: on an unseen 3-D scene ``paper`` flew R_goal 1.0 where they flew 0.87 (issue 34),
-    #: and the default changes only once they are measured on unseen scenes.
-    DEFAULT_BUILD: ClassVar[str] = "paper"
+    #: The preset the defaults are: our recommended sets by dimension (``by_dim``).
+    DEFAULT_BUILD: ClassVar[str] = "swarmnav"
     PRESET_DOCS: ClassVar[dict[str, str]] = {
+        "swarmnav": "ours, the default: guard on a 2-D scene, retime on a 3-D scene (by_dim), each chosen on "
+                    "training forests and checked on held-out forests and unseen scenes",
         "paper": "Table I and the paper's algorithm, with our readings where it is silent (docs/methods/sph.md): "
-                 "the build every SPH reproduction spec flies unless its variant names another",
+                 "the paper rows of docs/reproduction.md (--set preset=paper)",
         "headroom": "ours: paper with the tracking kept below what the swarm forces can hold (plan at 0.8 v_max, "
                     "pull capped at a_max)",
         "queue": "ours: headroom with yielding in narrow places (methods/sph/parts/yielding.py)",
@@ -122,7 +133,7 @@ class SphParams:
         "(ours; 0 = off, as the paper's planner: on, it made contacts more frequent)")
     plan_neighbours_range: float = param(3.0, "m", "[0, inf)", "ours",
         "only visible neighbours this close enter the search")
-    plan_v_max: float = param(0.0, "m/s", "[0, inf)", "ours (released planning/max_vel 1.2)",
+    plan_v_max: float = param(0.8, "m/s", "[0, inf)", "ours (released planning/max_vel 1.2)",
         "speed bound of the planner (eq. 11 and the knot span); 0: v_max")
     plan_a_max: float = param(0.0, "m/s^2", "[0, inf)", "ours (released planning/max_acc 1.5)",
         "acceleration bound of the planner (eq. 11); 0: a_max")
@@ -150,25 +161,29 @@ class SphParams:
         "an older field as heuristic); the planar search is always A* (weight 1.001)")
     search_weight_3d: float = param(10.0, "", "[1, inf)", "released astar/lambda_heu",
         "search_3d = astar only: heuristic weight of the 3-D A*, the released planner's")
-    retime: float = param(0.0, "", "[0, 1]", "ours",
+    retime: float = param(0.8, "", "[0, 1]", "ours",
         "a local plan whose spline is shorter than this fraction of the grid path it was seeded "
         "from is optimised again, seeded from its own curve at ctrl_spacing, so that it flies at "
         "the planner's speed (0 = off)")
     replan_from: Literal["state", "reference"] = param("reference", "", None, "ours",
         "start state of a replan (released)")
-    ref_reset: float = param(0.5, "m", "[0, inf)", "ours",
+    ref_reset: float = param(0.3, "m", "[0, inf)", "ours",
         "\"reference\" mode: bound on the reference lag at a replan (ours; released 1.0): k_p "
         "ref_reset = k_rep / (2 body radius) = 2.5 m/s^2, the tracking pull never beats the "
         "contact repulsion")
-    goal_reset: float = param(0.0, "m", "[0, inf)", "ours",
+    goal_reset: float = param(0.5, "m", "[0, inf)", "ours",
         "\"reference\" mode: the lag bound at a replan on the final approach (the robot's last local "
         "plan ended at its goal and it is farther than plan_clearance from every obstacle), where "
         "the only force against the pull is the 1/r push of the robots already gathered at the "
         "goal, which grows with their number (0 = ref_reset everywhere)")
-    band_guard: bool = param(False, "", None, "ours",
+    band_guard: bool = param(True, "", None, "ours",
         "inside the obstacle band (d < d_thr) drop the tracking term's component towards the "
         "obstacle: the reference never presses a robot into an obstacle, the ESDF force and the "
         "swarm alone set how close it comes (False: eq. 13 as printed)")
+    by_dim: bool = param(True, "", None, "ours",
+        "the recommended set of the scene's dimension: on a 2-D scene retime is off (guard's set), "
+        "on a 3-D scene goal_reset and band_guard are off (retime's set); False: every value as "
+        "given")
     start_clearance: float = param(0.0, "m", "[0, inf)", "ours",
         "\"reference\" mode: a replan whose start (the reference state) is closer than this to an "
         "obstacle starts from the robot's measured position and velocity instead, at rest in "
@@ -185,7 +200,7 @@ class SphParams:
         "ref_hold (v* = phi v, a* = phi^2 a), the position error capped at ref_hold, so the reference "
         "waits for a robot the swarm holds back instead of pulling it on; 0 = off (as once_hold "
         "for plan_once)")
-    yield_range: float = param(0.0, "m", "[0, inf)", "ours",
+    yield_range: float = param(1.2, "m", "[0, inf)", "ours",
         "yielding in narrow places (methods/sph/parts/yielding.py): of two visible robots closer than "
         "this, one within yield_clearance of an obstacle, the one farther from its goal slows its "
         "reference clock, stopping at yield_range / 2, so they pass one at a time; 0 = off (paper)")
@@ -203,3 +218,14 @@ class SphParams:
         "stops at once_hold (v* = phi v, a* = phi^2 a), and the position error is capped at "
         "once_hold (ours: k_p once_hold = k_rep / (2 body radius)); 0 = off, the reference runs "
         "on by time alone")
+
+
+def for_dim(p: SphParams, dim: int) -> SphParams:
+    """The parameters a run on a ``dim``-D scene flies: ``p`` itself unless ``p.by_dim``; with it,
+    the recommended set of that dimension (2-D: ``guard``'s, so ``retime`` off; 3-D: ``retime``'s,
+    so ``goal_reset`` and ``band_guard`` off), the other values as given."""
+    if not p.by_dim:
+        return p
+    if dim == 2:
+        return replace(p, retime=0.0)
+    return replace(p, goal_reset=0.0, band_guard=False)
