@@ -27,7 +27,10 @@ weight times the integral of the squared ``phi``-th derivative (jerk), both quad
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -323,6 +326,27 @@ def structure(pb: Problem) -> _Structure:
     return got
 
 
+@contextlib.contextmanager
+def _quiet_stdout():
+    """File descriptor 1 to /dev/null: OSQP 1.1's polishing prints "Polishing not needed" from C
+    even with verbose=False (its only message then)."""
+    try:
+        sys.stdout.flush()
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # no real stdout (captured): nothing to silence
+        yield
+        return
+    saved = os.dup(fd)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, fd)
+        yield
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)
+        os.close(null)
+
+
 def solve(pb: Problem, eps: float = 1e-5, max_iter: int = 4000, tol: float = 2e-3) -> Result:
     """Solve the QP with OSQP; a solution whose constraint violation exceeds ``tol``, or any
     status but solved, is a failure (``ctrl`` None), never an exception or NaN.
@@ -351,17 +375,35 @@ def solve(pb: Problem, eps: float = 1e-5, max_iter: int = 4000, tol: float = 2e-
     A_red = np.vstack([T, st.A_dyn_T, A_lsc_T])
     lo = np.concatenate([lo_box - xp, np.full(len(st.u_dyn), -np.inf), np.full(len(lsc_xp), -np.inf)])
     hi = np.concatenate([hi_box - xp, st.u_dyn - st.A_dyn @ xp, pb.lsc_rhs.reshape(-1) - lsc_xp])
+    # rows on the control points the initial state fixes (c[0, 0..2]) are constants here: the
+    # state decides them, so they are dropped (a previous solution within the solver's tolerance
+    # of a bound would otherwise make the next problem infeasible by 1e-9)
+    free = np.abs(A_red).max(axis=1) > 1e-9
+    A_red, lo, hi = A_red[free], lo[free], hi[free]
     s = osqp.OSQP()
     s.setup(sp.identity(T.shape[1], format="csc"), T.T @ (st.P @ xp + q), sp.csc_matrix(A_red), lo, hi,
-            verbose=False, eps_abs=eps, eps_rel=eps, max_iter=max_iter, polishing=False)
-    res = s.solve(raise_error=False)
+            verbose=False, eps_abs=eps, eps_rel=eps, max_iter=max_iter, polishing=True)
+    with _quiet_stdout():
+        res = s.solve(raise_error=False)
     status = str(res.info.status)
     w = res.x
+    iters = int(res.info.iter)
     if w is None or not np.all(np.isfinite(w)):
-        return Result(None, status, math.inf, int(res.info.iter))
+        return Result(None, status, math.inf, iters)
     Aw = A_red @ w
     viol = float(max(np.max(lo - Aw, initial=0.0), np.max(Aw - hi, initial=0.0)))
+    if viol > 0.1 * tol and res.info.status_val == osqp.SolverStatus.OSQP_SOLVED:
+        # polishing found no active set: ADMM's answer is eps-accurate only; refine it warm
+        s.update_settings(eps_abs=1e-3 * eps, eps_rel=1e-3 * eps)
+        with _quiet_stdout():
+            res = s.solve(raise_error=False)
+        iters += int(res.info.iter)
+        if res.x is not None and np.all(np.isfinite(res.x)):
+            Aw2 = A_red @ res.x
+            viol2 = float(max(np.max(lo - Aw2, initial=0.0), np.max(Aw2 - hi, initial=0.0)))
+            if viol2 < viol:
+                w, viol, status = res.x, viol2, str(res.info.status)
     ok = res.info.status_val in (osqp.SolverStatus.OSQP_SOLVED, osqp.SolverStatus.OSQP_SOLVED_INACCURATE)
     if not ok or viol > tol:
-        return Result(None, status, viol, int(res.info.iter))
-    return Result((xp + T @ w).reshape(pb.M, n1, D), status, viol, int(res.info.iter))
+        return Result(None, status, viol, iters)
+    return Result((xp + T @ w).reshape(pb.M, n1, D), status, viol, iters)
