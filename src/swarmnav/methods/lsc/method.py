@@ -179,11 +179,9 @@ class LscMethod:
         planes = self._planes(prev)
         new: list[tuple[int, np.ndarray]] = []
         for r in range(N):
-            start = prev[r, 0, 0]
-            resting = bool(np.ptp(prev[r].reshape(-1, self.dim), axis=0).max() < 1e-9)
-            if resting and np.linalg.norm(start - self.goals[r]) <= p.goal_threshold:
+            if np.linalg.norm(prev[r] - self.goals[r], axis=-1).max() <= p.goal_threshold:
                 self.stats["idle"] += 1
-                continue  # arrived: its plan rests at its goal
+                continue  # arrived: its whole plan lies within goal_threshold of its goal
             t0 = time.perf_counter()
             self.maps.observe(r, x[r])
             ctrl = self._plan(r, prev, planes[r])

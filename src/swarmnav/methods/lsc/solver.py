@@ -315,6 +315,9 @@ def structure(pb: Problem) -> _Structure:
         eq = kinds <= 2
         Z = null_space(A[eq])
         lam, V = np.linalg.eigh(Z.T @ P @ Z)
+        # w_jerk = 0 leaves directions the cost does not see: they get a unit weight on |w|^2
+        # there (a tiny regularisation towards the particular solution) instead of a division by 0
+        lam = np.maximum(lam, 1e-9 * max(float(lam.max()), 1e-300))
         T = Z @ V / np.sqrt(lam)
         dyn = (kinds == 4) | (kinds == 5)
         n1 = pb.n + 1
