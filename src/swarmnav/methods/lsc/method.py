@@ -101,6 +101,9 @@ class LscMethod:
         self.comm = CommLog()
         self.board = TrajectoryBoard(n, self.comm)
         self.ctrl = np.repeat(x[:, None, None, :], self.M * (self.n + 1), axis=1).reshape(n, self.M, self.n + 1, dim)
+        # each plan's SFC boxes (sfc=shifted): at first a point box where each robot stands
+        self.boxes = np.repeat(x[:, None, None, :], self.M * 2, axis=1).reshape(n, self.M, 2, dim)
+        self._new_boxes: dict[int, np.ndarray] = {}
         self.commit_step = np.zeros(n, dtype=np.int64)
         length = self.M * self.every + 1
         self.ref_q = np.repeat(x[:, None, :], length, axis=1)
@@ -184,7 +187,7 @@ class LscMethod:
                 continue  # arrived: its whole plan lies within goal_threshold of its goal
             t0 = time.perf_counter()
             self.maps.observe(r, x[r])
-            ctrl = self._plan(r, prev, planes[r])
+            ctrl = self._plan(r, prev, planes[r], (k - self.commit_step[r]) // self.every)
             self.stats["plans"] += 1
             self._plan_ms.append(1e3 * (time.perf_counter() - t0))
             if ctrl is None:
@@ -193,7 +196,10 @@ class LscMethod:
                 new.append((r, ctrl))
         for r, ctrl in new:
             self._commit(r, ctrl, k)
+            if r in self._new_boxes:
+                self.boxes[r] = self._new_boxes[r]
             self.stats["commits"] += 1
+        self._new_boxes.clear()
 
     def _planes(self, prev: np.ndarray) -> list[list[tuple[int, np.ndarray, np.ndarray]]]:
         """Per robot, its LSC planes (segment, normal, rhs per control point) against every agent
@@ -222,7 +228,7 @@ class LscMethod:
                     out[j].append((m, -nrm, rhs_j))
         return out
 
-    def _plan(self, r: int, prev: np.ndarray, planes) -> np.ndarray | None:
+    def _plan(self, r: int, prev: np.ndarray, planes, flown: int) -> np.ndarray | None:
         """One robot's replan: goal planning, SFC, the QP; the new control points or None."""
         p = self.params
         init = prev[r]
@@ -231,7 +237,11 @@ class LscMethod:
         v0 = S.evaluate(init, self.h, tau0, 1)[0]
         a0 = S.evaluate(init, self.h, tau0, 2)[0]
         goal = self._current_goal(r, prev)
-        boxes = self._sfc(r, init)
+        if p.sfc == "shifted":
+            boxes = self._sfc_shifted(r, init, goal, flown)
+            self._new_boxes[r] = boxes
+        else:
+            boxes = self._sfc(r, init)
         self.stats["planes"] += len(planes)
         if planes:
             seg = np.array([m for m, _, _ in planes], dtype=np.int64)
@@ -305,4 +315,30 @@ class LscMethod:
             glo, ghi = C.grow_box(occ, lo_i, hi_i, lim_lo, lim_hi, dims, self.blocked)
             boxes[m, 0] = np.minimum(lo_m, origin + res * glo[:dims])
             boxes[m, 1] = np.maximum(hi_m, origin + res * ghi[:dims])
+        return boxes
+
+    def _sfc_shifted(self, r: int, init: np.ndarray, goal: np.ndarray, flown: int) -> np.ndarray:
+        """(M, 2, D) boxes, the authors' scheme: the committed plan's boxes shifted by the segments
+        flown (each still holds its segment of the initial trajectory), and a new last box grown
+        from the initial trajectory's end, first through the faces towards the current goal (up to
+        the goal), then every face in turn, at most ``sfc_growth`` per face."""
+        p = self.params
+        res, origin = self.maps.resolution, self.maps.origin
+        occ = C.as3(self.maps.grids[r])
+        old = self.boxes[r]
+        s = int(min(max(flown, 0), self.M))
+        boxes = np.concatenate([old[s:], np.repeat(old[-1:], s, axis=0)], axis=0)
+        end = init[-1, -1]
+        seed = C.to_index(end, origin, res, self.shape_xyz)
+        gi = C.to_index(goal, origin, res, self.shape_xyz)
+        grow = int(math.floor(p.sfc_growth / res))
+        lim_lo = np.maximum(seed - grow, 0)
+        lim_hi = np.minimum(seed + grow, self.shape_xyz - 1)
+        # towards the goal only: the other faces frozen at the seed, the goal faces up to the goal
+        to_lo = np.where(gi < seed, np.maximum(gi, lim_lo), seed)
+        to_hi = np.where(gi > seed, np.minimum(gi, lim_hi), seed)
+        glo, ghi = C.grow_box(occ, seed, seed, to_lo, to_hi, self.dim, self.blocked)
+        glo, ghi = C.grow_box(occ, glo, ghi, lim_lo, lim_hi, self.dim, self.blocked)
+        boxes[-1, 0] = np.minimum(end, origin + res * glo[:self.dim])
+        boxes[-1, 1] = np.maximum(end, origin + res * ghi[:self.dim])
         return boxes

@@ -59,6 +59,10 @@ class LscParams:
         "obstacles grow by the body radius plus this in the robot's map, the SFC boxes and the grid search")
     sfc_growth: float = param(1.0, "m", "(0, inf)", "ours (the plan reaches v_max x horizon = 1 m)",
         "each face of a segment's SFC box grows at most this far beyond the previous plan's segment")
+    sfc: Literal["grown", "shifted"] = param("grown", "", None, "ours (grown); shifted: the authors' code",
+        "safe flight corridor: grown = each segment's box grown from the initial trajectory's segment, faces in turn; "
+        "shifted = the committed plan's boxes shifted by one segment, and a new last box grown from the initial "
+        "trajectory's end towards the current goal first")
     qp_tol: float = param(2e-3, "", "(0, 1]", "ours",
         "a QP solution violating a constraint by more than this (m, m/s or m/s^2) is a failed solve")
     max_iter: int = param(4000, "", "[10, 1000000]", "ours", "OSQP iterations per solve")
