@@ -40,6 +40,7 @@ _BUILTIN_MODULES = (
     "swarmnav.methods.ego_swarm",
     "swarmnav.methods.mader",
     "swarmnav.methods.flocking",
+    "swarmnav.methods.lsc",
 )
 
 
