@@ -39,6 +39,7 @@ _BUILTIN_MODULES = (
     "swarmnav.methods.vicsek",
     "swarmnav.methods.ego_swarm",
     "swarmnav.methods.mader",
+    "swarmnav.methods.nmpc",
 )
 
 
