@@ -110,7 +110,8 @@ class NmpcMethod:
         self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
         self.H = p.steps()
         self.every = int(round(p.control_dt / p.dt))
-        self.weights = S.Weights(p.w_sep, p.w_coh, p.w_dir, p.w_nav, p.w_u, p.d_ref, p.eps_v)
+        self.weights = S.Weights(p.w_sep, p.w_coh, p.w_dir, p.w_nav, p.w_u, p.d_ref, p.eps_v,
+                                 p.direction == "signed")
 
     # ------------------------------------------------------------------ contract
 

@@ -21,12 +21,12 @@ class NmpcParams:
     #: ``paper`` turns our part off. Both keep the readings the paper leaves open.
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "swarmnav": {},
-        "paper": {"crowd_shrink": 0.0},
+        "paper": {"crowd_shrink": 0.0, "direction": "squared"},
     }
     DEFAULT_BUILD: ClassVar[str] = "swarmnav"
     PRESET_DOCS: ClassVar[dict[str, str]] = {
-        "swarmnav": "our build: the paper's controller with crowd_shrink=0.9 (a start closer than the clearance "
-                    "stays feasible; docs/methods/nmpc.md)",
+        "swarmnav": "our build: the paper's controller with two parts of ours: direction=signed (forward, not "
+                    "either way along u_ref) and crowd_shrink=0.9 (a crowded start stays feasible); docs/methods/nmpc.md",
         "paper": "the paper's cost, constraints, horizon and weights, with the readings it leaves open",
     }
 
@@ -50,6 +50,9 @@ class NmpcParams:
     w_dir: float = param(5.0, "", "[0, inf)", "authors' code (W_dir = 5)", "weight of J_dir (migration direction)")
     w_nav: float = param(5.0, "s^4/m^4", "[0, inf)", "authors' code (W_nav = 5)", "weight of J_nav (migration speed)")
     w_u: float = param(0.4, "s^4/m^2", "[0, inf)", "authors' code (W_u = 0.4)", "weight of the control effort |u|^2")
+    direction: Literal["squared", "signed"] = param("signed", "", None, "authors' code (squared); signed: ours",
+        "J_dir: squared = (1 - (v.u)^2 / |v|^2)^2, indifferent to flying backwards along u_ref; "
+        "signed = (1 - v.u / |v|)^2 (|v|^2 + eps_v under the roots)")
     eps_v: float = param(0.01, "m^2/s^2", "(0, inf)", "ours", "regularises J_dir = (1 - (v.u)^2 / (|v|^2 + eps_v))^2 at rest")
     max_neig: int = param(3, "", "[1, 64]", "authors' code (param_swarm.m: max_neig = 3)",
         "closest neighbours in the separation / cohesion terms")
@@ -67,8 +70,8 @@ class NmpcParams:
         "a neighbour or obstacle already nearer than its clearance keeps crowd_shrink x the present distance "
         "(0 = off: such a robot's problem is infeasible, a fallback)")
     # --- solver ---
-    max_iter: int = param(50, "", "[1, 10000]", "ours", "IPOPT iterations per solve")
-    tol: float = param(1e-6, "", "(0, 1)", "ours", "IPOPT tolerance")
+    max_iter: int = param(100, "", "[1, 10000]", "ours", "IPOPT iterations per solve")
+    tol: float = param(1e-4, "", "(0, 1)", "ours", "IPOPT tolerance")
     feas_tol: float = param(1e-4, "", "(0, 1)", "ours", "a solution violating a constraint by more is a failed solve")
     fallback: Literal["shift", "brake"] = param("shift", "", None, "ours",
         "a failed solve: shift = the previous prediction's next acceleration (brake once it is used up), "

@@ -15,7 +15,8 @@ velocities are linear in them). The cost is the mean over the predicted states k
 with, for the neighbours j in the cost (weights c_j summing to 1) and e_j = |p_k - q_jk|^2 - d_ref^2,
 J_sep = sum_j c_j min(e_j, 0)^2 (too close), J_coh = sum_j c_j max(e_j, 0)^2 (too far): with
 w_sep = w_coh the paper's single separation term sum_j c_j e_j^2; J_dir = (1 - (v.u_ref)^2 /
-(|v|^2 + eps))^2 (migration direction), J_nav = (|v|^2 - v_ref^2)^2 (migration speed).
+(|v|^2 + eps))^2 (migration direction; ``signed``: (1 - v.u_ref / sqrt(|v|^2 + eps))^2, which
+tells forward from backward), J_nav = (|v|^2 - v_ref^2)^2 (migration speed).
 
 Constraints at every predicted step: |u|^2 <= a_max^2, |v_k|^2 <= v_max^2, |p_k - q_jk|^2 >=
 rho_j^2 for the neighbours in the constraints (rho_j = 0: none), and per obstacle slot
@@ -48,6 +49,7 @@ class Weights:
     w_u: float
     d_ref: float  # [m]
     eps_v: float  # [m^2/s^2] regularises J_dir at rest
+    signed: bool = False  # J_dir = (1 - v.u / sqrt(|v|^2 + eps))^2 instead of the squared cosine
 
 
 @dataclass(frozen=True, slots=True)
@@ -95,7 +97,7 @@ def rollout(p0, v0, U, h):
 
 def _pack(pb: Problem, w: Weights) -> np.ndarray:
     return np.concatenate([pb.p0, pb.v0, [pb.h, pb.v_max, pb.a_max, pb.v_ref], pb.u_ref,
-                           [w.w_sep, w.w_coh, w.w_dir, w.w_nav, w.w_u, w.d_ref, w.eps_v],
+                           [w.w_sep, w.w_coh, w.w_dir, w.w_nav, w.w_u, w.d_ref, w.eps_v, float(w.signed)],
                            pb.q.ravel(), pb.c_cost, pb.rho_col, pb.obs_c.ravel(), pb.obs_s.ravel(),
                            pb.obs_n.ravel(), pb.obs_rho, pb.obs_alpha]).astype(float)
 
@@ -107,7 +109,7 @@ def _build(H: int, K: int, M: int, D: int, max_iter: int, tol: float):
     if hit is not None:
         return hit
     x = ca.SX.sym("x", 3 * H * D)  # [U (H, D), P (H, D), V (H, D)]: multiple shooting
-    npar = 2 * D + 4 + D + 7 + K * H * D + 2 * K + 3 * M * D + 2 * M
+    npar = 2 * D + 4 + D + 8 + K * H * D + 2 * K + 3 * M * D + 2 * M
     par = ca.SX.sym("p", npar)
     o = 0
 
@@ -120,7 +122,7 @@ def _build(H: int, K: int, M: int, D: int, max_iter: int, tol: float):
     p0, v0 = take(D).T, take(D).T
     h, vmax, amax, vref = (take(1) for _ in range(4))
     uref = take(D).T
-    w_sep, w_coh, w_dir, w_nav, w_u, d_ref, eps_v = (take(1) for _ in range(7))
+    w_sep, w_coh, w_dir, w_nav, w_u, d_ref, eps_v, signed = (take(1) for _ in range(8))
     q = take(K * H * D)
     c_cost, rho_col = take(K), take(K)
     oc, os_, on = (ca.reshape(take(M * D), D, M).T for _ in range(3))
@@ -146,7 +148,8 @@ def _build(H: int, K: int, M: int, D: int, max_iter: int, tol: float):
             jc += c_cost[j] * ca.fmax(e, 0) ** 2
             g.append(dd - rho_col[j] ** 2)
         vv = ca.sumsqr(v)
-        jd = (1 - ca.dot(v, uref) ** 2 / (vv + eps_v)) ** 2
+        jd = (1 - signed) * (1 - ca.dot(v, uref) ** 2 / (vv + eps_v)) ** 2 \
+            + signed * (1 - ca.dot(v, uref) / ca.sqrt(vv + eps_v)) ** 2
         jn = (vv - vref**2) ** 2
         f += w_sep * js + w_coh * jc + w_dir * jd + w_nav * jn + w_u * ca.sumsqr(u)
         for m in range(M):
@@ -226,7 +229,10 @@ def reference(pb: Problem, w: Weights, U: np.ndarray) -> tuple[float, np.ndarray
                 jc += pb.c_cost[j] * e * e
             g.append(dd - pb.rho_col[j] ** 2)
         vv = float(v @ v)
-        jd = (1.0 - float(v @ pb.u_ref) ** 2 / (vv + w.eps_v)) ** 2
+        if w.signed:
+            jd = (1.0 - float(v @ pb.u_ref) / np.sqrt(vv + w.eps_v)) ** 2
+        else:
+            jd = (1.0 - float(v @ pb.u_ref) ** 2 / (vv + w.eps_v)) ** 2
         jn = (vv - pb.v_ref**2) ** 2
         f += w.w_sep * js + w.w_coh * jc + w.w_dir * jd + w.w_nav * jn + w.w_u * float(u @ u)
         for m in range(M):
