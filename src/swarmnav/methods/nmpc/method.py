@@ -87,8 +87,8 @@ class ObstacleSlots:
                 else:  # tangent half-space at the nearest point
                     d, u = nearest_obstacle(self.geoms[o], p[None])
                     d, u = float(d[0]), u[0]
-                    q = p + d * u
-                    normal = -u if d > 0 else u
+                    q = p + abs(d) * u  # u points to the boundary point (outward from inside)
+                    normal = -u if d > 0 else u  # inside: the free side is beyond q, so the slot is unmet
                     need = clearance
                     if shrink > 0 and d < need:
                         need = shrink * d if d > 0 else need
