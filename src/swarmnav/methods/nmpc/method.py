@@ -41,6 +41,23 @@ def _clip_norm(a: np.ndarray, bound: float) -> np.ndarray:
     return np.where(n > bound, a * (bound / np.maximum(n, 1e-300)), a)
 
 
+#: [m] the least predicted gap beyond contact the crowd rule keeps (ours)
+CONTACT_GAP = 0.005
+
+
+def crowded(gap: float, clearance: float, floor: float, shrink: float, contact: float) -> float:
+    """The clearance [m] kept from a neighbour or obstacle now ``gap`` away (our crowd rule,
+    ``crowd_shrink``, after MADER's): ``clearance`` if the gap holds it; else max(shrink x gap,
+    ``floor``), or below the floor max(shrink x gap, contact + CONTACT_GAP): a start or a squeeze
+    inside the clearance stays feasible, and the kept clearance never ratchets into contact.
+    ``shrink`` = 0: off."""
+    if shrink <= 0 or gap >= clearance:
+        return clearance
+    if gap >= floor:
+        return max(shrink * gap, floor)
+    return max(shrink * gap, contact + CONTACT_GAP)
+
+
 class ObstacleSlots:
     """The obstacles of a world as each robot's MPC sees them (module docstring, item 3)."""
 
@@ -65,9 +82,11 @@ class ObstacleSlots:
         self.lo = np.array(lo, float).reshape(-1, dim)
         self.hi = np.array(hi, float).reshape(-1, dim)
 
-    def slots(self, p: np.ndarray, M: int, sensing_range: float, clearance: float, shrink: float):
+    def slots(self, p: np.ndarray, M: int, sensing_range: float, clearance: float, floor: float, shrink: float,
+              contact: float):
         """(c, s, n, rho, alpha), each (M, ...), for a robot at ``p``: the M obstacles nearest by
-        bounding box within ``sensing_range``; empty slots are always met."""
+        bounding box within ``sensing_range``, each kept ``clearance`` away (or less, by
+        :func:`crowded`); empty slots are always met."""
         D = self.dim
         c, s, n = np.zeros((M, D)), np.zeros((M, D)), np.zeros((M, D))
         rho, alpha = np.full(M, -1.0), np.zeros(M)
@@ -79,20 +98,15 @@ class ObstacleSlots:
                 kd = self.kind[o]
                 if kd is not None:  # the paper's cylinder: |s o (p - c)| >= r + clearance
                     centre, mask, r = kd
-                    need = r + clearance
                     now = float(np.linalg.norm(mask * (p - centre)))
-                    if shrink > 0 and now < need:
-                        need = max(shrink * now, 1e-3)
+                    need = r + crowded(now - r, clearance, floor, shrink, contact)
                     c[m], s[m], rho[m], alpha[m] = centre, mask, need, 1.0
                 else:  # tangent half-space at the nearest point
                     d, u = nearest_obstacle(self.geoms[o], p[None])
                     d, u = float(d[0]), u[0]
                     q = p + abs(d) * u  # u points to the boundary point (outward from inside)
                     normal = -u if d > 0 else u  # inside: the free side is beyond q, so the slot is unmet
-                    need = clearance
-                    if shrink > 0 and d < need:
-                        need = shrink * d if d > 0 else need
-                    c[m], n[m], rho[m] = q, normal, need
+                    c[m], n[m], rho[m] = q, normal, crowded(d, clearance, floor, shrink, contact)
         return c, s, n, rho, alpha
 
 
@@ -193,13 +207,14 @@ class NmpcMethod:
         q = np.repeat(xi[None, None, :], K, axis=0) + np.zeros((K, H, D))
         c_cost = np.zeros(K)
         rho = np.zeros(K)
-        need = 2 * self.body + p.col_margin
+        need, floor = 2 * self.body + p.col_margin, 2 * self.body + p.col_margin / 2
         for s, j in enumerate(order):
             q[s] = q_all[j]
-            rho[s] = need if not (p.crowd_shrink > 0 and d[j] < need) else p.crowd_shrink * d[j]
+            rho[s] = crowded(float(d[j]), need, floor, p.crowd_shrink, 2 * self.body)
         ncost = min(p.max_neig, len(order))
         c_cost[:ncost] = 1.0 / max(ncost, 1)
-        oc, os_, on, orho, oal = self.obstacles.slots(xi, M, p.sensing_range, self.body + p.obs_margin, p.crowd_shrink)
+        oc, os_, on, orho, oal = self.obstacles.slots(xi, M, p.sensing_range, self.body + p.obs_margin,
+                                                        self.body + p.obs_margin / 2, p.crowd_shrink, self.body)
         return S.Problem(xi.copy(), v[i].copy(), p.control_dt, p.v_max, p.a_max, u_ref, v_ref, q, c_cost, rho,
                          oc, os_, on, orho, oal)
 

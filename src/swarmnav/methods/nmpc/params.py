@@ -67,13 +67,14 @@ class NmpcParams:
     sensing_range: float = param(8.0, "m", "(0, inf)", "ours (= MADER's)",
         "neighbours and obstacles (bounding box) within this enter a robot's problem")
     crowd_shrink: float = param(0.9, "", "[0, 1)", "ours",
-        "a neighbour or obstacle already nearer than its clearance keeps crowd_shrink x the present distance "
+        "a neighbour or obstacle already nearer than its clearance keeps max(crowd_shrink x the present gap, the "
+        "clearance less half its margin), below that max(crowd_shrink x gap, contact + 5 mm) "
         "(0 = off: such a robot's problem is infeasible, a fallback)")
     # --- solver ---
     max_iter: int = param(100, "", "[1, 10000]", "ours", "IPOPT iterations per solve")
     tol: float = param(1e-4, "", "(0, 1)", "ours", "IPOPT tolerance")
     feas_tol: float = param(1e-4, "", "(0, 1)", "ours", "a solution violating a constraint by more is a failed solve")
-    fallback: Literal["shift", "brake"] = param("shift", "", None, "ours",
+    fallback: Literal["shift", "brake"] = param("brake", "", None, "ours (measured: docs/methods/nmpc.md)",
         "a failed solve: shift = the previous prediction's next acceleration (brake once it is used up), "
         "brake = -v / control_dt within a_max")
     # --- goals (the paper migrates in a direction; ours: towards each robot's goal) ---
