@@ -2,7 +2,7 @@
 
     PYTHONPATH=src python benchmarks/nmpc_probe.py [steps=2000] [density=0.15] [seed=1] [KEY=VALUE ...]
 
-Flies the 15-robot sph-forest scene with the ``nmpc`` parameters given (e.g. ``horizon=2.0``,
+Flies the 15-robot sph-forest scene with the ``nmpc`` parameters given (e.g. ``prediction_horizon=2.0``,
 ``fallback=shift``) and prints, every 2.5 s of flight, the mean distance to the goal slots [m],
 the mean speed [m/s], the least obstacle clearance and robot gap [m] and the IPOPT return
 statuses so far; the first contact (clearance below the 0.2 m body radius) when it happens; then

@@ -143,7 +143,7 @@ def _fly(m, scene, steps, seed=3):
 
 def test_commands_within_limits_and_every_broadcast_counted():
     scene = random_forest(density=0.25, seed=2, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
-    m = NmpcMethod(horizon=1.0)
+    m = NmpcMethod(prediction_horizon=1.0)
     x, v, amax = _fly(m, scene, 30)
     s = m.summary()
     n = scene.n
@@ -161,7 +161,7 @@ def test_infeasible_problems_are_counted_fallbacks_that_brake():
     """Every robot starts inside its obstacles' clearance (obs_margin 30 m) with the crowd rule
     off: no solve is feasible, each is a counted fallback, the robots brake and stay finite."""
     scene = random_forest(density=0.45, seed=1, length=12, r_min=1.0, r_max=2.0, min_passage=1.0)
-    m = NmpcMethod(horizon=1.0, obs_margin=30.0, sensing_range=50.0, crowd_shrink=0.0)
+    m = NmpcMethod(prediction_horizon=1.0, obs_margin=30.0, sensing_range=50.0, crowd_shrink=0.0)
     x, v, _ = _fly(m, scene, 25)
     s = m.summary()
     assert s["nmpc_fallbacks"] == s["nmpc_solves"] > 0
@@ -170,8 +170,8 @@ def test_infeasible_problems_are_counted_fallbacks_that_brake():
 
 
 def test_same_seed_same_flight():
-    a = swarmnav.run(NmpcMethod(horizon=1.0), "random_forest:density=0.15,seed=1", seed=4, steps=30)
-    b = swarmnav.run(NmpcMethod(horizon=1.0), "random_forest:density=0.15,seed=1", seed=4, steps=30)
+    a = swarmnav.run(NmpcMethod(prediction_horizon=1.0), "random_forest:density=0.15,seed=1", seed=4, steps=30)
+    b = swarmnav.run(NmpcMethod(prediction_horizon=1.0), "random_forest:density=0.15,seed=1", seed=4, steps=30)
     np.testing.assert_array_equal(a.positions, b.positions)
     assert a.metrics == b.metrics
 
@@ -180,7 +180,7 @@ def test_bad_input_refused():
     with pytest.raises(ConfigError):
         NmpcMethod(control_dt=0.015)  # not a whole number of dt
     with pytest.raises(ConfigError):
-        NmpcMethod(horizon=30.0)
+        NmpcMethod(prediction_horizon=30.0)
     with pytest.raises(ConfigError):
         NmpcMethod(direction="both")
     with pytest.raises(ConfigError):

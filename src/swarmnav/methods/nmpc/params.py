@@ -35,8 +35,8 @@ class NmpcParams:
         "integration step of the simulation; the MPC acts every control_dt")
     control_dt: float = param(0.1, "s", "[0.01, 1]", "authors' code (cl_init.m: dt = 0.1 s, 10 Hz)",
         "MPC step: one solve per robot per control_dt, its first acceleration held (zero-order hold)")
-    horizon: float = param(4.0, "s", "(0, 20]", "authors' code (cl_init.m: T_p = 4 s)",
-        "prediction horizon: round(horizon / control_dt) steps")
+    prediction_horizon: float = param(4.0, "s", "(0, 20]", "authors' code (cl_init.m: T_p = 4 s)",
+        "prediction horizon: round(prediction_horizon / control_dt) steps")
     v_max: float = param(1.0, "m/s", "(0, inf)", "SPH Table I (shared)", "speed bound (norm), in the MPC and the dynamics")
     a_max: float = param(1.5, "m/s^2", "(0, inf)", "SPH Table I (shared)", "acceleration bound (norm)")
     # --- cost ---
@@ -84,7 +84,7 @@ class NmpcParams:
 
     def steps(self) -> int:
         """Prediction steps H."""
-        return max(1, int(round(self.horizon / self.control_dt)))
+        return max(1, int(round(self.prediction_horizon / self.control_dt)))
 
     def __post_init__(self) -> None:
         from swarmnav.errors import ConfigError
@@ -92,6 +92,7 @@ class NmpcParams:
         ratio = self.control_dt / self.dt
         if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
             raise ConfigError(f"nmpc: control_dt ({self.control_dt:g} s) must be a whole number of dt ({self.dt:g} s)")
-        if self.horizon / self.control_dt > 200:
-            raise ConfigError(f"nmpc: horizon / control_dt = {self.horizon / self.control_dt:g} steps, at most 200 "
-                              "(each step adds variables to every robot's problem); shorten horizon")
+        if self.prediction_horizon / self.control_dt > 200:
+            raise ConfigError(f"nmpc: prediction_horizon / control_dt = "
+                              f"{self.prediction_horizon / self.control_dt:g} steps, at most 200 (each step adds "
+                              "variables to every robot's problem); shorten prediction_horizon")
