@@ -35,7 +35,7 @@ from swarmnav.sim.result import RunResult
 from swarmnav.world.scenario import Scenario
 
 #: The methods :func:`baseline_policy` knows.
-BASELINES = ("hes", "sph", "apf", "ego-swarm", "mader", "lsc", "olfati-saber", "vasarhelyi")
+BASELINES = ("hes", "sph", "apf", "ego-swarm", "mader", "lsc", "nmpc", "olfati-saber", "vasarhelyi")
 
 
 def method_options(name: str, **params: Any) -> dict[str, Any]:

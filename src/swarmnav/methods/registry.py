@@ -41,6 +41,7 @@ _BUILTIN_MODULES = (
     "swarmnav.methods.mader",
     "swarmnav.methods.flocking",
     "swarmnav.methods.lsc",
+    "swarmnav.methods.nmpc",
 )
 
 

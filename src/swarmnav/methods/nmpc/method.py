@@ -1,0 +1,252 @@
+"""``nmpc``: the predictive swarm of Soria, Schiano & Floreano (Nature Machine Intelligence 2021),
+distributed: every control step (``control_dt``) each robot solves its own nonlinear MPC
+(solver.py) from its state, with
+
+1. its migration direction ``u_ref`` (towards its goal slot) and speed ``v_ref``;
+2. the predicted trajectories its neighbours broadcast at the previous control step (shifted by
+   one step to the present clock): the ``max_neig`` closest within ``sensing_range`` in the
+   separation / cohesion terms, the ``col_neig`` closest as hard distance constraints;
+3. the ``max_obs`` nearest obstacles within ``sensing_range``: discs, cylinders and balls as
+   themselves (the paper's cylinders), every other obstacle (boxes, polygons, walls) as the
+   half-space beyond the tangent plane at its nearest point.
+
+The robot applies the first acceleration for one control step (zero-order hold) and broadcasts
+its predicted positions (one trajectory message of H + 1 points, counted in the CommLog). A failed
+solve is a counted fallback (``nmpc_fallbacks``): the previous prediction's next acceleration, or a
+brake once that is used up.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from swarmnav.dynamics import SaturatedDoubleIntegrator
+from swarmnav.methods.base import Observation
+from swarmnav.methods.nmpc import solver as S
+from swarmnav.methods.nmpc.params import NmpcParams
+from swarmnav.params import build
+from swarmnav.planning.goals import goal_slots
+from swarmnav.planning.messages import CommLog, trajectory_bytes
+from swarmnav.planning.plan_log import PlanLog
+from swarmnav.sensing.geometry import nearest_obstacle
+from swarmnav.world.obstacles import Circle, Cylinder, Geometry, Sphere
+from swarmnav.world.scenario import Scenario
+
+
+def _clip_norm(a: np.ndarray, bound: float) -> np.ndarray:
+    n = np.linalg.norm(a, axis=-1, keepdims=True)
+    return np.where(n > bound, a * (bound / np.maximum(n, 1e-300)), a)
+
+
+#: [m] the least predicted gap beyond contact the crowd rule keeps (ours)
+CONTACT_GAP = 0.005
+
+
+def crowded(gap: float, clearance: float, floor: float, shrink: float, contact: float) -> float:
+    """The clearance [m] kept from a neighbour or obstacle now ``gap`` away (our crowd rule,
+    ``crowd_shrink``, after MADER's): ``clearance`` if the gap holds it; else max(shrink x gap,
+    ``floor``), or below the floor max(shrink x gap, contact + CONTACT_GAP): a start or a squeeze
+    inside the clearance stays feasible, and the kept clearance never ratchets into contact.
+    ``shrink`` = 0: off."""
+    if shrink <= 0 or gap >= clearance:
+        return clearance
+    if gap >= floor:
+        return max(shrink * gap, floor)
+    return max(shrink * gap, contact + CONTACT_GAP)
+
+
+class ObstacleSlots:
+    """The obstacles of a world as each robot's MPC sees them (module docstring, item 3)."""
+
+    def __init__(self, obstacles, dim: int):
+        self.dim = dim
+        self.kind = []  # per obstacle: (alpha, centre, mask, radius) for a round one, None otherwise
+        self.geoms = []
+        lo, hi = [], []
+        for o in obstacles:
+            g = Geometry.from_obstacles([o], dim=dim)
+            self.geoms.append(g)
+            lo.append(g.bbox_lo[0])
+            hi.append(g.bbox_hi[0])
+            if isinstance(o, Circle) and dim == 2:
+                self.kind.append((np.array(o.center, float), np.ones(2), float(o.radius)))
+            elif isinstance(o, Cylinder):
+                self.kind.append((np.array([*o.center, 0.0]), np.array([1.0, 1.0, 0.0]), float(o.radius)))
+            elif isinstance(o, Sphere):
+                self.kind.append((np.array(o.center, float), np.ones(3), float(o.radius)))
+            else:
+                self.kind.append(None)
+        self.lo = np.array(lo, float).reshape(-1, dim)
+        self.hi = np.array(hi, float).reshape(-1, dim)
+
+    def slots(self, p: np.ndarray, M: int, sensing_range: float, clearance: float, floor: float, shrink: float,
+              contact: float):
+        """(c, s, n, rho, alpha), each (M, ...), for a robot at ``p``: the M obstacles nearest by
+        bounding box within ``sensing_range``, each kept ``clearance`` away (or less, by
+        :func:`crowded`); empty slots are always met."""
+        D = self.dim
+        c, s, n = np.zeros((M, D)), np.zeros((M, D)), np.zeros((M, D))
+        rho, alpha = np.full(M, -1.0), np.zeros(M)
+        if len(self.lo):
+            gap = np.linalg.norm(np.maximum(0.0, np.maximum(self.lo - p, p - self.hi)), axis=1)
+            order = np.argsort(gap, kind="stable")
+            order = order[gap[order] <= sensing_range][:M]
+            for m, o in enumerate(order):
+                kd = self.kind[o]
+                if kd is not None:  # the paper's cylinder: |s o (p - c)| >= r + clearance
+                    centre, mask, r = kd
+                    now = float(np.linalg.norm(mask * (p - centre)))
+                    need = r + crowded(now - r, clearance, floor, shrink, contact)
+                    c[m], s[m], rho[m], alpha[m] = centre, mask, need, 1.0
+                else:  # tangent half-space at the nearest point
+                    d, u = nearest_obstacle(self.geoms[o], p[None])
+                    d, u = float(d[0]), u[0]
+                    q = p + abs(d) * u  # u points to the boundary point (outward from inside)
+                    normal = -u if d > 0 else u  # inside: the free side is beyond q, so the slot is unmet
+                    c[m], n[m], rho[m] = q, normal, crowded(d, clearance, floor, shrink, contact)
+        return c, s, n, rho, alpha
+
+
+class NmpcMethod:
+    """The distributed NMPC swarm (see the module docstring)."""
+
+    name = "nmpc"
+    dims = (2, 3)
+    periodic = False  # obstacles and a goal to migrate to: a periodic box is refused in one line
+
+    def __init__(self, **overrides: Any):
+        p = build(NmpcParams, overrides, context="nmpc")
+        self.params = p
+        self.dt = p.dt
+        self.dynamics = SaturatedDoubleIntegrator(p.v_max, p.a_max)
+        self.H = p.steps()
+        self.every = int(round(p.control_dt / p.dt))
+        self.weights = S.Weights(p.w_sep, p.w_coh, p.w_dir, p.w_nav, p.w_u, p.d_ref, p.eps_v,
+                                 p.direction == "signed")
+
+    # ------------------------------------------------------------------ contract
+
+    def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
+              rng: np.random.Generator) -> None:
+        p = self.params
+        x = np.asarray(positions, dtype=float)
+        n, dim = x.shape
+        self.dim = dim
+        self.body = scenario.rules.body_radius
+        self.obstacles = ObstacleSlots(scenario.solid_obstacles, dim)
+        self.goals = goal_slots(scenario.goal_array, x, p.goal_disc)
+        self.comm = CommLog()
+        self.log = PlanLog(dim)
+        H = self.H
+        self.U = np.zeros((n, H, dim))  # each robot's last accepted plan (accelerations)
+        self.pred = None  # (n, H, dim): predicted positions broadcast at the last control step
+        self.age = np.zeros(n, dtype=np.int64)  # control steps since the plan was solved
+        self.u_hold = np.zeros((n, dim))
+        self.stats = {"solves": 0, "fallbacks": 0, "brakes": 0, "iterations": 0}
+        self._solve_ms: list[float] = []
+        self._steps = 0
+
+    def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
+        if obs.step % self.every == 0:
+            self._control(obs.step, obs.positions, obs.velocities)
+        self._steps += 1
+        return self.u_hold.copy(), {}
+
+    def summary(self) -> dict[str, float]:
+        s = self.stats
+        return {
+            "nmpc_solves": float(s["solves"]),
+            "nmpc_fallbacks": float(s["fallbacks"]),
+            "nmpc_brakes": float(s["brakes"]),
+            "nmpc_iterations_mean": s["iterations"] / max(s["solves"], 1),
+            **self.comm.summary(self._steps * self.params.dt),
+        }
+
+    def plans(self) -> dict[str, np.ndarray]:
+        """Every robot's predicted trajectory at every control step (its present position first)."""
+        return self.log.arrays()
+
+    def timings(self) -> dict[str, float]:
+        """Wall-clock solve time per robot per control step [ms] (not reproducible: not metrics)."""
+        t = np.array(self._solve_ms) if self._solve_ms else np.zeros(1)
+        return {"plan_ms_median": float(np.median(t)), "plan_ms_p95": float(np.percentile(t, 95)),
+                "plan_ms_max": float(t.max())}
+
+    # ------------------------------------------------------------------ control
+
+    def neighbour_predictions(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(n, H, dim) every robot's predicted positions at control steps 1..H from now, as the
+        others hold them: last step's broadcast shifted by one step (its last point extended at its
+        last velocity); before any broadcast, constant velocity from the present state."""
+        h, H = self.params.control_dt, self.H
+        if self.pred is None:
+            return x[:, None, :] + h * np.arange(1, H + 1)[None, :, None] * v[:, None, :]
+        last = self.pred[:, -1]
+        prev = self.pred[:, -2] if H > 1 else x
+        return np.concatenate([self.pred[:, 1:], (2 * last - prev)[:, None]], axis=1)
+
+    def problem(self, i: int, x: np.ndarray, v: np.ndarray, q_all: np.ndarray) -> S.Problem:
+        """Robot ``i``'s MPC problem at the present state ``x``, ``v`` (n, dim) with the others'
+        predictions ``q_all`` (n, H, dim)."""
+        p = self.params
+        n, D = x.shape
+        K, M = p.col_neig, p.max_obs
+        H = self.H
+        xi = x[i]
+        to_goal = self.goals[i] - xi
+        dist = float(np.linalg.norm(to_goal))
+        u_ref = to_goal / dist if dist > 1e-9 else np.zeros(D)
+        v_ref = p.v_ref * min(1.0, dist / p.slow_radius)
+        d = np.linalg.norm(x - xi, axis=1)
+        d[i] = np.inf
+        order = np.argsort(d, kind="stable")
+        order = order[d[order] <= p.sensing_range][:K]
+        q = np.repeat(xi[None, None, :], K, axis=0) + np.zeros((K, H, D))
+        c_cost = np.zeros(K)
+        rho = np.zeros(K)
+        need, floor = 2 * self.body + p.col_margin, 2 * self.body + p.col_margin / 2
+        for s, j in enumerate(order):
+            q[s] = q_all[j]
+            rho[s] = crowded(float(d[j]), need, floor, p.crowd_shrink, 2 * self.body)
+        ncost = min(p.max_neig, len(order))
+        c_cost[:ncost] = 1.0 / max(ncost, 1)
+        oc, os_, on, orho, oal = self.obstacles.slots(xi, M, p.sensing_range, self.body + p.obs_margin,
+                                                        self.body + p.obs_margin / 2, p.crowd_shrink, self.body)
+        return S.Problem(xi.copy(), v[i].copy(), p.control_dt, p.v_max, p.a_max, u_ref, v_ref, q, c_cost, rho,
+                         oc, os_, on, orho, oal)
+
+    def _control(self, step: int, x: np.ndarray, v: np.ndarray) -> None:
+        p = self.params
+        n, D = x.shape
+        H, h = self.H, p.control_dt
+        q_all = self.neighbour_predictions(x, v)
+        new_pred = np.empty((n, H, D))
+        for i in range(n):
+            pb = self.problem(i, x, v, q_all)
+            warm = np.concatenate([self.U[i, 1:], self.U[i, -1:]], axis=0)
+            t0 = time.perf_counter()
+            res = S.solve(pb, self.weights, warm, p.max_iter, p.tol, p.feas_tol)
+            self._solve_ms.append(1e3 * (time.perf_counter() - t0))
+            self.stats["solves"] += 1
+            self.stats["iterations"] += res.iterations
+            if res.U is not None:
+                self.U[i], self.age[i] = res.U, 0
+                new_pred[i] = res.positions
+            else:
+                self.stats["fallbacks"] += 1
+                self.age[i] += 1
+                if p.fallback == "shift" and self.age[i] < H:
+                    self.U[i] = warm  # the previous plan, one step on (its last acceleration held)
+                else:  # brake: cancel the velocity within a_max, then hold still
+                    self.stats["brakes"] += 1
+                    self.U[i] = 0.0
+                    self.U[i, 0] = _clip_norm(-v[i] / h, p.a_max)
+                ps, _ = S.rollout(x[i], v[i], self.U[i], h)
+                new_pred[i] = np.array(ps)
+            self.u_hold[i] = _clip_norm(self.U[i, 0], p.a_max)
+            self.log.add(step, i, step * p.dt + h * np.arange(H + 1), np.vstack([x[i], new_pred[i]]))
+        self.pred = new_pred
+        self.comm.send(n, trajectory_bytes(H + 1))
