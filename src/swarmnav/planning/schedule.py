@@ -1,6 +1,9 @@
-"""The replanning schedule: every robot replans every ``T_p`` seconds of the control clock."""
+"""The replanning schedule (every robot replans every ``T_p`` seconds of the control clock),
+the plan-length guard and the planners' timing figures."""
 
 from __future__ import annotations
+
+import numpy as np
 
 from swarmnav.errors import ConfigError
 
@@ -41,3 +44,12 @@ class ReplanSchedule:
 
     def done(self, step: int) -> None:
         self.last = step
+
+
+def plan_time_summary(samples_ms: list[float]) -> dict[str, float]:
+    """The planners' ``timings()`` figures from wall-clock samples [ms], one per robot per
+    replan (or control step): ``plan_ms_median``, ``plan_ms_p95`` and ``plan_ms_max``; all 0
+    for a run that never planned. Wall clock, so never metrics (docs/methods/contract.md)."""
+    t = np.asarray(samples_ms, dtype=float) if len(samples_ms) else np.zeros(1)
+    return {"plan_ms_median": float(np.median(t)), "plan_ms_p95": float(np.percentile(t, 95)),
+            "plan_ms_max": float(t.max())}

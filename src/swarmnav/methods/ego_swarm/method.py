@@ -45,6 +45,7 @@ from swarmnav.planning.messages import CommLog, TrajectoryBoard
 from swarmnav.planning.plan_log import PlanLog, sample_rows
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
+from swarmnav.planning.schedule import plan_time_summary
 
 
 class BrakePlan:
@@ -163,9 +164,7 @@ class EgoSwarm:
 
     def timings(self) -> dict[str, float]:
         """Planning time per robot per replan [ms], wall clock (not a metric)."""
-        t = np.array(self._plan_ms) if self._plan_ms else np.zeros(1)
-        return {"plan_ms_median": float(np.median(t)), "plan_ms_p95": float(np.percentile(t, 95)),
-                "plan_ms_max": float(t.max())}
+        return plan_time_summary(self._plan_ms)
 
     def plans(self) -> dict[str, np.ndarray]:
         """Every committed plan (splines and emergency stops), sampled every 0.1 s

@@ -38,11 +38,12 @@ from swarmnav.params import build
 from swarmnav.planning import bspline, clamped
 from swarmnav.planning.hulls import hull_vertices, inflate_points, interval_points, obstacle_vertices, pad, seed_planes, segment_points
 from swarmnav.planning.goals import goal_slots
-from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
+from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
 from swarmnav.planning.plan_log import PlanLog, sample_rows
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
+from swarmnav.planning.schedule import plan_time_summary
 
 _MAX_MAP_BYTES = 2 * 1024**3
 
@@ -162,9 +163,7 @@ class MaderMethod:
 
     def timings(self) -> dict[str, float]:
         """Wall-clock planning time per robot per replan [ms] (not reproducible: not metrics)."""
-        plan = np.array(self._plan_ms) if self._plan_ms else np.zeros(1)
-        return {"plan_ms_median": float(np.median(plan)), "plan_ms_p95": float(np.percentile(plan, 95)),
-                "plan_ms_max": float(plan.max())}
+        return plan_time_summary(self._plan_ms)
 
     # ------------------------------------------------------------------ commits
 

@@ -34,6 +34,7 @@ from swarmnav.planning.plan_log import PlanLog
 from swarmnav.sensing.geometry import nearest_obstacle
 from swarmnav.world.obstacles import Circle, Cylinder, Geometry, Sphere
 from swarmnav.world.scenario import Scenario
+from swarmnav.planning.schedule import plan_time_summary
 
 
 def _clip_norm(a: np.ndarray, bound: float) -> np.ndarray:
@@ -171,9 +172,7 @@ class NmpcMethod:
 
     def timings(self) -> dict[str, float]:
         """Wall-clock solve time per robot per control step [ms] (not reproducible: not metrics)."""
-        t = np.array(self._solve_ms) if self._solve_ms else np.zeros(1)
-        return {"plan_ms_median": float(np.median(t)), "plan_ms_p95": float(np.percentile(t, 95)),
-                "plan_ms_max": float(t.max())}
+        return plan_time_summary(self._solve_ms)
 
     # ------------------------------------------------------------------ control
 

@@ -39,7 +39,7 @@ from swarmnav.planning.bspline import SplineCosts, optimize
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import POSITION_BYTES, CommLog
 from swarmnav.planning.plan_log import PlanLog, sample_times
-from swarmnav.planning.schedule import ReplanSchedule
+from swarmnav.planning.schedule import ReplanSchedule, plan_time_summary
 from swarmnav.planning.tracker import References, track
 from swarmnav.sensing.esdf import Esdf, grid_nodes
 from swarmnav.world.scenario import Scenario
@@ -230,14 +230,8 @@ class Sph:
         """Wall-clock figures of this run [ms]: planning time per robot per replan (median,
         95th percentile, max) and the coordination (visibility + SPH + ESDF force) time per
         control step for the whole swarm (median). Not reproducible, so not metrics."""
-        plan = np.array(self._plan_ms) if self._plan_ms else np.zeros(1)
         coord = np.array(self._coord_ms) if self._coord_ms else np.zeros(1)
-        return {
-            "plan_ms_median": float(np.median(plan)),
-            "plan_ms_p95": float(np.percentile(plan, 95)),
-            "plan_ms_max": float(plan.max()),
-            "coord_ms_median": float(np.median(coord)),
-        }
+        return {**plan_time_summary(self._plan_ms), "coord_ms_median": float(np.median(coord))}
 
     def plans(self) -> dict[str, np.ndarray]:
         """Every robot's spline of every replan, whole, sampled every 0.1 s
