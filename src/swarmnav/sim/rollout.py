@@ -20,7 +20,7 @@ from swarmnav.sensing import PreparedGeometry
 from swarmnav.sim.referee import Referee
 from swarmnav.sim.result import Plans, RunResult
 from swarmnav.world.catalog import load_scenario
-from swarmnav.world.scenario import Rules, Scenario
+from swarmnav.world.scenario import Scenario
 
 
 #: The run options that override the scene's referee settings (``world.boundary``, ``[rules]``).
