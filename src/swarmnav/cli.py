@@ -361,13 +361,16 @@ def _cmd_experiment(args) -> int:
     _writable_dir(args.out, "--out")
     rows, summary = run_experiment(exp, args.out, workers=args.workers, backend=args.backend,
                                    ray_address=args.ray_address, save_trajectories=not args.no_trajectories,
-                                   progress=not args.quiet, force=args.force)
+                                   progress=not args.quiet, force=args.force,
+                                   variants=_split_patterns(args.variants))
     failed = sum(r["status"] != "done" for r in rows)
     print(f"{exp.name}: {len(rows)} runs ({failed} failed) -> {args.out}/results.sqlite, runs.csv, summary.csv")
     # the SPH paper's success test means something where the experiment reproduces an SPH table
     # (any method flown on its scenes), not on the HES or HWVEM scenes
     sph_table = str(exp.report.get("reference", "")).startswith("sph") or exp.name.startswith("sph")
     for s in summary:
+        if not s["runs"]:  # a variant --variants left out, with nothing stored yet
+            continue
         # the metrics that mean something for the runs: navigation, or consensus in a periodic box
         # (no goal, no obstacles)
         names = (("Y_mean", "R_goal_mean", "E_mean_mean", "R_unsafe_mean") + (("sph_success_mean",) if sph_table else ())
@@ -378,6 +381,15 @@ def _cmd_experiment(args) -> int:
         print(f"  {failed} run(s) failed (see the error column of runs.csv); rerun the same command to retry them",
               file=sys.stderr)
     return 1 if failed else 0
+
+
+def _split_patterns(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    pats = [p.strip() for p in text.split(",") if p.strip()]
+    if not pats:
+        raise ConfigError("--variants: give one or more variant names or glob patterns, e.g. 'lsc/*,sph/0.35'")
+    return pats
 
 
 def _cmd_merge(args) -> int:
@@ -476,6 +488,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--backend", choices=["local", "ray"], default="local")
     s.add_argument("--ray-address", metavar="ADDR", help="join an existing Ray cluster (default: start a local one)")
     s.add_argument("--no-trajectories", action="store_true", help="store metrics only, no trajectory files")
+    s.add_argument("--variants", metavar="PATTERNS",
+                   help="fly only these variants: names or glob patterns, comma-separated (e.g. 'lsc/*'); "
+                        "the store still records the whole spec, so its report shows every variant flown there")
     s.add_argument("--force", action="store_true",
                    help="DIR holds another sweep (other --set values or spec, or another experiment): "
                         "record this one there anyway; stored runs are kept")

@@ -9,11 +9,13 @@ ends, after a rerun, with exactly the runs of an uninterrupted sweep.
 from __future__ import annotations
 
 import csv
+import difflib
+import fnmatch
 import math
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -104,8 +106,14 @@ def run_experiment(
     progress: bool = True,
     on_row: Callable[[dict], None] | None = None,
     force: bool = False,
+    variants: Sequence[str] | None = None,
 ) -> tuple[list[dict], list[dict]]:
     """Run every missing (variant, seed) of ``exp`` into the store in ``out``.
+
+    ``variants`` (glob patterns of variant names, e.g. ``["lsc/*"]``) flies only the variants it
+    matches; the store still records the whole spec, so the report shows every variant with the
+    runs it has, and sweeps of other variants into the same store (or merged into it) add to it.
+    A pattern that matches no variant is a one-line ConfigError, before anything runs.
 
     A store that holds another sweep is refused (ConfigError, before anything runs) unless
     ``force``: the same experiment with variants configured differently (another ``--set``
@@ -121,6 +129,7 @@ def run_experiment(
     if workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
     jobs = plan(exp)
+    wanted = select_variants([v.name for v in exp.variants], variants) if variants else None
     store = Store(out)
     meta = _spec_meta(exp, jobs)
     if not force:
@@ -129,8 +138,9 @@ def run_experiment(
     store.set_meta("last_experiment", exp.name)
     done = store.done_keys()
     # Two variants may declare the identical configuration: it is run once and reported under both.
-    todo = list({j.key: j for j in jobs if j.key not in done}.values())
-    bar = _Progress(len(jobs), len(jobs) - len(todo), progress)
+    mine = [j for j in jobs if wanted is None or j.variant.name in wanted]
+    todo = list({j.key: j for j in mine if j.key not in done}.values())
+    bar = _Progress(len(mine), len(mine) - len(todo), progress)
 
     def finished(row: dict) -> None:
         _write_files(store.root, row)  # the files exist before the row that names them
@@ -146,6 +156,21 @@ def run_experiment(
     finally:
         bar.close()
     return export(store, exp.name)
+
+
+def select_variants(names: list[str], patterns: Sequence[str]) -> set[str]:
+    """The variant names that match any of the glob ``patterns`` (``fnmatch``, case-sensitive).
+    A pattern matching none is a one-line ConfigError naming the closest variants."""
+    out: set[str] = set()
+    for pat in patterns:
+        hit = {n for n in names if fnmatch.fnmatchcase(n, pat)}
+        if not hit:
+            close = difflib.get_close_matches(pat, names, n=3, cutoff=0.5)
+            hint = f" (did you mean {', '.join(close)}?)" if close else ""
+            shown = ", ".join(names[:12]) + (f", … ({len(names)} in all)" if len(names) > 12 else "")
+            raise ConfigError(f"--variants: '{pat}' matches no variant{hint}; variants: {shown}")
+        out |= hit
+    return out
 
 
 def export(store: Store, experiment: str) -> tuple[list[dict], list[dict]]:
