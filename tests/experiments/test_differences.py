@@ -3,7 +3,7 @@ rates and the paired t interval of a mean difference, against hand computations,
 a coverage simulation."""
 
 import math
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -11,7 +11,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats as sps
 
-from swarmnav.experiments.differences import mean_difference, paired_table, phi, success_difference
+from swarmnav.experiments.differences import (
+    mean_difference,
+    paired_table,
+    phi,
+    success_difference,
+)
 
 Z = sps.norm.ppf(0.975)
 
@@ -51,7 +56,7 @@ tables = st.tuples(*[st.integers(0, 15)] * 4).filter(lambda t: sum(t) > 0)
 def test_the_interval_lies_in_minus_one_to_one_holds_the_estimate_and_swapping_negates_it(table):
     a, b = arrays(table)
     d = success_difference(a, b)
-    e, f, g, h = table
+    _, f, g, _ = table
     assert d.n == sum(table) and d.estimate == pytest.approx((g - f) / sum(table), abs=1e-15)
     assert -1.0 - 1e-12 <= d.low <= d.estimate <= d.high <= 1.0 + 1e-12
     s = success_difference(b, a)
@@ -125,7 +130,7 @@ def test_the_corrected_phi_widens_the_interval_and_ends_zero_width_ones(table):
         assert corr.high - corr.low > 0.05
 
 
-@lru_cache(maxsize=None)
+@cache
 def _covers(table, truth, corrected):
     d = success_difference(*arrays(table), corrected_phi=corrected)
     return d.low <= truth <= d.high

@@ -94,6 +94,11 @@ def _by_hand(runs, a, b):
     return out
 
 
+def _csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
 def _numbers(cell):
     """``+1.23 [-0.45, +2.91]`` -> [1.23, -0.45, 2.91]; ``–`` -> nan."""
     parts = cell.replace("[", " ").replace("]", " ").replace(",", " ").split()
@@ -108,7 +113,7 @@ def _md_rows(md):
 
 
 def test_the_table_gives_the_differences_computed_by_hand_from_runs_csv(tiny):
-    runs = {(r["variant"], int(r["seed"])): r for r in csv.DictReader(open(tiny / "runs.csv"))}
+    runs = {(r["variant"], int(r["seed"])): r for r in _csv(tiny / "runs.csv")}
     want = {p: _by_hand(runs, *p) for p in PAIRS}
     # the fixture means something: some pair disagrees on a seed, some pair has an interval of distances
     assert any(w["table"][1] + w["table"][2] > 0 for w in want.values())
@@ -132,7 +137,7 @@ def test_the_table_gives_the_differences_computed_by_hand_from_runs_csv(tiny):
             else:  # three significant digits of the largest of the three
                 assert _numbers(cell) == pytest.approx([mean, lo, hi], rel=5e-3, abs=5e-3 * max(map(abs, (lo, hi))))
     # every number at full precision in differences.csv
-    got = list(csv.DictReader(open(tiny / "report_files" / "differences.csv")))
+    got = _csv(tiny / "report_files" / "differences.csv")
     assert [(r["a"], r["b"]) for r in got] == PAIRS
     for r in got:
         w = want[r["a"], r["b"]]
@@ -166,7 +171,7 @@ def test_pairs_the_store_lacks_are_rows_with_a_note_not_a_crash(tmp_path, capsys
     _, rows = _md_rows((out / "report.md").read_text())
     assert rows == [["base", "strong", "0", "–", "–", "–", "–", "–",
                      "no paired seeds: base and strong not in this store"]]
-    (r,) = csv.DictReader(open(out / "report_files" / "differences.csv"))
+    (r,) = _csv(out / "report_files" / "differences.csv")
     assert r["seeds_paired"] == "0" and r["d_success_points"] == "" and "not in this store" in r["note"]
     (d,) = paired_differences(out, [("base[k_sep=3]", "strong[k_sep=3]")], "sph_success", ["flight_distance"])
     assert len(d.seeds) == 1 and d.note == ""
