@@ -158,8 +158,9 @@ def test_the_table_gives_the_differences_computed_by_hand_from_runs_csv(tiny):
     assert [d.table for d in diffs] == [want[p]["table"] for p in PAIRS]
 
 
-def test_pairs_the_store_lacks_are_rows_with_a_note_not_a_crash(tmp_path, capsys):
-    """A --set sweep renames every variant (base[k_sep=3], ...): the spec's pairs are not in the store."""
+def test_a_swept_pair_is_compared_at_each_value_and_a_missing_one_is_a_row_with_a_note(tmp_path, capsys):
+    """A --set sweep renames every variant (base[k_sep=3], ...): the spec's pair is compared at
+    each swept value; a pair the store does not have is a row that says so."""
     spec = tmp_path / "s.toml"
     spec.write_text('name = "s"\nmethod = "apf"\nscenario = "default_corridor"\nn = 3\nsteps = 5\nseeds = "1"\n'
                     '[[variants]]\nname = "base"\n[[variants]]\nname = "strong"\nparams = { k_att = 3.0 }\n'
@@ -169,12 +170,20 @@ def test_pairs_the_store_lacks_are_rows_with_a_note_not_a_crash(tmp_path, capsys
     assert main(["experiment", "--spec", str(spec), "--set", "k_sep=3|2", "--out", str(out), "--quiet"]) == 0
     assert main(["report", str(out), "--no-viewers"]) == 0
     _, rows = _md_rows((out / "report.md").read_text())
-    assert rows == [["base", "strong", "0", "–", "–", "–", "–", "–",
-                     "no paired seeds: base and strong not in this store"]]
+    assert [r[:3] for r in rows] == [["base[k_sep=3]", "strong[k_sep=3]", "1"], ["base[k_sep=2]", "strong[k_sep=2]", "1"]]
+    assert all(r[-1] == "–" for r in rows)
+    d, gone = paired_differences(out, [("base[k_sep=3]", "strong[k_sep=3]"), ("base", "weak")], "sph_success",
+                                 ["flight_distance"])
+    assert len(d.seeds) == 1 and d.note == ""
+    assert gone.seeds == () and gone.note == "no paired seeds: base and weak not in this store"
+    meta = Store(out).meta("experiment:s")  # a spec pair neither as named nor swept: a row with a note
+    meta["report"]["differences"]["pairs"] = [["base", "weak"]]
+    Store(out).set_meta("experiment:s", meta)
+    write_report(out)
+    _, rows = _md_rows((out / "report.md").read_text())
+    assert rows == [["base", "weak", "0", "–", "–", "–", "–", "–", "no paired seeds: base and weak not in this store"]]
     (r,) = _csv(out / "report_files" / "differences.csv")
     assert r["seeds_paired"] == "0" and r["d_success_points"] == "" and "not in this store" in r["note"]
-    (d,) = paired_differences(out, [("base[k_sep=3]", "strong[k_sep=3]")], "sph_success", ["flight_distance"])
-    assert len(d.seeds) == 1 and d.note == ""
 
 
 def _synthetic_store(d):

@@ -552,8 +552,10 @@ def paired_differences(directory: str | Path, pairs: list[tuple[str, str]] | lis
                        experiment: str | None = None) -> list[differences.PairDifference]:
     """B − A with 95 % intervals for each pair ``(A, B)`` of a results directory's variants: the
     difference of the ``success`` rates (a 0/1 metric; Newcombe's paired interval) and of the mean
-    of each of ``metrics`` over the seeds where both succeeded (paired t). A pair whose variants
-    the store lacks is returned with a note and no seeds, not an error
+    of each of ``metrics`` over the seeds where both succeeded (paired t). A ``--set`` sweep
+    appends its values to every variant name (``sph/0.15[horizon=60]``): a pair of spec names is
+    then compared at each swept value both variants have. A pair whose variants the store lacks
+    otherwise is returned with a note and no seeds, not an error
     (:class:`swarmnav.experiments.differences.PairDifference`)."""
     store, experiment = _open(directory, experiment)
     meta = store.meta(f"experiment:{experiment}")
@@ -563,7 +565,19 @@ def paired_differences(directory: str | Path, pairs: list[tuple[str, str]] | lis
 
     rows = job_rows(store, meta)
     known = [v["name"] for v in meta["variants"]]
-    return [differences.pair_difference(rows, a, b, success, list(metrics), known) for a, b in pairs]
+    return [differences.pair_difference(rows, a, b, success, list(metrics), known)
+            for pair in pairs for a, b in _swept(tuple(pair), known)]
+
+
+def _swept(pair: tuple[str, str], known: list[str]) -> list[tuple[str, str]]:
+    """``pair`` itself if both are variants of the store, else the pairs ``(A[s], B[s])`` of each
+    sweep suffix ``[s]`` both have (a ``--set`` sweep renames every variant alike); else ``pair``."""
+    a, b = pair
+    if a in known and b in known:
+        return [pair]
+    tails = [n[len(a):] for n in known if n.startswith(a + "[") and n.endswith("]")]
+    both = [(a + t, b + t) for t in tails if b + t in known]
+    return both or [pair]
 
 
 def write_report(directory: str | Path, experiment: str | None = None,
