@@ -221,6 +221,7 @@ def test_unpaired_seeds_missing_values_and_a_non_binary_success_are_said(tmp_pat
     md, _ = write_report(tmp_path)
     _, rows = _md_rows(md.read_text())
     assert [r[:3] for r in rows] == [["A", "B", "3"], ["A", "C", "4"], ["A", "Z", "0"]]
+    assert rows[1][3:8] == ["–"] * 5  # no rates, no differences from a success that is not 0/1
     assert rows[0][5] == "0.0 [-56.1, +56.1]"  # 3 of 3 both: Wilson (1 / (1 + z²/3), 1) = (0.4385, 1) twice, phi = 0
     assert rows[0][7] == "+1.50 [-4.85, +7.85]"  # d = (1, 2): 1.5 ± 12.706 · 0.5
     assert (tmp_path / "report_files" / "differences.csv").exists()

@@ -164,11 +164,14 @@ class PairDifference:
 
     @property
     def rate_a(self) -> float:
-        return (self.table[0] + self.table[1]) / len(self.seeds) if self.seeds else math.nan
+        """A's success rate over the paired seeds (nan without a 2×2 table)."""
+        n = sum(self.table)
+        return (self.table[0] + self.table[1]) / n if n else math.nan
 
     @property
     def rate_b(self) -> float:
-        return (self.table[0] + self.table[2]) / len(self.seeds) if self.seeds else math.nan
+        n = sum(self.table)
+        return (self.table[0] + self.table[2]) / n if n else math.nan
 
     @property
     def both_succeeded(self) -> int:
@@ -286,7 +289,7 @@ def table(diffs: list[PairDifference], success: str, metrics: list[str], units: 
     for p in diffs:
         rate = (lambda x: "–" if not math.isfinite(x) else f"{100 * x:.1f}")
         rows.append([p.a, p.b, str(len(p.seeds)), rate(p.rate_a), rate(p.rate_b),
-                     interval_cell(p.success, 100.0, 1), str(p.both_succeeded) if p.seeds else "–"]
+                     interval_cell(p.success, 100.0, 1), str(p.both_succeeded) if sum(p.table) else "–"]
                     + [interval_cell(p.metrics[m]) for m in metrics] + [p.note or "–"])
     return {"title": TITLE, "note": note(success, metrics),
             "columns": [{"label": c, "metric": None, "kind": k} for c, k in cols], "rows": rows}
