@@ -4,8 +4,9 @@ Tables are in the papers' format (mean ± population std over seeds) with the pu
 values beside them when the experiment's spec names a reference table of the packaged
 ``paper_results.toml``; figures are bars with error bars (HES Figures 4 and 9) and per-seed
 box plots (HES Figure 7). For two variants, the paired-seed percent change of one against the
-other (HES Figure 5, :mod:`swarmnav.experiments.paired`). Reads the store only; never runs a
-simulation.
+other (HES Figure 5, :mod:`swarmnav.experiments.paired`); for the pairs a spec's
+``[report.differences]`` lists, B − A with 95 % intervals (:mod:`swarmnav.experiments.differences`).
+Reads the store only; never runs a simulation.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav.errors import SwarmnavError
-from swarmnav.experiments import paired
+from swarmnav.experiments import differences, paired
 from swarmnav.experiments import stats
 from swarmnav.experiments.store import DB_NAME, Store
 
@@ -246,6 +247,7 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
     return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
             "variants": variants, "reference": spec.get("reference"), "reference_index": None,
             "title": spec.get("title") or experiment, "n_runs": len(rows), "compare": spec.get("compare"),
+            "differences": spec.get("differences"),
             "planned": len(meta["jobs"]), "seed_list": list(meta.get("seeds") or []),
             "overrides": meta.get("overrides")}
 
@@ -545,6 +547,39 @@ def paired_changes(directory: str | Path, a: str, b: str, *, experiment: str | N
     return paired.pair_rows(rows, experiment, a, b, list(metrics) if metrics else report_metrics(meta, rows))
 
 
+def paired_differences(directory: str | Path, pairs: list[tuple[str, str]] | list[list[str]], success: str,
+                       metrics: list[str] | tuple[str, ...] = (), *,
+                       experiment: str | None = None) -> list[differences.PairDifference]:
+    """B − A with 95 % intervals for each pair ``(A, B)`` of a results directory's variants: the
+    difference of the ``success`` rates (a 0/1 metric; Newcombe's paired interval) and of the mean
+    of each of ``metrics`` over the seeds where both succeeded (paired t). A ``--set`` sweep
+    appends its values to every variant name (``sph/0.15[horizon=60]``): a pair of spec names is
+    then compared at each swept value both variants have. A pair whose variants the store lacks
+    otherwise is returned with a note and no seeds, not an error
+    (:class:`swarmnav.experiments.differences.PairDifference`)."""
+    store, experiment = _open(directory, experiment)
+    meta = store.meta(f"experiment:{experiment}")
+    if meta is None:
+        raise SwarmnavError(f"{store.root}: no experiment '{experiment}' in the store")
+    from swarmnav.experiments.runner import job_rows
+
+    rows = job_rows(store, meta)
+    known = [v["name"] for v in meta["variants"]]
+    return [differences.pair_difference(rows, a, b, success, list(metrics), known)
+            for pair in pairs for a, b in _swept(tuple(pair), known)]
+
+
+def _swept(pair: tuple[str, str], known: list[str]) -> list[tuple[str, str]]:
+    """``pair`` itself if both are variants of the store, else the pairs ``(A[s], B[s])`` of each
+    sweep suffix ``[s]`` both have (a ``--set`` sweep renames every variant alike); else ``pair``."""
+    a, b = pair
+    if a in known and b in known:
+        return [pair]
+    tails = [n[len(a):] for n in known if n.startswith(a + "[") and n.endswith("]")]
+    both = [(a + t, b + t) for t in tails if b + t in known]
+    return both or [pair]
+
+
 def write_report(directory: str | Path, experiment: str | None = None,
                  compare: tuple[str, str] | None = None, viewers: dict[str, str] | None = None) -> list[Path]:
     """Write ``report.md`` (+ ``report_files/*.png``, ``*.svg``) and ``report.html`` into ``directory``.
@@ -582,6 +617,14 @@ def write_report(directory: str | Path, experiment: str | None = None,
     else:  # an earlier report's comparison would otherwise stay beside this one
         for ext in ("png", "svg", "csv"):
             (files / f"paired.{ext}").unlink(missing_ok=True)
+    diff_spec = t["differences"]
+    if diff_spec:
+        diff_metrics = list(diff_spec.get("metrics") or [])
+        diffs = paired_differences(d, diff_spec["pairs"], diff_spec["success"], diff_metrics, experiment=experiment)
+        tabs.append(differences.table(diffs, diff_spec["success"], diff_metrics, UNITS))
+        (files / "differences.csv").write_text(differences.to_csv(diffs, diff_metrics), encoding="utf-8")
+    else:
+        (files / "differences.csv").unlink(missing_ok=True)
     figs = []
     for stem, fig in charts:  # PNG for the pages, SVG to print or to read the drawn values from
         figs.append((f"{stem}.png", _png(fig)))

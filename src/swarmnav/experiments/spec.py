@@ -24,7 +24,10 @@ experiment reproduces: ``reference = "hes.table3"`` (a table of the packaged
 ``i`` of the key's per-scene lists), ``metric_map = {metric = "paper_key"}`` (or ``["paper_key",
 factor]``, the factor from the paper's unit to ours) when the paper names a metric otherwise, and
 ``compare = ["A", "B"]``,
-the pair of variants whose paired-seed percent changes (B against A) the report draws.
+the pair of variants whose paired-seed percent changes (B against A) the report draws. A
+``[report.differences]`` table lists pairs ``[A, B]`` whose B − A the report gives with 95 %
+intervals: ``success = "sph_success"`` (a 0/1 metric), ``metrics = ["flight_distance"]``
+(continuous, over the seeds where both succeeded) and ``pairs = [["sph/0.15", "mader/0.15"]]``.
 
 ``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
 ``n`` (swarm size), a declared scenario variable, or a method parameter. ``key=a|b|c`` sweeps:
@@ -52,7 +55,9 @@ from swarmnav.params import coerce, flatten
 _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "seeds", "n", "params", "variants",
               "matrix",
               "report", "scenario_vars"}
-_REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "metric_map", "figures", "compare"}
+_REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "metric_map", "figures", "compare",
+                "differences"}
+_DIFFERENCES_KEYS = {"success", "metrics", "pairs"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "horizon", "n", "params"}
 _RUN_KEYS = {"method", "scenario", "steps", "horizon", "n"}
@@ -163,6 +168,8 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         if not isinstance(report["compare"], list) or not all(isinstance(x, str) for x in report["compare"]):
             raise ConfigError(f"{source}: [report] compare must be a list of two variant names")
         check_variants(report["compare"], [v.name for v in variants], where=f"{source}: [report] compare")
+    if "differences" in report:
+        _check_differences(report["differences"], [v.name for v in variants], f"{source}: [report.differences]")
     variants = _apply_overrides(variants, overrides, svars)
     _check_params(variants, source)
     seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
@@ -171,6 +178,31 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         raise ConfigError(f"{source}: variant names must be unique, got {names}")
     return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants),
                       seeds=seed_list, report=dict(report), overrides=dict(overrides))
+
+
+def _check_differences(table: Any, known: list[str], where: str) -> None:
+    """``[report.differences]``: ``success`` a metric name, ``metrics`` a list of names, ``pairs`` a
+    non-empty list of two different known variants each; a one-line ConfigError otherwise."""
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} must be a table with {sorted(_DIFFERENCES_KEYS)}, got {table!r}")
+    bad = set(table) - _DIFFERENCES_KEYS
+    if bad:
+        raise ConfigError(f"{where} unknown key(s) {sorted(bad)} (allowed: {sorted(_DIFFERENCES_KEYS)})")
+    success = table.get("success")
+    if not isinstance(success, str) or not success:
+        raise ConfigError(f"{where} success must be the name of a 0/1 metric (e.g. \"sph_success\"), got {success!r}")
+    metrics = table.get("metrics", [])
+    if not isinstance(metrics, list) or not all(isinstance(m, str) and m for m in metrics):
+        raise ConfigError(f"{where} metrics must be a list of metric names, got {metrics!r}")
+    if success in metrics:
+        raise ConfigError(f"{where} metrics lists the success metric '{success}' (it is compared as a rate)")
+    pairs = table.get("pairs")
+    if not isinstance(pairs, list) or not pairs:
+        raise ConfigError(f"{where} pairs must be a non-empty list of [A, B] variant pairs, got {pairs!r}")
+    for k, pair in enumerate(pairs):
+        if not isinstance(pair, list) or not all(isinstance(x, str) for x in pair):
+            raise ConfigError(f"{where} pairs[{k}] must be a list of two variant names, got {pair!r}")
+        check_variants(pair, known, where=f"{where} pairs[{k}]")
 
 
 def _params(table: Any, where: str) -> dict[str, Any]:
