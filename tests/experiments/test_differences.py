@@ -99,11 +99,18 @@ def test_one_table_by_hand():
     assert phi(table) == pytest.approx(r, rel=1e-12)
     low = (pb - pa) - math.sqrt((pb - lb) ** 2 - 2 * r * (pb - lb) * (ua - pa) + (ua - pa) ** 2)
     high = (pb - pa) + math.sqrt((ub - pb) ** 2 - 2 * r * (ub - pb) * (pa - la) + (pa - la) ** 2)
-    d = success_difference(*arrays(table))
+    d = success_difference(*arrays(table), corrected_phi=False)
     assert (d.estimate, d.low, d.high, d.n) == pytest.approx((-0.2, low, high, 20), abs=1e-9)
     assert (round(d.low, 3), round(d.high, 3)) == (-0.390, 0.022)  # -20 points [-39.0, +2.2]
+    # the default: the numerator of phi shrunk by n/2 = 10 (continuity correction)
+    rc = (8 * 6 - 5 * 1 - 10) / math.sqrt(13 * 7 * 9 * 11)
+    assert phi(table, corrected=True) == pytest.approx(rc, rel=1e-12)
+    low = (pb - pa) - math.sqrt((pb - lb) ** 2 - 2 * rc * (pb - lb) * (ua - pa) + (ua - pa) ** 2)
+    high = (pb - pa) + math.sqrt((ub - pb) ** 2 - 2 * rc * (ub - pb) * (pa - la) + (pa - la) ** 2)
+    d = success_difference(*arrays(table))
+    assert (d.estimate, d.low, d.high) == pytest.approx((-0.2, low, high), abs=1e-9)
     # the plain phi's aberration: six seeds that agree at p = 1/2 give a zero-width interval
-    same = success_difference(*arrays((3, 0, 0, 3)))
+    same = success_difference(*arrays((3, 0, 0, 3)), corrected_phi=False)
     assert same.high - same.low == pytest.approx(0.0, abs=1e-6)
     assert success_difference(*arrays((3, 0, 0, 3)), corrected_phi=True).high == pytest.approx(0.255, abs=1e-3)
 

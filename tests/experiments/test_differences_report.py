@@ -78,7 +78,9 @@ def _by_hand(runs, a, b):
     pa, pb = (e + f) / n, (e + g) / n
     (la, ua), (lb, ub) = _wilson(e + f, n), _wilson(e + g, n)
     den = (e + f) * (g + h) * (e + g) * (f + h)
-    r = (e * h - f * g) / math.sqrt(den) if den else 0.0
+    num = e * h - f * g
+    num = max(num - (e + f + g + h) / 2, 0.0) if num > 0 else num  # the continuity-corrected phi
+    r = num / math.sqrt(den) if den else 0.0
     lo = pb - pa - math.sqrt(max((pb - lb) ** 2 - 2 * r * (pb - lb) * (ua - pa) + (ua - pa) ** 2, 0))
     hi = pb - pa + math.sqrt(max((ub - pb) ** 2 - 2 * r * (ub - pb) * (pa - la) + (pa - la) ** 2, 0))
     out = {"seeds": n, "table": (e, f, g, h), "rate_a": 100 * pa, "rate_b": 100 * pb,
