@@ -286,3 +286,41 @@ def test_identical_flights_across_processes():
     out = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
            for _ in range(2)]
     assert out[0] == out[1] and len(out[0]) == 64
+
+
+def test_guarded_fallback_brakes_when_safe_and_steers_clear_otherwise():
+    """A failed solve's acceleration under the reach guard: the plain brake when its first step keeps
+    every guard; otherwise an acceleration within a_max whose first step does, when one exists."""
+    from swarmnav.methods.nmpc.method import guarded_fallback
+
+    rng = np.random.default_rng(11)
+    h, amax = 0.2, 1.5
+    empty = (np.zeros((1, 2)), np.zeros((1, 2)), np.zeros((1, 2)), np.array([-1.0]), np.zeros(1))
+    kinds = {"brake": 0, "steered": 0}
+    for _ in range(400):
+        p0, v0 = np.zeros(2), rng.normal(0, 0.4, 2)
+        c = rng.uniform(-0.8, 0.8, (2, 2))
+        R = np.array([0.44, 0.44])
+        pb = S.Problem(p0, v0, h, 1.0, amax, np.array([1.0, 0.0]), 0.9, np.zeros((2, 3, 2)), np.zeros(2),
+                       np.zeros(2), *empty, c, R)
+        brake = _clip(-v0 / h, amax)
+        u = guarded_fallback(pb, brake)
+        assert np.linalg.norm(u) <= amax + 1e-12
+        first = lambda a: p0 + h * v0 + 0.5 * h * h * a  # noqa: E731
+        if np.all(np.linalg.norm(first(brake) - c, axis=1) >= R):
+            np.testing.assert_array_equal(u, brake)
+            kinds["brake"] += 1
+        else:
+            # is any acceleration safe? (a fine grid, finer than the filter's)
+            a = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+            grid = np.concatenate([f * amax * np.stack([np.cos(a), np.sin(a)], 1) for f in (1.0, 2 / 3, 1 / 3)])
+            safe = np.all(np.linalg.norm(first(grid)[:, None] - c[None], axis=2) >= R + 0.01, axis=1)
+            if safe.any():
+                assert np.all(np.linalg.norm(first(u) - c, axis=1) >= R)
+                kinds["steered"] += 1
+    assert kinds["brake"] >= 20 and kinds["steered"] >= 10
+
+
+def _clip(a, bound):
+    n = np.linalg.norm(a)
+    return a if n <= bound else a * bound / n
