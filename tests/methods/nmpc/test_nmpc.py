@@ -324,3 +324,20 @@ def test_guarded_fallback_brakes_when_safe_and_steers_clear_otherwise():
 def _clip(a, bound):
     n = np.linalg.norm(a)
     return a if n <= bound else a * bound / n
+
+
+def test_guarded_fallback_never_trades_an_obstacle_for_a_neighbours_worst_case():
+    """When no acceleration keeps every guard, the fallback still keeps the obstacle clearances if
+    some acceleration does: a neighbour's reach is a possible contact, an obstacle a sure one."""
+    from swarmnav.methods.nmpc.method import guarded_fallback
+
+    h = 0.2
+    # a wall (half-space) 2 cm below the robot's reach, a neighbour right above it: no step keeps the
+    # guard, and the step that comes closest to it (straight down at a_max, 3 cm) crosses the wall
+    obs = (np.array([[0.0, -0.02]]), np.zeros((1, 2)), np.array([[0.0, 1.0]]), np.array([0.0]), np.zeros(1))
+    pb = S.Problem(np.zeros(2), np.zeros(2), h, 1.0, 1.5, np.array([1.0, 0.0]), 0.9, np.zeros((1, 3, 2)),
+                   np.zeros(1), np.zeros(1), *obs, np.array([[0.0, 0.3]]), np.array([0.44]))
+    u = guarded_fallback(pb, np.zeros(2))
+    p1 = 0.5 * h * h * u
+    assert p1[1] >= -0.02 - 1e-12  # the wall kept
+    assert np.linalg.norm(p1 - [0.0, 0.3]) > 0.31  # and away from the neighbour as far as the wall lets it

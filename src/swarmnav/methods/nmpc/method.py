@@ -74,8 +74,10 @@ def _directions(D: int, n: int = 48) -> np.ndarray:
 def guarded_fallback(pb: S.Problem, u_brake: np.ndarray) -> np.ndarray:
     """The reach guard on a failed solve's acceleration (ours): among the brake ``u_brake`` and a
     fixed grid of accelerations within a_max (48 directions x 3 magnitudes, and 0), the one nearest
-    the brake whose first step keeps every reach guard and obstacle slot of ``pb``; if none does,
-    the one with the largest least margin [m]. Held for one control step like a solved plan's."""
+    the brake whose first step keeps every obstacle slot and every reach guard of ``pb``. If none
+    keeps them all: among those that keep the obstacles (a sure contact) the one with the largest
+    least guard margin (a neighbour's worst case); if none keeps the obstacles, the one with the
+    largest least margin of all [m]. Held for one control step like a solved plan's."""
     D = pb.p0.shape[0]
     dirs = _directions(D)
     cand = np.vstack([u_brake[None], np.zeros((1, D)),
@@ -83,17 +85,20 @@ def guarded_fallback(pb: S.Problem, u_brake: np.ndarray) -> np.ndarray:
     p1 = pb.p0 + pb.h * pb.v0 + 0.5 * pb.h**2 * cand  # (C, D) the first predicted position
     rc, rr = pb.reach()
     guarded = rr > 0
-    margins = [np.linalg.norm(p1[:, None, :] - rc[None, guarded], axis=2) - rr[None, guarded]]
+    guard = np.min(np.linalg.norm(p1[:, None, :] - rc[None, guarded], axis=2) - rr[None, guarded], axis=1,
+                   initial=np.inf)
     r = p1[:, None, :] - pb.obs_c[None]  # (C, M, D)
     disc = np.linalg.norm(pb.obs_s[None] * r, axis=2) - pb.obs_rho[None]
     half = np.einsum("cmd,md->cm", r, pb.obs_n) - pb.obs_rho[None]
-    margins.append(np.where(pb.obs_alpha[None] == 1.0, disc, half))
-    least = np.min(np.concatenate(margins, axis=1), axis=1, initial=np.inf)
-    ok = least >= 0
+    obst = np.min(np.where(pb.obs_alpha[None] == 1.0, disc, half), axis=1, initial=np.inf)
+    ok = (guard >= 0) & (obst >= 0)
     if ok.any():
         dist = np.where(ok, np.linalg.norm(cand - u_brake, axis=1), np.inf)
         return cand[int(np.argmin(dist))]
-    return cand[int(np.argmax(least))]
+    clear = obst >= 0
+    if clear.any():
+        return cand[int(np.argmax(np.where(clear, guard, -np.inf)))]
+    return cand[int(np.argmax(np.minimum(guard, obst)))]
 
 
 class ObstacleSlots:
