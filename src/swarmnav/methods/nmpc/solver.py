@@ -23,7 +23,11 @@ rho_j^2 for the neighbours in the constraints (rho_j = 0: none), and per obstacl
 ``alpha (|s o (p_k - c)|^2 - rho^2) + (1 - alpha) (n.(p_k - c) - rho) >= 0``: alpha = 1 a disc,
 cylinder or ball of radius rho around c (s masks the axes it spans), alpha = 0 the half-space
 beyond the tangent plane at the obstacle's nearest point c with normal n, rho away from it.
-An empty slot is alpha = 0, n = 0, rho = -1 (always met).
+An empty slot is alpha = 0, n = 0, rho = -1 (always met). After the H step blocks, K rows of the
+reach guard (ours, method.py): |p_1 - c_j|^2 >= rho_j^2 at the first predicted step only.
+
+IPOPT is warm-started from the previous plan shifted by one step and, with ``Options.warm_dual``,
+from its multipliers shifted the same way (:func:`shift_duals`).
 """
 
 from __future__ import annotations
@@ -128,8 +132,8 @@ class Options:
 
 def _build(H: int, K: int, M: int, D: int, max_iter: int | Options, tol: float = 1e-6):
     """The compiled problem of a shape (cached): variables ``U`` (H D), parameters :func:`_pack`."""
-    o_ = max_iter if isinstance(max_iter, Options) else Options(int(max_iter), float(tol))
-    key = (H, K, M, D, o_)
+    opt = max_iter if isinstance(max_iter, Options) else Options(int(max_iter), float(tol))
+    key = (H, K, M, D, opt)
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
@@ -190,11 +194,11 @@ def _build(H: int, K: int, M: int, D: int, max_iter: int | Options, tol: float =
     lbg += [0.0] * K
     ubg += [np.inf] * K
     f = f / H
-    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": int(o_.max_iter),
-            "ipopt.tol": float(o_.tol), "ipopt.acceptable_tol": float(o_.tol) * 100, "ipopt.mu_strategy": "adaptive",
-            "ipopt.acceptable_iter": int(o_.acceptable_iter), "ipopt.hessian_approximation": o_.hessian,
-            "ipopt.mu_init": float(o_.mu_init)}
-    if o_.warm_dual:
+    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": int(opt.max_iter),
+            "ipopt.tol": float(opt.tol), "ipopt.acceptable_tol": float(opt.tol) * 100, "ipopt.mu_strategy": "adaptive",
+            "ipopt.acceptable_iter": int(opt.acceptable_iter), "ipopt.hessian_approximation": opt.hessian,
+            "ipopt.mu_init": float(opt.mu_init)}
+    if opt.warm_dual:
         opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-6,
                      "ipopt.warm_start_bound_frac": 1e-6, "ipopt.warm_start_slack_bound_push": 1e-6,
                      "ipopt.warm_start_slack_bound_frac": 1e-6, "ipopt.warm_start_mult_bound_push": 1e-6})
