@@ -59,6 +59,48 @@ def crowded(gap: float, clearance: float, floor: float, shrink: float, contact: 
     return max(shrink * gap, contact + CONTACT_GAP)
 
 
+def _directions(D: int, n: int = 48) -> np.ndarray:
+    """(n, D) unit vectors spread evenly (a circle; a Fibonacci sphere in 3-D), fixed: deterministic."""
+    if D == 2:
+        a = 2 * np.pi * np.arange(n) / n
+        return np.stack([np.cos(a), np.sin(a)], axis=1)
+    k = np.arange(n) + 0.5
+    z = 1 - 2 * k / n
+    r = np.sqrt(1 - z * z)
+    a = np.pi * (1 + 5**0.5) * k
+    return np.stack([r * np.cos(a), r * np.sin(a), z], axis=1)
+
+
+def guarded_fallback(pb: S.Problem, u_brake: np.ndarray) -> np.ndarray:
+    """The reach guard on a failed solve's acceleration (ours): among the brake ``u_brake`` and a
+    fixed grid of accelerations within a_max (48 directions x 3 magnitudes, and 0), the one nearest
+    the brake whose first step keeps every obstacle slot and every reach guard of ``pb``. If none
+    keeps them all: among those that keep the obstacles (a sure contact) the one with the largest
+    least guard margin (a neighbour's worst case); if none keeps the obstacles, the one with the
+    largest least margin of all [m]. Held for one control step like a solved plan's."""
+    D = pb.p0.shape[0]
+    dirs = _directions(D)
+    cand = np.vstack([u_brake[None], np.zeros((1, D)),
+                      *(f * pb.a_max * dirs for f in (1.0, 2 / 3, 1 / 3))])
+    p1 = pb.p0 + pb.h * pb.v0 + 0.5 * pb.h**2 * cand  # (C, D) the first predicted position
+    rc, rr = pb.reach()
+    guarded = rr > 0
+    guard = np.min(np.linalg.norm(p1[:, None, :] - rc[None, guarded], axis=2) - rr[None, guarded], axis=1,
+                   initial=np.inf)
+    r = p1[:, None, :] - pb.obs_c[None]  # (C, M, D)
+    disc = np.linalg.norm(pb.obs_s[None] * r, axis=2) - pb.obs_rho[None]
+    half = np.einsum("cmd,md->cm", r, pb.obs_n) - pb.obs_rho[None]
+    obst = np.min(np.where(pb.obs_alpha[None] == 1.0, disc, half), axis=1, initial=np.inf)
+    ok = (guard >= 0) & (obst >= 0)
+    if ok.any():
+        dist = np.where(ok, np.linalg.norm(cand - u_brake, axis=1), np.inf)
+        return cand[int(np.argmin(dist))]
+    clear = obst >= 0
+    if clear.any():
+        return cand[int(np.argmax(np.where(clear, guard, -np.inf)))]
+    return cand[int(np.argmax(np.minimum(guard, obst)))]
+
+
 class ObstacleSlots:
     """The obstacles of a world as each robot's MPC sees them (module docstring, item 3)."""
 
@@ -127,6 +169,12 @@ class NmpcMethod:
         self.every = int(round(p.control_dt / p.dt))
         self.weights = S.Weights(p.w_sep, p.w_coh, p.w_dir, p.w_nav, p.w_u, p.d_ref, p.eps_v,
                                  p.direction == "signed")
+        self.options = S.Options(p.max_iter, p.tol, warm_dual=p.warm_start == "primal-dual")
+        n_sub = self.every
+        #: [m] the reach guard's least distance to a neighbour's free motion one control step on: contact,
+        #: CONTACT_GAP, the neighbour's reach in the plant (|a| <= a_max held for n substeps of the
+        #: semi-implicit Euler plant: a_max h^2 (n+1) / 2n) and this robot's plant-vs-model offset (a_max h^2 / 2n)
+        self.reach_extra = CONTACT_GAP + p.a_max * p.control_dt**2 * (n_sub + 2) / (2 * n_sub)
 
     # ------------------------------------------------------------------ contract
 
@@ -137,12 +185,14 @@ class NmpcMethod:
         n, dim = x.shape
         self.dim = dim
         self.body = scenario.rules.body_radius
+        self.reach_radius = 2 * self.body + self.reach_extra
         self.obstacles = ObstacleSlots(scenario.solid_obstacles, dim)
         self.goals = goal_slots(scenario.goal_array, x, p.goal_disc)
         self.comm = CommLog()
         self.log = PlanLog(dim)
         H = self.H
         self.U = np.zeros((n, H, dim))  # each robot's last accepted plan (accelerations)
+        self.last: list[S.Result | None] = [None] * n  # each robot's last accepted solve (its multipliers)
         self.pred = None  # (n, H, dim): predicted positions broadcast at the last control step
         self.age = np.zeros(n, dtype=np.int64)  # control steps since the plan was solved
         self.u_hold = np.zeros((n, dim))
@@ -206,16 +256,19 @@ class NmpcMethod:
         q = np.repeat(xi[None, None, :], K, axis=0) + np.zeros((K, H, D))
         c_cost = np.zeros(K)
         rho = np.zeros(K)
+        rc, rr = np.zeros((K, D)), np.zeros(K)
         need, floor = 2 * self.body + p.col_margin, 2 * self.body + p.col_margin / 2
         for s, j in enumerate(order):
             q[s] = q_all[j]
             rho[s] = crowded(float(d[j]), need, floor, p.crowd_shrink, 2 * self.body)
+            if p.reach_guard == "on":
+                rc[s], rr[s] = x[j] + p.control_dt * v[j], self.reach_radius
         ncost = min(p.max_neig, len(order))
         c_cost[:ncost] = 1.0 / max(ncost, 1)
         oc, os_, on, orho, oal = self.obstacles.slots(xi, M, p.sensing_range, self.body + p.obs_margin,
                                                         self.body + p.obs_margin / 2, p.crowd_shrink, self.body)
         return S.Problem(xi.copy(), v[i].copy(), p.control_dt, p.v_max, p.a_max, u_ref, v_ref, q, c_cost, rho,
-                         oc, os_, on, orho, oal)
+                         oc, os_, on, orho, oal, rc, rr)
 
     def _control(self, step: int, x: np.ndarray, v: np.ndarray) -> None:
         p = self.params
@@ -227,15 +280,17 @@ class NmpcMethod:
             pb = self.problem(i, x, v, q_all)
             warm = np.concatenate([self.U[i, 1:], self.U[i, -1:]], axis=0)
             t0 = time.perf_counter()
-            res = S.solve(pb, self.weights, warm, p.max_iter, p.tol, p.feas_tol)
+            res = S.solve(pb, self.weights, warm, feas_tol=p.feas_tol, options=self.options,
+                          duals=S.shift_duals(self.last[i], H, p.col_neig, D))
             self._solve_ms.append(1e3 * (time.perf_counter() - t0))
             self.stats["solves"] += 1
             self.stats["iterations"] += res.iterations
             if res.U is not None:
-                self.U[i], self.age[i] = res.U, 0
+                self.U[i], self.age[i], self.last[i] = res.U, 0, res
                 new_pred[i] = res.positions
             else:
                 self.stats["fallbacks"] += 1
+                self.last[i] = None
                 self.age[i] += 1
                 if p.fallback == "shift" and self.age[i] < H:
                     self.U[i] = warm  # the previous plan, one step on (its last acceleration held)
@@ -243,6 +298,8 @@ class NmpcMethod:
                     self.stats["brakes"] += 1
                     self.U[i] = 0.0
                     self.U[i, 0] = _clip_norm(-v[i] / h, p.a_max)
+                    if p.reach_guard == "on":
+                        self.U[i, 0] = guarded_fallback(pb, self.U[i, 0])
                 ps, _ = S.rollout(x[i], v[i], self.U[i], h)
                 new_pred[i] = np.array(ps)
             self.u_hold[i] = _clip_norm(self.U[i, 0], p.a_max)

@@ -21,20 +21,23 @@ class NmpcParams:
     #: ``paper`` turns our part off. Both keep the readings the paper leaves open.
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {
         "swarmnav": {},
-        "paper": {"crowd_shrink": 0.0, "direction": "squared"},
+        "paper": {"crowd_shrink": 0.0, "direction": "squared", "reach_guard": "off", "control_dt": 0.1},
     }
     DEFAULT_BUILD: ClassVar[str] = "swarmnav"
     PRESET_DOCS: ClassVar[dict[str, str]] = {
-        "swarmnav": "our build: the paper's controller with two parts of ours: direction=signed (forward, not "
-                    "either way along u_ref) and crowd_shrink=0.9 (a crowded start stays feasible); docs/methods/nmpc.md",
+        "swarmnav": "our build: the paper's controller with parts of ours: direction=signed (forward, not "
+                    "either way along u_ref), crowd_shrink=0.9 (a crowded start stays feasible), reach_guard=on "
+                    "(no robot-robot contact from stale predictions) and control_dt=0.2 s (20 steps over the same "
+                    "4 s: 4x less CPU); docs/methods/nmpc.md",
         "paper": "the paper's cost, constraints, horizon and weights, with the readings it leaves open",
     }
 
     # --- dynamics and control ---
     dt: float = param(0.01, "s", "[0.001, 0.1]", "SPH Table I (the shared simulation step)",
         "integration step of the simulation; the MPC acts every control_dt")
-    control_dt: float = param(0.1, "s", "[0.01, 1]", "authors' code (cl_init.m: dt = 0.1 s, 10 Hz)",
-        "MPC step: one solve per robot per control_dt, its first acceleration held (zero-order hold)")
+    control_dt: float = param(0.2, "s", "[0.01, 1]", "ours (authors' code, preset=paper: cl_init.m dt = 0.1 s)",
+        "MPC step and prediction step: one solve per robot per control_dt, its first acceleration held "
+        "(zero-order hold); 0.2 s halves the steps over the horizon and the solves (docs/methods/nmpc.md)")
     prediction_horizon: float = param(4.0, "s", "(0, 20]", "authors' code (cl_init.m: T_p = 4 s)",
         "prediction horizon: round(prediction_horizon / control_dt) steps")
     v_max: float = param(1.0, "m/s", "(0, inf)", "SPH Table I (shared)", "speed bound (norm), in the MPC and the dynamics")
@@ -70,10 +73,17 @@ class NmpcParams:
         "a neighbour or obstacle already nearer than its clearance keeps max(crowd_shrink x the present gap, the "
         "clearance less half its margin), below that max(crowd_shrink x gap, contact + 5 mm) "
         "(0 = off: such a robot's problem is infeasible, a fallback)")
+    reach_guard: Literal["on", "off"] = param("on", "", None, "ours (docs/methods/nmpc.md, Contacts)",
+        "on: the first predicted position keeps 2 body radii + 5 mm + one step of a neighbour's reach "
+        "(a_max h^2 (n+2) / 2n, h = control_dt, n = h / dt) from where each of the col_neig closest "
+        "neighbours would be one step on at its present velocity: no contact whatever they do next")
     # --- solver ---
     max_iter: int = param(100, "", "[1, 10000]", "ours", "IPOPT iterations per solve")
     tol: float = param(1e-4, "", "(0, 1)", "ours", "IPOPT tolerance")
     feas_tol: float = param(1e-4, "", "(0, 1)", "ours", "a solution violating a constraint by more is a failed solve")
+    warm_start: Literal["primal", "primal-dual"] = param("primal-dual", "", None, "ours (measured: docs/methods/nmpc.md)",
+        "IPOPT starts from the previous plan shifted by one step; primal-dual: its multipliers too "
+        "(warm_start_init_point, bound push 1e-6)")
     fallback: Literal["shift", "brake"] = param("brake", "", None, "ours (measured: docs/methods/nmpc.md)",
         "a failed solve: shift = the previous prediction's next acceleration (brake once it is used up), "
         "brake = -v / control_dt within a_max")

@@ -23,7 +23,11 @@ rho_j^2 for the neighbours in the constraints (rho_j = 0: none), and per obstacl
 ``alpha (|s o (p_k - c)|^2 - rho^2) + (1 - alpha) (n.(p_k - c) - rho) >= 0``: alpha = 1 a disc,
 cylinder or ball of radius rho around c (s masks the axes it spans), alpha = 0 the half-space
 beyond the tangent plane at the obstacle's nearest point c with normal n, rho away from it.
-An empty slot is alpha = 0, n = 0, rho = -1 (always met).
+An empty slot is alpha = 0, n = 0, rho = -1 (always met). After the H step blocks, K rows of the
+reach guard (ours, method.py): |p_1 - c_j|^2 >= rho_j^2 at the first predicted step only.
+
+IPOPT is warm-started from the previous plan shifted by one step and, with ``Options.warm_dual``,
+from its multipliers shifted the same way (:func:`shift_duals`).
 """
 
 from __future__ import annotations
@@ -73,6 +77,17 @@ class Problem:
     obs_n: np.ndarray  # (M, D) unit normal of a half-space
     obs_rho: np.ndarray  # (M,) radius / offset [m]
     obs_alpha: np.ndarray  # (M,) 1: disc, 0: half-space
+    #: the one-step reach guard (ours, method.py): |p_1 - reach_c_j| >= reach_rho_j at the first
+    #: predicted step only (reach_rho_j = 0: not constrained)
+    reach_c: np.ndarray | None = None  # (K, D) [m]
+    reach_rho: np.ndarray | None = None  # (K,) [m]
+
+    def reach(self) -> tuple[np.ndarray, np.ndarray]:
+        """(reach_c, reach_rho), zeros (never binding) when not given."""
+        K, _, D = self.q.shape
+        c = np.zeros((K, D)) if self.reach_c is None else np.asarray(self.reach_c, float)
+        r = np.zeros(K) if self.reach_rho is None else np.asarray(self.reach_rho, float)
+        return c, r
 
 
 def shape(pb: Problem) -> tuple[int, int, int, int]:
@@ -99,17 +114,31 @@ def _pack(pb: Problem, w: Weights) -> np.ndarray:
     return np.concatenate([pb.p0, pb.v0, [pb.h, pb.v_max, pb.a_max, pb.v_ref], pb.u_ref,
                            [w.w_sep, w.w_coh, w.w_dir, w.w_nav, w.w_u, w.d_ref, w.eps_v, float(w.signed)],
                            pb.q.ravel(), pb.c_cost, pb.rho_col, pb.obs_c.ravel(), pb.obs_s.ravel(),
-                           pb.obs_n.ravel(), pb.obs_rho, pb.obs_alpha]).astype(float)
+                           pb.obs_n.ravel(), pb.obs_rho, pb.obs_alpha, pb.reach()[0].ravel(), pb.reach()[1]]
+                          ).astype(float)
 
 
-def _build(H: int, K: int, M: int, D: int, max_iter: int, tol: float):
+@dataclass(frozen=True, slots=True)
+class Options:
+    """IPOPT settings of a solve (see docs/methods/nmpc.md, *Solver*)."""
+
+    max_iter: int = 50
+    tol: float = 1e-6
+    hessian: str = "exact"  # or "limited-memory" (L-BFGS)
+    warm_dual: bool = False  # warm start the multipliers too (IPOPT warm_start_init_point)
+    acceptable_iter: int = 15  # IPOPT stops at a point acceptable (tol x 100) this many iterations in a row
+    mu_init: float = 0.1  # IPOPT's initial barrier parameter (its default 0.1)
+
+
+def _build(H: int, K: int, M: int, D: int, max_iter: int | Options, tol: float = 1e-6):
     """The compiled problem of a shape (cached): variables ``U`` (H D), parameters :func:`_pack`."""
-    key = (H, K, M, D, max_iter, tol)
+    opt = max_iter if isinstance(max_iter, Options) else Options(int(max_iter), float(tol))
+    key = (H, K, M, D, opt)
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
     x = ca.SX.sym("x", 3 * H * D)  # [U (H, D), P (H, D), V (H, D)]: multiple shooting
-    npar = 2 * D + 4 + D + 8 + K * H * D + 2 * K + 3 * M * D + 2 * M
+    npar = 2 * D + 4 + D + 8 + K * H * D + 2 * K + 3 * M * D + 2 * M + K * D + K
     par = ca.SX.sym("p", npar)
     o = 0
 
@@ -127,6 +156,7 @@ def _build(H: int, K: int, M: int, D: int, max_iter: int, tol: float):
     c_cost, rho_col = take(K), take(K)
     oc, os_, on = (ca.reshape(take(M * D), D, M).T for _ in range(3))
     orho, oalpha = take(M), take(M)
+    rc, rrho = ca.reshape(take(K * D), D, K).T, take(K)
     assert o == npar
     U = ca.reshape(x[: H * D], D, H).T
     P = ca.reshape(x[H * D: 2 * H * D], D, H).T
@@ -159,9 +189,19 @@ def _build(H: int, K: int, M: int, D: int, max_iter: int, tol: float):
         g += [vv - vmax**2, ca.sumsqr(u) - amax**2]
         lbg += [0.0] * (K + M) + [-np.inf, -np.inf]
         ubg += [np.inf] * (K + M) + [0.0, 0.0]
+    for j in range(K):  # the reach guard, after every step's block (the dual shift keeps them in place)
+        g.append(ca.sumsqr(P[0, :] - rc[j, :]) - rrho[j] ** 2)
+    lbg += [0.0] * K
+    ubg += [np.inf] * K
     f = f / H
-    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": int(max_iter),
-            "ipopt.tol": float(tol), "ipopt.acceptable_tol": float(tol) * 100, "ipopt.mu_strategy": "adaptive"}
+    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": int(opt.max_iter),
+            "ipopt.tol": float(opt.tol), "ipopt.acceptable_tol": float(opt.tol) * 100, "ipopt.mu_strategy": "adaptive",
+            "ipopt.acceptable_iter": int(opt.acceptable_iter), "ipopt.hessian_approximation": opt.hessian,
+            "ipopt.mu_init": float(opt.mu_init)}
+    if opt.warm_dual:
+        opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-6,
+                     "ipopt.warm_start_bound_frac": 1e-6, "ipopt.warm_start_slack_bound_push": 1e-6,
+                     "ipopt.warm_start_slack_bound_frac": 1e-6, "ipopt.warm_start_mult_bound_push": 1e-6})
     solver = ca.nlpsol("nmpc", "ipopt", {"x": x, "p": par, "f": f, "g": ca.vertcat(*g)}, opts)
     _CACHE[key] = (solver, np.array(lbg), np.array(ubg))
     return _CACHE[key]
@@ -175,19 +215,41 @@ class Result:
     violation: float  # largest constraint violation at the returned point
     iterations: int
     status: str
+    lam_x: np.ndarray | None = None  # multipliers of the variable bounds and constraints at the point,
+    lam_g: np.ndarray | None = None  # for a warm start of the next solve (:func:`shift_duals`)
+
+
+def shift_duals(res: Result | None, H: int, K: int, D: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """The multipliers of ``res`` one control step on (each step's block moves one step earlier, the
+    last repeated; the K reach-guard rows stay), the dual half of the shifted warm start; None when
+    there are none."""
+    if res is None or res.lam_x is None or res.lam_g is None:
+        return None
+    lx = res.lam_x.reshape(3, H, D)
+    lx = np.concatenate([lx[:, 1:], lx[:, -1:]], axis=1).ravel()
+    nb = len(res.lam_g) - K
+    lg = res.lam_g[:nb].reshape(H, -1)
+    lg = np.concatenate([np.concatenate([lg[1:], lg[-1:]], axis=0).ravel(), res.lam_g[nb:]])
+    return lx, lg
 
 
 def solve(pb: Problem, w: Weights, U0: np.ndarray, max_iter: int = 50, tol: float = 1e-6,
-          feas_tol: float = 1e-4) -> Result:
-    """Solve ``pb`` with IPOPT from the guess ``U0`` (H, D) (warm start). A point is returned only
-    if IPOPT reports success and every constraint holds within ``feas_tol``."""
+          feas_tol: float = 1e-4, options: Options | None = None,
+          duals: tuple[np.ndarray, np.ndarray] | None = None) -> Result:
+    """Solve ``pb`` with IPOPT from the guess ``U0`` (H, D) (warm start; ``duals``: the multipliers'
+    guess, used when ``options.warm_dual``). ``options`` overrides ``max_iter`` and ``tol``. A point
+    is returned only if IPOPT reports success and every constraint holds within ``feas_tol``."""
     H, K, M, D = shape(pb)
-    solver, lbg, ubg = _build(H, K, M, D, max_iter, tol)
+    opt = options if options is not None else Options(int(max_iter), float(tol))
+    solver, lbg, ubg = _build(H, K, M, D, opt)
     par = _pack(pb, w)
     x0 = _shoot(pb, U0)
     if not (np.all(np.isfinite(par)) and np.all(np.isfinite(x0))):
         return Result(None, None, np.inf, np.inf, 0, "non-finite input")
-    sol = solver(x0=x0, p=par, lbg=lbg, ubg=ubg)
+    args = {"x0": x0, "p": par, "lbg": lbg, "ubg": ubg}
+    if opt.warm_dual and duals is not None and len(duals[1]) == len(lbg):
+        args["lam_x0"], args["lam_g0"] = duals
+    sol = solver(**args)
     st = solver.stats()
     status = str(st.get("return_status", "unknown"))
     iters = int(st.get("iter_count", 0))
@@ -198,7 +260,8 @@ def solve(pb: Problem, w: Weights, U0: np.ndarray, max_iter: int = 50, tol: floa
     if status not in OK_STATUS or not np.all(np.isfinite(x)) or not np.isfinite(cost) or viol > feas_tol:
         return Result(None, None, cost, viol, iters, status)
     U = x[: H * D].reshape(H, D)
-    return Result(U, x[H * D: 2 * H * D].reshape(H, D), cost, viol, iters, status)
+    return Result(U, x[H * D: 2 * H * D].reshape(H, D), cost, viol, iters, status,
+                  np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel())
 
 
 def _shoot(pb: Problem, U) -> np.ndarray:
@@ -242,6 +305,9 @@ def reference(pb: Problem, w: Weights, U: np.ndarray) -> tuple[float, np.ndarray
             else:
                 g.append(float(pb.obs_n[m] @ r) - pb.obs_rho[m])
         g += [pb.v_max**2 - vv, pb.a_max**2 - float(u @ u)]
+    rc, rr = pb.reach()
+    for j in range(K):
+        g.append(float(np.sum((ps[0] - rc[j]) ** 2)) - rr[j] ** 2)
     return f / H, np.array(g)
 
 
@@ -253,6 +319,7 @@ def evaluate(pb: Problem, w: Weights, U: np.ndarray) -> tuple[float, np.ndarray]
     f, g = fg(_shoot(pb, U), _pack(pb, w))
     g = np.asarray(g).ravel()
     dyn = np.zeros(len(g), dtype=bool)  # the dynamics rows (met by construction) are dropped
+    # (the K reach-guard rows after the H step blocks are kept)
     for k in range(H):
         dyn[k * (2 * D + K + M + 2): k * (2 * D + K + M + 2) + 2 * D] = True
     g, lbg, ubg = g[~dyn], lbg[~dyn], ubg[~dyn]
