@@ -17,8 +17,12 @@ The dimension is the scene's: on a 3-D scene (six bounds) the maps are voxel gri
 corner cutting (a diagonal step needs every cell it grazes free), the 3-D octile heuristic
 weighted by ``weight_3d`` (weighted A*: a path costs at most ``weight_3d`` times the optimum;
 the planar search keeps its fixed 1.001, a tie-break only).
-Its per-cell work arrays are kept between searches and marked by a search number, so a search
-costs what it expands, not the size of the grid (millions of voxels at 0.1 m).
+Both searches keep their per-cell work arrays between searches, marked by a search number, so a
+search costs what it expands, not the size of the grid (millions of voxels at 0.1 m). A planar
+search is a function of the robot's map (the obstacles it knows), its start and goal cells and
+the expansion cap, so the maps remember the last searches by those and answer a repeated one
+(a robot that stands still, or one at a cell where another searched from the same map) with the
+same path without searching again.
 """
 
 from __future__ import annotations
@@ -36,6 +40,12 @@ _SQRT2 = math.sqrt(2.0)
 
 #: cost-to-go fields kept per OccupancyMaps (3-D field search): a field of a 4.6-M-voxel world is 37 MB
 _FIELDS_KEPT = 6
+
+#: planar searches remembered per robot (:meth:`OccupancyMaps.search`; ~2 KB each)
+_SEARCHES_KEPT_PER_ROBOT = 8
+
+#: the planar A*'s search numbers run up to this, then its marks are cleared (int32 marks 2 id, 2 id + 1)
+_MAX_SEARCH_ID = 2**30 - 1
 
 #: heuristic weight of the field-guided A*: a tie-break only (a path costs at most 1 + 1e-6 times the optimum)
 _TIE = 1.0 + 1e-6
@@ -58,8 +68,9 @@ def grid_cells(bounds, resolution: float) -> float:
 
 def bytes_per_cell(dim: int, n_robots: int, field_3d: bool, marked: bool) -> int:
     """Bytes an :class:`OccupancyMaps` holds per grid cell, searches included: a uint8 class per
-    robot; planar A*: its cost, parent and closed arrays (17 B), a copy of the map when neighbours
-    are marked; 3-D: the search work arrays kept between searches (24 B), and either the kept
+    robot; planar A*: its cost, parent and mark arrays kept between searches (16 B, counted as the
+    17 B of the fresh arrays it once allocated), a copy of the map when neighbours are marked; 3-D:
+    the search work arrays kept between searches (24 B), and either the kept
     cost-to-go fields with the one being built (``field_3d``: 6 x 8 + 9 B) or the kept component
     labels with the passable mask being labelled (6 x 4 + 1 B)."""
     if dim == 2:
@@ -114,6 +125,13 @@ class OccupancyMaps:
         self._fields: dict[tuple, tuple] = {}  # (field, known obstacles) by (map, goal, tier); newest last
         self.fields_built = 0
         self._components: dict[tuple, np.ndarray] = {}  # passable components by (map, tier); newest last
+        self._origin = tuple(float(o) for o in self.origin)
+        # planar searches already made, by (known obstacles, start cell, goal cell, cap): a robot that
+        # stands still, or one where another stood, with the same map, repeats a search exactly
+        self._searched: dict[tuple, tuple[np.ndarray, bool]] = {}
+        self._searched_kept = _SEARCHES_KEPT_PER_ROBOT * max(n_robots, 1)
+        self._work2 = None  # the planar A*'s work arrays, made at its first search
+        self._searches2 = 0
 
     def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
         """Flat indices and clearance classes (see the module docstring) of the cells around
@@ -151,8 +169,11 @@ class OccupancyMaps:
 
     def cell(self, p: np.ndarray) -> tuple[int, ...]:
         """Grid index ``(iy, ix)`` or ``(iz, iy, ix)`` of the cell holding ``p`` [m], clamped."""
-        return tuple(int(np.clip(round((p[k] - self.origin[k]) / self.resolution), 0, self.shape[-1 - k] - 1))
-                     for k in reversed(range(self.dim)))
+        out = []
+        for k in reversed(range(self.dim)):
+            c = round((float(p[k]) - self._origin[k]) / self.resolution)  # half to even, as np.round
+            out.append(min(max(c, 0), self.shape[-1 - k] - 1))
+        return tuple(out)
 
     def center(self, *index: np.ndarray) -> np.ndarray:
         """Cell centres [m] (M, dim) of grid indices given as ``(iy, ix)`` or ``(iz, iy, ix)``."""
@@ -170,12 +191,37 @@ class OccupancyMaps:
             occ = occ.copy()  # neighbours: cells within others_radius join the wide (costly) band
             mark = _mark_balls if self.dim == 3 else _mark_discs
             mark(occ, (np.asarray(others) - self.origin) / self.resolution, others_radius / self.resolution)
+        gc = self.cell(goal)
+        sc = self.cell(start)
+        key = None
+        if self.dim == 2 and not marked:  # a planar search is a function of the map, the cells and the cap
+            key = (self.known[robot].tobytes(), sc, gc, int(max_expand))
+            found = self._searched.pop(key, None)
+            if found is None:
+                found = self._search_cells(robot, occ, sc, gc, max_expand, marked)
+                while len(self._searched) >= self._searched_kept:
+                    self._searched.pop(next(iter(self._searched)))
+            self._searched[key] = found  # most recently used last
+        else:
+            found = self._search_cells(robot, occ, sc, gc, max_expand, marked)
+        idx, at_goal = found
+        if len(idx) == 0:
+            return None
+        path = self.center(*np.unravel_index(idx, self.shape))
+        path[0] = start
+        if at_goal:  # the goal itself is free: end exactly on it
+            path[-1] = goal
+        return path
+
+    def _search_cells(self, robot: int, occ, sc, gc, max_expand, marked) -> tuple[np.ndarray, bool]:
+        """The search of :meth:`search` between the cells ``sc`` and ``gc``: ``(flat cell indices of
+        the path, empty if none; whether it ends on ``gc`` itself)``."""
         nearest_free = _nearest_free3 if self.dim == 3 else _nearest_free
         idx = np.zeros(0, dtype=np.int64)
-        gc = self.cell(goal)
+        g = gc
         top = len(self.levels) + 1
         for blocked in (top - 1, top) if top > 1 else (1,):  # keep d_thr if possible, else the body clearance
-            s = nearest_free(occ, *self.cell(start), 40, blocked)
+            s = nearest_free(occ, *sc, 40, blocked)
             g = nearest_free(occ, *gc, 40, blocked)
             if s[0] >= 0 and g[0] >= 0:
                 if self.dim == 3 and self.field_3d and not marked:
@@ -186,13 +232,7 @@ class OccupancyMaps:
                     idx = self._astar(occ, s, g, max_expand, blocked)
                 if len(idx):
                     break
-        if len(idx) == 0:
-            return None
-        path = self.center(*np.unravel_index(idx, self.shape))
-        path[0] = start
-        if g == gc:  # the goal itself is free: end exactly on it
-            path[-1] = goal
-        return path
+        return idx, g == gc
 
     def _connected(self, robot: int, occ, s, g, blocked) -> bool:
         """Whether voxels ``s`` and ``g`` lie in one connected component of ``robot``'s passable
@@ -243,7 +283,17 @@ class OccupancyMaps:
     def _astar(self, occ, s, g, max_expand, blocked) -> np.ndarray:
         """Flat cell indices of the A* path between free cells ``s`` and ``g`` (empty: none)."""
         if self.dim == 2:
-            return _astar(occ, s[0], s[1], g[0], g[1], max_expand, blocked, self.cost)
+            if self._work2 is None or self._searches2 >= _MAX_SEARCH_ID:
+                n = occ.size
+                self._work2 = (np.empty(n), np.empty(n, dtype=np.int32), np.zeros(n, dtype=np.int32),
+                               np.empty(1024), np.empty(1024, dtype=np.int64))
+                self._searches2 = 0
+            self._searches2 += 1
+            g_, parent, mark, keys, vals = self._work2
+            idx, keys, vals = _astar(occ, s[0], s[1], g[0], g[1], max_expand, blocked, self.cost,
+                                     self._searches2, g_, parent, mark, keys, vals)
+            self._work2 = (g_, parent, mark, keys, vals)
+            return idx
         self._searches += 1
         gcost, parent, seen, closed, keys, vals = self._work
         idx, keys, vals = _astar3(occ, s, g, max_expand, blocked, self.cost, _STEPS3, self._searches,
@@ -330,6 +380,10 @@ def _nearest_free(occ, iy, ix, max_r, blocked):
 
 @njit(cache=True)
 def _heap_push(keys, vals, size, key, val):
+    """Push ``(key, val)`` on the binary min-heap ``keys[:size]``, ``vals[:size]`` (grown by doubling
+    when full). The new entry moves up while its parent's key is larger (a hole moves instead of
+    swaps: the same comparisons and the same arrangement as swapping). Returns the arrays and the
+    new size."""
     if size == keys.shape[0]:
         nk = np.empty(2 * size)
         nv = np.empty(2 * size, dtype=np.int64)
@@ -337,37 +391,45 @@ def _heap_push(keys, vals, size, key, val):
         nv[:size] = vals
         keys, vals = nk, nv
     k = size
-    keys[k] = key
-    vals[k] = val
     while k > 0:
         p = (k - 1) // 2
-        if keys[p] <= keys[k]:
+        kp = keys[p]
+        if kp <= key:
             break
-        keys[p], keys[k] = keys[k], keys[p]
-        vals[p], vals[k] = vals[k], vals[p]
+        keys[k] = kp
+        vals[k] = vals[p]
         k = p
+    keys[k] = key
+    vals[k] = val
     return keys, vals, size + 1
 
 
 @njit(cache=True)
 def _heap_pop(keys, vals, size):
+    """Pop the root of the heap: the last entry moves down from the root while the smaller child
+    (the left one on a tie) has a smaller key (a hole, as in :func:`_heap_push`). Returns the
+    root's value and the new size."""
     val = vals[0]
     size -= 1
-    keys[0] = keys[size]
-    vals[0] = vals[size]
+    key = keys[size]
+    last = vals[size]
     k = 0
     while True:
         l = 2 * k + 1
         if l >= size:
             break
         c = l
-        if l + 1 < size and keys[l + 1] < keys[l]:
+        kc = keys[l]
+        if l + 1 < size and keys[l + 1] < kc:
             c = l + 1
-        if keys[k] <= keys[c]:
+            kc = keys[c]
+        if key <= kc:
             break
-        keys[c], keys[k] = keys[k], keys[c]
-        vals[c], vals[k] = vals[k], vals[c]
+        keys[k] = kc
+        vals[k] = vals[c]
         k = c
+    keys[k] = key
+    vals[k] = last
     return val, size
 
 
@@ -388,52 +450,65 @@ def _walk_back(parent, s, goal):
 
 
 @njit(cache=True)
-def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost):
+def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost, sid, g, parent, mark, keys, vals):
     """A* over the cells with ``occ < blocked`` of an 8-connected grid, step length 1 (diagonal
     sqrt(2)) times ``cost[occ]`` of the entered cell (all >= 1), no corner cutting, octile
-    heuristic (ties broken towards larger g). Returns flat cell indices start -> goal, empty
-    if the goal is unreachable within ``max_expand`` expansions."""
+    heuristic (ties broken towards larger g). Returns ``(flat cell indices start -> goal, empty
+    if the goal is unreachable within max_expand expansions, keys, vals)`` (the heap arrays,
+    possibly grown).
+
+    The work arrays ``g`` (cost), ``parent`` (int32) and ``mark`` (int32) are kept between
+    searches: for search number ``sid`` a cell is unseen while ``mark < 2 sid``, seen with a
+    valid ``g`` and ``parent`` at ``2 sid`` and closed at ``2 sid + 1``, so nothing is cleared
+    and a search costs what it expands, not the size of the grid."""
     ny, nx = occ.shape
-    n = ny * nx
-    g = np.full(n, np.inf)
-    parent = np.full(n, -1, dtype=np.int64)
-    closed = np.zeros(n, dtype=np.bool_)
-    keys = np.empty(1024)
-    vals = np.empty(1024, dtype=np.int64)
+    of = occ.ravel()
+    opened = 2 * sid
+    done = opened + 1
     s = sy * nx + sx
     goal = gy * nx + gx
     g[s] = 0.0
+    mark[s] = opened
+    parent[s] = -1
     keys, vals, size = _heap_push(keys, vals, 0, 0.0, s)
-    dys = np.array([-1, -1, -1, 0, 0, 1, 1, 1])
-    dxs = np.array([-1, 0, 1, -1, 1, -1, 0, 1])
+    dys = (-1, -1, -1, 0, 0, 1, 1, 1)
+    dxs = (-1, 0, 1, -1, 1, -1, 0, 1)
     expanded = 0
     found = False
     while size > 0:
         cur, size = _heap_pop(keys, vals, size)
-        if closed[cur]:
+        if mark[cur] == done:
             continue
         if cur == goal:
             found = True
             break
-        closed[cur] = True
+        mark[cur] = done
         expanded += 1
         if expanded > max_expand:
             break
         cy = cur // nx
         cx = cur - cy * nx
+        gcur = g[cur]
         for k in range(8):
-            y = cy + dys[k]
-            x = cx + dxs[k]
-            if y < 0 or y >= ny or x < 0 or x >= nx or occ[y, x] >= blocked:
-                continue
-            diag = dys[k] != 0 and dxs[k] != 0
-            if diag and (occ[cy, x] >= blocked or occ[y, cx] >= blocked):
+            dy = dys[k]
+            dx = dxs[k]
+            y = cy + dy
+            x = cx + dx
+            if y < 0 or y >= ny or x < 0 or x >= nx:
                 continue
             nb = y * nx + x
-            if closed[nb]:
+            o = of[nb]
+            if o >= blocked:
                 continue
-            ng = g[cur] + (1.4142135623730951 if diag else 1.0) * cost[occ[y, x]]
-            if ng < g[nb]:
+            diag = dy != 0 and dx != 0
+            if diag and (of[cy * nx + x] >= blocked or of[y * nx + cx] >= blocked):
+                continue
+            m = mark[nb]
+            if m == done:
+                continue
+            ng = gcur + (1.4142135623730951 if diag else 1.0) * cost[o]
+            if m != opened or ng < g[nb]:
+                mark[nb] = opened
                 g[nb] = ng
                 parent[nb] = cur
                 ady = abs(gy - y)
@@ -441,8 +516,8 @@ def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost):
                 h = (ady + adx) + (1.4142135623730951 - 2.0) * min(ady, adx)
                 keys, vals, size = _heap_push(keys, vals, size, ng + h * 1.001, nb)
     if not found:
-        return np.zeros(0, dtype=np.int64)
-    return _walk_back(parent, s, goal)
+        return np.zeros(0, dtype=np.int64), keys, vals
+    return _walk_back(parent, s, goal), keys, vals
 
 
 @njit(cache=True)

@@ -34,6 +34,7 @@ import math
 from typing import Literal
 
 import numpy as np
+from numba import njit
 
 Kernel = Literal["paper", "released"]
 
@@ -115,16 +116,11 @@ def sph_forces(
         d = x[i] - x[j]  # q_ij
         r = np.sqrt(np.einsum("pd,pd->p", d, d))
         w = m * kernel_value(r, h, c, kind)
-        np.add.at(rho, i, w)
-        np.add.at(rho, j, w)
         rs = np.maximum(r, r_floor)
         unit = d / rs[:, None]
         g = kernel_slope(r, h, c, kind)[:, None] * unit  # grad_i W(q_ij); grad_j W(q_ji) = -g
-        np.add.at(grad_sum, i, g)
-        np.add.at(grad_sum, j, -g)
         f = unit / rs[:, None]  # q_ij / |q_ij|^2
-        np.add.at(rep, i, f)
-        np.add.at(rep, j, -f)
+        _scatter_pairs(i, j, w, g, f, rho, grad_sum, rep)
     pressure = -k_den / rho * ((rho / rho0) ** gamma - 1.0)
     parts = {
         "density": pressure[:, None] * grad_sum,
@@ -132,6 +128,30 @@ def sph_forces(
         "viscosity": -k_vis * v,
     }
     return parts["density"] + parts["repulsive"] + parts["viscosity"], rho, parts
+
+
+@njit(cache=True)
+def _scatter_pairs(i, j, w, g, f, rho, grad_sum, rep):
+    """The pair terms summed per agent, in the order of ``np.add.at`` (pairs in order, first the
+    ``i`` ends, then the ``j`` ends: the same sums to the last bit): ``rho[i] += w``,
+    ``rho[j] += w``, ``grad_sum[i] += g``, ``grad_sum[j] -= g``, ``rep[i] += f``, ``rep[j] -= f``."""
+    P, D = g.shape
+    for p in range(P):
+        rho[i[p]] += w[p]
+    for p in range(P):
+        rho[j[p]] += w[p]
+    for p in range(P):
+        for k in range(D):
+            grad_sum[i[p], k] += g[p, k]
+    for p in range(P):
+        for k in range(D):
+            grad_sum[j[p], k] += -g[p, k]
+    for p in range(P):
+        for k in range(D):
+            rep[i[p], k] += f[p, k]
+    for p in range(P):
+        for k in range(D):
+            rep[j[p], k] += -f[p, k]
 
 
 def environment_force(d: np.ndarray, grad_d: np.ndarray, k_env: float, d_thr: float) -> np.ndarray:

@@ -11,8 +11,7 @@ rollout are the component-level ones, as HES logs them: a sub-swarm breaking int
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from numba import njit
 
 from swarmnav.sensing import neighbor_pairs, segments_blocked
 from swarmnav.world.obstacles import Geometry
@@ -34,13 +33,33 @@ def components(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     """(n,) sub-swarm label of every agent: the smallest agent index of its connected
     component in the graph with edges ``(i, j)`` (stable while a component keeps its
     lowest-indexed member)."""
-    if n == 0:
-        return np.zeros(0, dtype=np.int32)
-    adj = coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
-    _, comp = connected_components(adj, directed=False)
-    first = np.full(comp.max() + 1, n, dtype=np.int64)
-    np.minimum.at(first, comp, np.arange(n))
-    return first[comp].astype(np.int32)
+    out = np.empty(n, dtype=np.int32)
+    _smallest_member(n, np.asarray(i, dtype=np.int64), np.asarray(j, dtype=np.int64), out)
+    return out
+
+
+@njit(cache=True)
+def _smallest_member(n, i, j, out):
+    """Union-find over the edges, each set rooted at its smallest member (so the root is the
+    label, whatever the order of the unions); writes every agent's root into ``out``."""
+    root = np.arange(n)
+    for e in range(i.shape[0]):
+        a, b = i[e], j[e]
+        while root[a] != a:  # path halving
+            root[a] = root[root[a]]
+            a = root[a]
+        while root[b] != b:
+            root[b] = root[root[b]]
+            b = root[b]
+        if a < b:
+            root[b] = a
+        elif b < a:
+            root[a] = b
+    for k in range(n):
+        r = k
+        while root[r] != r:
+            r = root[r]
+        out[k] = r
 
 
 def structural_events(prev: np.ndarray, new: np.ndarray) -> list[dict]:
@@ -75,6 +94,11 @@ def link_changes(prev_visible: np.ndarray, in_range: np.ndarray, visible: np.nda
     A pair within R that is visible now and was not is a merge (line 8); one within R that is
     occluded now and was visible is a split (line 10). A pair that left R is neither.
     """
-    merges = int(np.count_nonzero(~np.isin(in_range[visible], prev_visible, assume_unique=True)))
-    splits = int(np.count_nonzero(np.isin(in_range[~visible], prev_visible, assume_unique=True)))
-    return merges, splits
+    prev = np.asarray(prev_visible, dtype=np.int64)
+    keys = np.asarray(in_range, dtype=np.int64)
+    visible = np.asarray(visible, dtype=bool)
+    if len(prev) == 0:
+        return int(np.count_nonzero(visible)), 0
+    pos = np.minimum(np.searchsorted(prev, keys), len(prev) - 1)
+    was = prev[pos] == keys  # a binary search in the sorted previous keys
+    return int(np.count_nonzero(visible & ~was)), int(np.count_nonzero(~visible & was))
