@@ -54,7 +54,7 @@ FACTS = (
          r"^([\d.]+) / ([\d.]+) / ([\d.]+) ms$", "docs/methods/hes.md",
          _ws(r"([\d.]+), ([\d.]+) and ([\d.]+) ms per step")),
     Fact("SPH planning per replan, guard: median and p95 ranges [ms]", "SPH planning, per robot per replan (`guard`",
-         r"^median ([\d.]+)–([\d.]+) ms, p95 ([\d.]+)–([\d.]+) ms$", "docs/reproduction.md",
+         r"^median ([\d.]+)–([\d.]+) ms, p95 ([\d.]+)–([\d.]+) ms$", "docs/reproduction/table2.md",
          r"\| SPH \(`guard`\) \| ([\d.]+)–([\d.]+) ms \| ([\d.]+)–([\d.]+) ms \|"),
     Fact("vem step at N = 1e5, ours / NumPy + cKDTree [ms] and ratio", "`vem` step, N = 1e5",
          r"^([\d.]+) ms; ([\d.]+)x faster than the usual NumPy \+ cKDTree Vicsek step measured beside it \(([\d.]+) ms\)$",
