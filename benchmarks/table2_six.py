@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import collections
 import csv
+import re
 import sys
 import tomllib
 from importlib import resources
@@ -60,12 +61,13 @@ def main(store: str) -> None:
                     continue
                 ok = [r for r in rs if float(r["sph_success"]) == 1.0]
                 dist, tim = col(ok, "flight_distance"), col(ok, "flight_time")
-                print(f"| {fam} | {d} | {seeds} | {len(rs)} | {100 * len(ok) / len(rs):.0f} | "
+                line = (f"| {fam} | {d} | {seeds} | {len(rs)} | {100 * len(ok) / len(rs):.0f} | "
                       f"{dist.mean():.1f} ± {dist.std():.1f} | {tim.mean():.1f} ± {tim.std():.1f} | "
                       f"{col(ok, 'avg_velocity').mean():.2f} | {np.median(col(ok, 'jerk_energy')):.3g} | "
                       f"{col(rs, 'comm_mbps').mean():.3f} | {col(rs, 'crashes').mean():.1f} | "
                       f"{col(rs, 'min_inter_robot_distance').min():.3f} | "
-                      f"{col(rs, 'min_robot_obstacle_distance').min():.3f} |")
+                        f"{col(rs, 'min_robot_obstacle_distance').min():.3f} |")
+                print(re.sub(r"(?<=\| )nan( ± nan)?(?= \|)", "–", line))  # no successful trial: no value
             p = paper[PAPER_ROW[fam]]
             if fam.endswith("-paper") or not any(groups.get((fam, d, s)) for s in ("1–20", "21–40")):
                 continue
