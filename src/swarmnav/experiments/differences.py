@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from scipy import stats as sps
 
-from swarmnav.experiments.paired import seed_ranges
+from swarmnav.experiments.paired import _number, seed_ranges
 
 TITLE = "Paired differences, B − A (95 % interval)"
 
@@ -222,13 +222,6 @@ def pair_difference(rows: list[dict], a: str, b: str, success: str, metrics: lis
         xa, xb = (np.array([p[i] for p in ok], dtype=float) for i in (0, 1))
         out[m] = mean_difference(xa, xb, confidence)
     return PairDifference(a, b, tuple(seeds), table, diff, out, "; ".join(notes))
-
-
-def _number(v: Any) -> float:
-    try:
-        return float(v)
-    except (TypeError, ValueError):
-        return math.nan
 
 
 #: Columns of ``report_files/differences.csv`` before the per-metric ones.

@@ -95,13 +95,19 @@ def check_variants(pair: tuple[str, str] | list[str], known: list[str], where: s
         raise ConfigError(f"{where}: expected two variant names, got {list(pair)}")
     for name in pair:
         if name not in known:
-            close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
-            hint = f" (did you mean {', '.join(close)}?)" if close else ""
-            shown = ", ".join(known[:12]) + (f", … ({len(known)} in all)" if len(known) > 12 else "")
-            raise ConfigError(f"{where}: unknown variant '{name}'{hint}; variants: {shown}")
+            raise ConfigError(f"{where}: unknown variant '{name}'{unknown_hint(name, known)}")
     if pair[0] == pair[1]:
         raise ConfigError(f"{where}: compare two different variants, got '{pair[0]}' twice")
     return pair[0], pair[1]
+
+
+def unknown_hint(name: str, known: list[str]) -> str:
+    """What a one-line error about an unknown variant ``name`` adds: the closest known names, then
+    the known ones (the first 12)."""
+    close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
+    hint = f" (did you mean {', '.join(close)}?)" if close else ""
+    shown = ", ".join(known[:12]) + (f", … ({len(known)} in all)" if len(known) > 12 else "")
+    return f"{hint}; variants: {shown}"
 
 
 def pair_rows(rows: list[dict], experiment: str, a: str, b: str, metrics: list[str]) -> Paired:

@@ -9,7 +9,6 @@ ends, after a rerun, with exactly the runs of an uninterrupted sweep.
 from __future__ import annotations
 
 import csv
-import difflib
 import fnmatch
 import math
 import os
@@ -23,6 +22,7 @@ from swarmnav.errors import ConfigError, SwarmnavError
 from swarmnav.experiments import stats
 from swarmnav.experiments.backends import BACKENDS
 from swarmnav.experiments.jobs import Job, plan, variant_key
+from swarmnav.experiments.paired import unknown_hint
 from swarmnav.experiments.spec import Experiment
 from swarmnav.experiments.store import Store
 
@@ -165,10 +165,7 @@ def select_variants(names: list[str], patterns: Sequence[str]) -> set[str]:
     for pat in patterns:
         hit = {n for n in names if fnmatch.fnmatchcase(n, pat)}
         if not hit:
-            close = difflib.get_close_matches(pat, names, n=3, cutoff=0.5)
-            hint = f" (did you mean {', '.join(close)}?)" if close else ""
-            shown = ", ".join(names[:12]) + (f", … ({len(names)} in all)" if len(names) > 12 else "")
-            raise ConfigError(f"--variants: '{pat}' matches no variant{hint}; variants: {shown}")
+            raise ConfigError(f"--variants: '{pat}' matches no variant{unknown_hint(pat, names)}")
         out |= hit
     return out
 
