@@ -24,18 +24,21 @@ import numpy as np
 R_GOAL = 3.0  # [m] the Table II rule (swarmnav.metrics.flight.FlightParams.r_goal)
 
 
-def crowd(n: int, preset: str, horizon: float, seed: int) -> tuple[float, float, float, float]:
-    """(largest, median distance to the goal at the end [m], share within R_GOAL, largest 5 s earlier [m])."""
+def crowd(n: int, preset: str, horizon: float, seed: int, overrides: dict | None = None
+          ) -> tuple[float, float, float, float, float]:
+    """(largest, median distance to the goal at the end [m], share within R_GOAL, largest 5 s
+    earlier [m], closest two robots over the run [m])."""
     import swarmnav
     from swarmnav.world import from_dict
 
     scn = from_dict({"name": "crowd", "world": {"bounds": [-40.0, -40.0, 60.0, 40.0]},
                      "swarm": {"n": n, "spawn": [-12.0, -6.0, 0.0, 6.0]}, "goal": {"position": [20.0, 0.0]}})
-    res = swarmnav.run("sph", scn, seed=seed, horizon=horizon, preset=preset)
+    res = swarmnav.run("sph", scn, seed=seed, horizon=horizon, preset=preset, **(overrides or {}))
     dt = horizon / (res.positions.shape[0] - 1)
     r = np.linalg.norm(res.positions - np.array([20.0, 0.0]), axis=2)
     earlier = r[max(0, len(r) - 1 - round(5.0 / dt))]
-    return float(r[-1].max()), float(np.median(r[-1])), float(np.mean(r[-1] <= R_GOAL)), float(earlier.max())
+    return (float(r[-1].max()), float(np.median(r[-1])), float(np.mean(r[-1] <= R_GOAL)), float(earlier.max()),
+            float(res.metrics["min_inter_robot_distance"]))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -44,6 +47,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--preset", default="queue,guard", help="SPH presets, comma separated")
     ap.add_argument("--horizon", type=float, default=90.0, help="simulated time [s]")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="SPH parameter applied on top of every preset (repeatable), e.g. rep_cutoff=2")
     a = ap.parse_args(argv)
     try:
         sizes = [int(s) for s in a.n.split(",")]
@@ -56,16 +61,24 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sph_goal_crowd: --horizon must be more than 5 s, got {a.horizon}", file=sys.stderr)
         return 2
     from swarmnav.errors import ConfigError
+    overrides = {}
+    for kv in a.set:
+        key, eq, value = kv.partition("=")
+        if not eq:
+            print(f"sph_goal_crowd: --set wants KEY=VALUE, got {kv!r}", file=sys.stderr)
+            return 2
+        overrides[key.strip()] = value.strip()  # the method's parameter record coerces it
 
-    print(f"{'preset':<9} {'N':>4} {'largest [m]':>12} {'median [m]':>11} {'within 3 m':>11} {'largest 5 s before [m]':>23}")
+    print(f"{'preset':<9} {'N':>4} {'largest [m]':>12} {'median [m]':>11} {'within 3 m':>11} "
+          f"{'largest 5 s before [m]':>23} {'min r-r [m]':>12}")
     for preset in a.preset.split(","):
         for n in sizes:
             try:
-                big, med, share, before = crowd(n, preset, a.horizon, a.seed)
+                big, med, share, before, rr = crowd(n, preset, a.horizon, a.seed, overrides)
             except ConfigError as e:
                 print(f"sph_goal_crowd: {e}", file=sys.stderr)
                 return 2
-            print(f"{preset:<9} {n:>4} {big:>12.2f} {med:>11.2f} {share:>11.2f} {before:>23.2f}", flush=True)
+            print(f"{preset:<9} {n:>4} {big:>12.2f} {med:>11.2f} {share:>11.2f} {before:>23.2f} {rr:>12.3f}", flush=True)
     return 0
 
 

@@ -24,6 +24,16 @@ within ``r_goal`` of the goal (the horizon K if it never is). Then
   radius), else 0.0; its mean over trials is Table II's Rate. Both carry the paper's name
   because they are its test, not the run's: a method that does not gather within ``r_goal``
   by design (HES parks on its encircle ring ~6 m out) scores 0 here with Y = 1 (docs/metrics.md);
+- ``sph_swarm_goal_radius``, ``sph_swarm_arrived_fraction``, ``sph_swarm_success``: the success test for any
+  swarm size (issue 36; docs/metrics.md, *Success for a swarm*). The goal disc grows with the
+  swarm so that it holds N robots at the density at which 15 fill the Table II disc:
+  ``r(N) = r_goal sqrt(max(N, n_ref) / n_ref)`` [m] (3 m up to 15 robots, 4.24 m for 30, 6 m
+  for 60, 7.75 m for 100). A robot has arrived once it has been inside r(N) at some step;
+  ``sph_swarm_success`` is 1.0 if every robot arrived by the horizon, none ever touched another or
+  an obstacle (the contact rule of ``sph_success``) and none crashed, else 0.0. Arrival rather
+  than presence at the last step: a swarm's task is to cross the field to the goal, and where
+  its robots settle after arriving depends on the method's spacing rule, not on navigation;
+  contacts after arrival still fail the run;
 - ``coordination_time``: first time the swarm moves as one body (Fig. 6): the speed of its
   centre, ``|mean_i v_i|``, first reaches ``phi_coord`` times its median over the flight up
   to the first arrival (the cruise, free of the crowding at the goal) [s] (horizon if never).
@@ -51,6 +61,7 @@ class FlightParams:
     broadcast_hz: float = 10.0  # position broadcast rate [Hz], SPH paper Section IV-A
     msg_bytes: int = 64  # position message [B]: 3 x float64 position, float64 stamp, uint32 id,
     #                      UDP (8) + IPv4 (20) headers (our choice; the paper gives none; planning/messages.py)
+    n_ref: int = 15  # swarm size the r_goal disc is made for (Table II's 15 robots) [-]
     phi_coord: float = 0.8  # coordinated once the swarm's centre moves at this fraction of its
     #                         median flight speed [-] (our choice; the paper does not define it)
 
@@ -63,6 +74,7 @@ def flight_metrics(
     dt: float,
     params: FlightParams = FlightParams(),
     min_pair: float | None = None,
+    crashed: np.ndarray | None = None,
 ) -> dict[str, float]:
     """Table II metrics of one run (see the module docstring).
 
@@ -72,6 +84,7 @@ def flight_metrics(
         goal: (d,) goal [m]; dt: step of the recorded states [s].
         min_pair: the smallest robot-robot distance of the run [m] if already known (the rollout
             passes navigation_metrics' ``min_inter_agent_distance``: one pass over the run, not two).
+        crashed: (N,) robots the referee found crashed (None: none); they fail ``sph_swarm_success``.
     """
     K = positions.shape[0] - 1
     n = positions.shape[1]
@@ -91,6 +104,10 @@ def flight_metrics(
     min_obs = float(clearance.min()) if clearance.size else float("inf")
     touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
     success = bool(inside[-1].all()) and not touched
+    r_swarm = p.r_goal * float(np.sqrt(max(n, p.n_ref) / p.n_ref))
+    arrived = (dist_goal <= r_swarm).any(axis=0)  # (N,) inside r(N) at some step
+    crash_free = crashed is None or not bool(np.any(crashed))
+    swarm_success = bool(arrived.all()) and not touched and crash_free
     centre = norms(velocities.mean(axis=1))  # (K + 1,) common-mode speed [m/s]
     cruise = float(np.median(centre[: max(int(arrival.min()), 1) + 1]))  # before anyone has arrived
     coord = centre >= p.phi_coord * cruise
@@ -105,5 +122,8 @@ def flight_metrics(
         "min_robot_obstacle_distance": min_obs,
         "sph_arrived_fraction": float(inside[-1].mean()),
         "sph_success": float(success),
+        "sph_swarm_goal_radius": r_swarm,
+        "sph_swarm_arrived_fraction": float(arrived.mean()),
+        "sph_swarm_success": float(swarm_success),
         "coordination_time": t_coord,
     }

@@ -220,7 +220,7 @@ def run(
         # jumps would count as path and jerk, and there is no goal to arrive at (docs/metrics.md).
         # Same pairs, same contact distance: the minimum is reused, not searched again.
         metrics.update(flight_metrics(P, V, C, scn.goal_array, dt, FlightParams(body_radius=rules.body_radius),
-                                      min_pair=metrics["min_inter_agent_distance"]))
+                                      min_pair=metrics["min_inter_agent_distance"], crashed=crashed))
     metrics.update(m.summary())
     result.metrics = metrics
     timings = getattr(m, "timings", None)  # optional hook: wall-clock figures, never metrics

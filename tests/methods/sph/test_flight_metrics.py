@@ -76,3 +76,40 @@ def test_coordination_time_ignores_weaving_and_scales_with_the_ramp():
     assert flight_metrics(P, V, C, far, DT)["coordination_time"] == pytest.approx(1.6)
     # the same flight at half the speed: the same time (relative to the run's own cruise)
     assert flight_metrics(P / 2, V / 2, C, far, DT)["coordination_time"] == pytest.approx(1.6)
+
+
+def test_swarm_goal_disc_grows_with_the_square_root_of_the_swarm():
+    for n, r in ((1, 3.0), (15, 3.0), (30, 3.0 * np.sqrt(2)), (60, 6.0), (100, 3.0 * np.sqrt(100 / 15))):
+        P, V, C = _line(n=n, y_gap=0.5)
+        assert flight_metrics(P, V, C, GOAL, DT)["sph_swarm_goal_radius"] == pytest.approx(r)
+
+
+def test_swarm_success_asks_for_arrival_not_presence_at_the_end():
+    P, V, C = _line(n=1, steps=200)
+    P[150:, 0, 1] = np.linspace(0.0, 8.0, 51)  # at the goal at 15 s, then drifts 8 m sideways
+    m = flight_metrics(P, V, C, GOAL, DT)
+    assert m["sph_success"] == 0.0 and m["sph_arrived_fraction"] == 0.0  # not inside at the end
+    assert m["sph_swarm_success"] == 1.0 and m["sph_swarm_arrived_fraction"] == 1.0  # but it arrived
+
+
+def test_swarm_of_sixty_inside_its_disc_succeeds_where_the_three_metre_test_fails():
+    n = 60
+    ang = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = GOAL + 5.0 * np.column_stack([np.cos(ang), np.sin(ang)])  # 60 robots 0.52 m apart, 5 m out
+    P = np.repeat(ring[None], 11, axis=0)
+    V, C = np.zeros_like(P), np.full(P.shape[:2], np.inf)
+    m = flight_metrics(P, V, C, GOAL, DT)
+    assert m["sph_swarm_goal_radius"] == pytest.approx(6.0)
+    assert m["sph_swarm_success"] == 1.0 and m["sph_success"] == 0.0
+    far = P.copy()
+    far[:, 0] += np.array([2.0, 0.0])  # one robot 7 m out never arrives
+    assert flight_metrics(far, V, C, GOAL, DT)["sph_swarm_success"] == 0.0
+
+
+def test_swarm_success_fails_on_contact_after_arrival_and_on_a_crash():
+    P, V, C = _line(n=2, y_gap=1.0)
+    P[-1, 1] = P[-1, 0] + np.array([0.3, 0.0])  # arrived, then 0.3 m from the other robot
+    assert flight_metrics(P, V, C, GOAL, DT)["sph_swarm_success"] == 0.0
+    P, V, C = _line(n=2, y_gap=1.0)
+    assert flight_metrics(P, V, C, GOAL, DT)["sph_swarm_success"] == 1.0
+    assert flight_metrics(P, V, C, GOAL, DT, crashed=np.array([False, True]))["sph_swarm_success"] == 0.0

@@ -37,7 +37,7 @@ def test_released_kernel_is_the_integer_division_evaluation():
     np.testing.assert_allclose(kernel_slope(r, H, C, "released"), sig * H * np.where(k <= 1, -3 * k + 2 * k**2, 0.0))
 
 
-def _loop_forces(x, v, pairs, kind, rho0=1e6, k_den=1.0, k_rep=1.0, k_vis=1.5, gamma=7.0):
+def _loop_forces(x, v, pairs, kind, rho0=1e6, k_den=1.0, k_rep=1.0, k_vis=1.5, gamma=7.0, rep_cutoff=0.0):
     """Plain per-agent loop of Algorithm 1 (lines 5-10), the oracle of the vectorised one."""
     n = len(x)
     nb = {a: [] for a in range(n)}
@@ -54,7 +54,8 @@ def _loop_forces(x, v, pairs, kind, rho0=1e6, k_den=1.0, k_rep=1.0, k_vis=1.5, g
             q = x[a] - x[b]
             r = np.linalg.norm(q)
             grad += kernel_slope(np.array([r]), H, C, kind)[0] * q / r
-            rep += q / r**2
+            if rep_cutoff == 0 or r < rep_cutoff:
+                rep += q / r**2
         out[a] = -k_den / rho * ((rho / rho0) ** gamma - 1) * grad + k_rep * rep - k_vis * v[a]
     return out
 
@@ -73,6 +74,23 @@ def test_vectorised_forces_match_the_loop(kind, dim):
     np.testing.assert_allclose(f, _loop_forces(x, v, pairs, kind), rtol=1e-10, atol=1e-12)
     # repulsion is pairwise antisymmetric: it sums to zero over the swarm
     np.testing.assert_allclose(parts["repulsive"].sum(axis=0), 0.0, atol=1e-10)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_repulsion_cut_off_drops_only_the_pairs_beyond_it(dim):
+    rng = np.random.default_rng(5)
+    x = rng.uniform(-4, 4, (12, dim))
+    v = rng.normal(size=(12, dim))
+    pairs = [(a, b) for a in range(12) for b in range(a + 1, 12)]
+    i, j = np.array(pairs).T
+    kw = dict(h=H, c=C, m=1.0, k_den=1.0, k_rep=1.0, k_vis=1.5, rho0=1e6, gamma=7.0)
+    f, _, parts = sph_forces(x, v, i, j, rep_cutoff=3.0, **kw)
+    np.testing.assert_allclose(f, _loop_forces(x, v, pairs, "paper", rep_cutoff=3.0), rtol=1e-10, atol=1e-12)
+    _, _, full = sph_forces(x, v, i, j, **kw)
+    assert not np.allclose(parts["repulsive"], full["repulsive"])  # some pairs are beyond 3 m
+    np.testing.assert_array_equal(parts["density"], full["density"])  # the cut-off is line 9's only
+    _, _, wide = sph_forces(x, v, i, j, rep_cutoff=100.0, **kw)  # beyond every pair: the paper's sum
+    np.testing.assert_array_equal(wide["repulsive"], full["repulsive"])
 
 
 def test_density_term_attracts_below_and_repels_above_the_reference_density():

@@ -87,6 +87,7 @@ def sph_forces(
     gamma: float,
     kind: Kernel = "paper",
     r_floor: float = 0.05,
+    rep_cutoff: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """Density, pressure/density force, repulsion and viscosity of Algorithm 1 (lines 5-10).
 
@@ -96,6 +97,10 @@ def sph_forces(
             visible neighbours within R (Algorithm 2) are passed in.
         r_floor: distances are floored here in the 1/r repulsion [m] (a finite force at
             coincident agents; our choice, never reached in a collision-free run).
+        rep_cutoff: 0 (the paper): line 9 sums over every pair passed in. Positive: only pairs
+            closer than ``rep_cutoff`` [m] repel, with line 9's unchanged 1/r (a hard cut, as the
+            released code's neighbour search cuts every pair term at 2h; ours,
+            docs/methods/sph.md, *A crowd that does not crush itself*).
 
     Returns:
         ``(force (N, D), density (N,), parts)``: the sum of the three inter-agent terms
@@ -120,6 +125,8 @@ def sph_forces(
         unit = d / rs[:, None]
         g = kernel_slope(r, h, c, kind)[:, None] * unit  # grad_i W(q_ij); grad_j W(q_ji) = -g
         f = unit / rs[:, None]  # q_ij / |q_ij|^2
+        if rep_cutoff > 0:  # ours: no repulsion from robots beyond the cut-off
+            f[r >= rep_cutoff] = 0.0
         _scatter_pairs(i, j, w, g, f, rho, grad_sum, rep)
     pressure = -k_den / rho * ((rho / rho0) ** gamma - 1.0)
     parts = {

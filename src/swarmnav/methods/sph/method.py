@@ -164,7 +164,8 @@ class Sph:
         self._prev_visible = keys[vis]
         # Algorithm 1 over the visible neighbours, plus the ESDF environment force
         force, _, _ = sph_forces(x, v, vi, vj, h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep, k_vis=p.k_vis,
-                                 rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor)
+                                 rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor,
+                                 rep_cutoff=p.rep_cutoff)
         if not p.swarm_vertical and x.shape[1] == 3:  # released 3-D: Algorithm 1 acts in x, y only
             force[:, 2] = 0.0
         d, grad = self.esdf.query(x)

@@ -113,6 +113,10 @@ class SphParams:
         "tracking law and the obstacle force (False: the released sph_zhang_3d.cpp, whose z command "
         "has no SPH term)")
     r_floor: float = param(0.05, "m", "(0, inf)", "ours", "distance floor in the 1/r repulsion (finite force)")
+    rep_cutoff: float = param(0.0, "m", "[0, inf)", "ours",
+        "cut-off of the 1/r repulsion (Alg. 1 line 9): only robots closer than this repel, with the "
+        "paper's k_rep / r, so a large crowd does not press its edge robots into obstacles "
+        "(0 = none, the paper: every visible robot within R)")
     esdf_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "ESDF grid, as the released sdf_map")
     grid_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "grid-search cell, as the released A*")
     max_map_bytes: int = param(2 * 2**30, "B", "[1, inf)", "ours",
