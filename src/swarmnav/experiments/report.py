@@ -282,7 +282,8 @@ def line_series(t: dict, lines_cfg: dict) -> dict[str, dict[str, lines.Line]]:
     ``density = 0.15``), the points ``(x, mean, low, high, runs, dropped)`` by increasing x, each the
     mean over a variant's finished seeds with its 95 % interval (Wilson's for a 0/1 metric,
     Student-t otherwise; :mod:`swarmnav.experiments.lines`). ``t`` is :func:`build_tables`' result.
-    A table that does not fit the store's variants is a one-line ConfigError."""
+    A table that does not fit the store's variants is a one-line ConfigError, two variants at one
+    point of a line a ValueError."""
     placed = [(v["name"], v["variables"]) for v in t["variants"]]
     names = {k for _, vals in placed for k in vals}
     lines.check(lines_cfg, placed, names, "[report.lines]")
@@ -298,7 +299,10 @@ def _lines_figure(t: dict) -> tuple[Any, str]:
     """``lines.png`` of the spec's ``[report.lines]`` (None if it cannot be drawn) and the report's
     paragraph on it."""
     cfg = t["lines"]
-    data = line_series(t, cfg)
+    try:
+        data = line_series(t, cfg)
+    except ValueError as e:  # two variants on one point: a sweep that does not spread along x
+        return None, f"Line figure (`[report.lines]`): not drawn, {e}."
     x = cfg["x"]
     xs = sorted({float(p) for panel in data.values() for line in panel.values() for p in line.x})
     empty = [m for m, panel in data.items() if not any(line.runs.sum() for line in panel.values())]
