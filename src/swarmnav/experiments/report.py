@@ -308,6 +308,9 @@ def _lines_figure(t: dict) -> tuple[Any, str]:
     empty = [m for m, panel in data.items() if not any(line.runs.sum() for line in panel.values())]
     panels = {m: panel for m, panel in data.items() if m not in empty}
     missing = f" No finished run has {', '.join(f'`{m}`' for m in empty)}." if empty else ""
+    apart = [v["name"] for v in t["variants"] if x not in v["variables"]]
+    if apart:  # a spec's [[variants]] beside its matrix over x
+        missing += f" Not drawn (no `{x}` of their own): {', '.join(apart[:6])}{' ...' if len(apart) > 6 else ''}."
     if len(xs) < 2 or not panels:
         why = f"the variants take one value of `{x}`" if len(xs) < 2 else "no metric it names has values"
         return None, f"Line figure (`[report.lines]`): not drawn, {why}.{missing}"
