@@ -15,8 +15,8 @@ names. Every other variable the variants differ by (a second ``--set`` sweep, sa
 splits the lines further: one line per combination, labelled ``density = 0.15, preset = queue``.
 
 A point is the mean over the seeds of one variant with its 95 % interval: Wilson's score interval
-for a 0/1 metric (every value of the metric 0 or 1, e.g. ``sph_success``), the Student-t interval
-of the mean otherwise (:mod:`swarmnav.experiments.differences`); non-finite values (a run that
+for a 0/1 outcome (:data:`BINARY_METRICS`, e.g. ``sph_success``), the Student-t interval of the
+mean otherwise (:mod:`swarmnav.experiments.differences`); non-finite values (a run that
 never got there) are left out of the point and counted.
 """
 
@@ -31,6 +31,9 @@ from swarmnav.errors import ConfigError
 from swarmnav.experiments import differences
 
 KEYS = ("x", "series", "metrics", "title")
+#: Per-run 0/1 outcomes, drawn as rates with Wilson intervals. Named, not guessed from the values:
+#: a fraction (``Y``, ``R_goal``) or a count (``N_swarm``, ``collisions``) may be all 0 or 1 in a sweep.
+BINARY_METRICS = ("sph_success", "sph_swarm_success", "converged", "success_rate")
 
 
 class Line(NamedTuple):
@@ -138,8 +141,11 @@ def interval(vals: np.ndarray, binary: bool) -> tuple[float, float, float]:
     return iv.estimate, iv.low, iv.high
 
 
-def is_binary(per_variant: list[np.ndarray]) -> bool:
-    """A 0/1 metric: every finite value of every variant is 0 or 1 (and there is one)."""
+def is_binary(metric: str, per_variant: list[np.ndarray]) -> bool:
+    """A 0/1 outcome: one of :data:`BINARY_METRICS`, and every finite value of every variant is 0
+    or 1 (and there is one)."""
+    if metric not in BINARY_METRICS:
+        return False
     vals = np.concatenate([np.asarray(v, dtype=float) for v in per_variant] or [np.zeros(0)])
     vals = vals[np.isfinite(vals)]
     return len(vals) > 0 and bool(np.all((vals == 0.0) | (vals == 1.0)))
@@ -178,7 +184,7 @@ def figure(panels: dict[str, dict[str, Line]], binary: dict[str, bool], x: str, 
         if binary[m]:
             ax.set_ylim(-0.05, 1.05)
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{title}: mean over seeds with its 95 % interval (Wilson's for a 0/1 metric, "
+    fig.suptitle(f"{title}: mean over seeds with its 95 % interval (Wilson's for a 0/1 outcome, "
                  f"Student-t otherwise)", fontsize=10)
     if len(handles) > 1 or (handles and handles[0].get_label() not in metrics):
         fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 4), fontsize=8, frameon=False)

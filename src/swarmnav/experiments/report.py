@@ -280,8 +280,9 @@ def variant_variables(v: dict, overrides: dict[str, str]) -> dict[str, Any]:
 def line_series(t: dict, lines_cfg: dict) -> dict[str, dict[str, lines.Line]]:
     """The data of ``lines.png`` (a spec's ``[report.lines]``): per metric, per line (label
     ``density = 0.15``), the points ``(x, mean, low, high, runs, dropped)`` by increasing x, each the
-    mean over a variant's finished seeds with its 95 % interval (Wilson's for a 0/1 metric,
-    Student-t otherwise; :mod:`swarmnav.experiments.lines`). ``t`` is :func:`build_tables`' result.
+    mean over a variant's finished seeds with its 95 % interval (Wilson's for a 0/1 outcome,
+    Student-t otherwise; :mod:`swarmnav.experiments.lines`). ``t`` is :func:`build_tables`' result,
+    which holds the values of the stored spec's ``[report]`` and ``[report.lines]`` metrics.
     A table that does not fit the store's variants is a one-line ConfigError, two variants at one
     point of a line a ValueError."""
     placed = [(v["name"], v["variables"]) for v in t["variants"]]
@@ -291,7 +292,7 @@ def line_series(t: dict, lines_cfg: dict) -> dict[str, dict[str, lines.Line]]:
     out = {}
     for m in lines_cfg["metrics"]:
         values = {v["name"]: v["values"].get(m, np.zeros(0)) for v in t["variants"]}
-        out[m] = lines.series_of(drawn, values, lines.is_binary(list(values.values())))
+        out[m] = lines.series_of(drawn, values, lines.is_binary(m, list(values.values())))
     return out
 
 
@@ -314,14 +315,15 @@ def _lines_figure(t: dict) -> tuple[Any, str]:
     if len(xs) < 2 or not panels:
         why = f"the variants take one value of `{x}`" if len(xs) < 2 else "no metric it names has values"
         return None, f"Line figure (`[report.lines]`): not drawn, {why}.{missing}"
-    binary = {m: lines.is_binary([v["values"].get(m, np.zeros(0)) for v in t["variants"]]) for m in panels}
+    binary = {m: lines.is_binary(m, [v["values"].get(m, np.zeros(0)) for v in t["variants"]]) for m in panels}
     labels = {m: _header(m) for m in [x, *panels]}
     fig = lines.figure(panels, binary, x, cfg.get("title") or t["title"], labels)
     dropped = {m: int(sum(line.dropped.sum() for line in panel.values())) for m, panel in panels.items()}
     left = "; ".join(f"`{m}`: {k} non-finite runs left out" for m, k in dropped.items() if k)
     series = f", one line per `{cfg['series']}`" if cfg.get("series") else ""
     return fig, (f"Line figure (`lines.png`): each metric against `{x}`{series}; a point is the mean over a "
-                 f"variant's seeds with its 95 % interval (Wilson's for a 0/1 metric, Student-t otherwise)."
+                 f"variant's seeds with its 95 % interval (Wilson's for a 0/1 outcome such as `sph_success`, "
+                 f"Student-t otherwise)."
                  + (f" {left}." if left else "") + missing)
 
 
