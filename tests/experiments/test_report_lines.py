@@ -184,3 +184,34 @@ def test_sph_scaling_draws_its_metrics_against_n_one_line_per_density():
     assert len(exp.variants) == 16 and exp.report["lines"]["x"] == "n"
     assert {(v.variables["n"], v.variables["density"]) for v in exp.variants} == \
         {(n, d) for n in (15, 30, 60, 100) for d in ("0.15", "0.25", "0.35", "0.45")}
+
+
+def test_a_stored_lines_table_that_does_not_fit_the_store_exits_2_from_report(tiny, tmp_path, capsys):
+    import shutil
+
+    d = tmp_path / "copy"
+    shutil.copytree(tiny, d)
+    store = Store(d)
+    meta = store.meta("experiment:tiny-lines")
+    meta["report"]["lines"] = {"x": "steps", "metrics": ["flight_time"]}  # as an edited or older record might say
+    store.set_meta("experiment:tiny-lines", meta)
+    capsys.readouterr()
+    assert main(["report", str(d), "--no-viewers"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "[report.lines] x must be a variable" in err and "'steps'" in err
+
+
+def test_variants_on_one_point_are_a_note_and_no_figure(tiny, tmp_path):
+    import shutil
+
+    d = tmp_path / "copy"
+    shutil.copytree(tiny, d)
+    store = Store(d)
+    meta = store.meta("experiment:tiny-lines")
+    for v in meta["variants"]:  # as `--set n=4` over the matrix would record them
+        v["variables"]["n"] = 4
+    store.set_meta("experiment:tiny-lines", meta)
+    assert main(["report", str(d), "--no-viewers"]) == 0
+    md = (d / "report.md").read_text()
+    assert "Line figure (`[report.lines]`): not drawn, variants '2[density=0.1]' and '4[density=0.1]'" in md
+    assert not (d / "report_files" / "lines.png").exists() and "lines.png" not in md
