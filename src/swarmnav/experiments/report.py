@@ -5,7 +5,9 @@ values beside them when the experiment's spec names a reference table of the pac
 ``paper_results.toml``; figures are bars with error bars (HES Figures 4 and 9) and per-seed
 box plots (HES Figure 7). For two variants, the paired-seed percent change of one against the
 other (HES Figure 5, :mod:`swarmnav.experiments.paired`); for the pairs a spec's
-``[report.differences]`` lists, B − A with 95 % intervals (:mod:`swarmnav.experiments.differences`).
+``[report.differences]`` lists, B − A with 95 % intervals (:mod:`swarmnav.experiments.differences`);
+for a spec's ``[report.lines]``, metrics against a sweep variable, one line per value of another
+(SPH Fig. 6, :mod:`swarmnav.experiments.lines`).
 Reads the store only; never runs a simulation.
 """
 
@@ -14,6 +16,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+import itertools
 import re
 import tomllib
 from importlib import resources
@@ -23,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav.errors import SwarmnavError
-from swarmnav.experiments import differences, paired
+from swarmnav.experiments import differences, lines, paired
 from swarmnav.experiments import stats
 from swarmnav.experiments.store import DB_NAME, Store
 
@@ -217,6 +220,8 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
     rows = job_rows(store, meta)
     spec = meta.get("report") or {}
     metric_names = report_metrics(meta, rows)
+    line_spec = spec.get("lines") or None
+    wanted = list(dict.fromkeys(metric_names + list((line_spec or {}).get("metrics") or [])))
     ref_root = _lookup(paper_results(), spec["reference"]) if spec.get("reference") else None
     vmap = spec.get("variant_map") or {}
     planned: dict[str, int] = {}  # runs the stored spec plans per variant: its (variant, seed) jobs
@@ -227,7 +232,7 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
         mine = [r for r in rows if r["variant"] == v["name"]]
         done = [r for r in mine if r["status"] == "done"]
         per_metric = {}
-        for m in metric_names:
+        for m in wanted:
             vals = np.array([float(r["metrics"][m]) for r in done if m in r["metrics"]
                              and r["metrics"][m] is not None], dtype=float)
             per_metric[m] = vals
@@ -238,6 +243,7 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
         ref = _lookup(ref_root, key) if isinstance(ref_root, dict) else None
         row_name = key.strip('"') + (f" [{index}]" if index is not None else "")
         variants.append({"name": v["name"], "runs": len(mine), "done": len(done), "values": per_metric,
+                         "variables": variant_variables(v, meta.get("overrides") or {}),
                          "planned": planned.get(v["name"], 0), "failed": len(mine) - len(done),
                          "seeds": [r["seed"] for r in done], "build": build_label(mine[0] if mine else None),
                          "build_named": names_build(mine[0] if mine else None),
@@ -247,9 +253,78 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
     return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
             "variants": variants, "reference": spec.get("reference"), "reference_index": None,
             "title": spec.get("title") or experiment, "n_runs": len(rows), "compare": spec.get("compare"),
-            "differences": spec.get("differences"),
+            "differences": spec.get("differences"), "lines": line_spec,
             "planned": len(meta["jobs"]), "seed_list": list(meta.get("seeds") or []),
             "overrides": meta.get("overrides")}
+
+
+def variant_variables(v: dict, overrides: dict[str, str]) -> dict[str, Any]:
+    """What places a stored variant in its sweep (``Variant.variables``: [matrix] values, scenario
+    variables, --set values). A store written before they were recorded: the variant's run columns
+    (``n``, ``method``, ``scenario``, ``steps``) and parameters, and the values of the --set sweeps
+    (recovered by matching the name against each combination of the recorded sweep values)."""
+    if "variables" in v:
+        return dict(v["variables"])
+    cols = v.get("columns") or {}
+    out = {k: cols[k] for k in ("method", "scenario", "steps", "n") if cols.get(k) not in (None, "")}
+    out.update({k[len("param."):]: x for k, x in cols.items() if k.startswith("param.")})
+    swept = {k: str(val).split("|") for k, val in overrides.items() if len(str(val).split("|")) > 1}
+    for combo in itertools.product(*swept.values()):
+        suffix = "[" + ",".join(f"{k}={c}" for k, c in zip(swept, combo)) + "]"
+        if swept and v["name"].endswith(suffix):
+            out.update(zip(swept, combo))
+            break
+    return out
+
+
+def line_series(t: dict, lines_cfg: dict) -> dict[str, dict[str, lines.Line]]:
+    """The data of ``lines.png`` (a spec's ``[report.lines]``): per metric, per line (label
+    ``density = 0.15``), the points ``(x, mean, low, high, runs, dropped)`` by increasing x, each the
+    mean over a variant's finished seeds with its 95 % interval (Wilson's for a 0/1 outcome,
+    Student-t otherwise; :mod:`swarmnav.experiments.lines`). ``t`` is :func:`build_tables`' result,
+    which holds the values of the stored spec's ``[report]`` and ``[report.lines]`` metrics.
+    A table that does not fit the store's variants is a one-line ConfigError, two variants at one
+    point of a line a ValueError."""
+    placed = [(v["name"], v["variables"]) for v in t["variants"]]
+    names = {k for _, vals in placed for k in vals}
+    lines.check(lines_cfg, placed, names, "[report.lines]")
+    drawn = lines.lines(placed, lines_cfg["x"], lines_cfg.get("series"))
+    out = {}
+    for m in lines_cfg["metrics"]:
+        values = {v["name"]: v["values"].get(m, np.zeros(0)) for v in t["variants"]}
+        out[m] = lines.series_of(drawn, values, lines.is_binary(m, list(values.values())))
+    return out
+
+
+def _lines_figure(t: dict) -> tuple[Any, str]:
+    """``lines.png`` of the spec's ``[report.lines]`` (None if it cannot be drawn) and the report's
+    paragraph on it."""
+    cfg = t["lines"]
+    try:
+        data = line_series(t, cfg)
+    except ValueError as e:  # two variants on one point: a sweep that does not spread along x
+        return None, f"Line figure (`[report.lines]`): not drawn, {e}."
+    x = cfg["x"]
+    xs = sorted({float(p) for panel in data.values() for line in panel.values() for p in line.x})
+    empty = [m for m, panel in data.items() if not any(line.runs.sum() for line in panel.values())]
+    panels = {m: panel for m, panel in data.items() if m not in empty}
+    missing = f" No finished run has {', '.join(f'`{m}`' for m in empty)}." if empty else ""
+    apart = [v["name"] for v in t["variants"] if x not in v["variables"]]
+    if apart:  # a spec's [[variants]] beside its matrix over x
+        missing += f" Not drawn (no `{x}` of their own): {', '.join(apart[:6])}{' ...' if len(apart) > 6 else ''}."
+    if len(xs) < 2 or not panels:
+        why = f"the variants take one value of `{x}`" if len(xs) < 2 else "no metric it names has values"
+        return None, f"Line figure (`[report.lines]`): not drawn, {why}.{missing}"
+    binary = {m: lines.is_binary(m, [v["values"].get(m, np.zeros(0)) for v in t["variants"]]) for m in panels}
+    labels = {m: _header(m) for m in [x, *panels]}
+    fig = lines.figure(panels, binary, x, cfg.get("title") or t["title"], labels)
+    dropped = {m: int(sum(line.dropped.sum() for line in panel.values())) for m, panel in panels.items()}
+    left = "; ".join(f"`{m}`: {k} non-finite runs left out" for m, k in dropped.items() if k)
+    series = f", one line per `{cfg['series']}`" if cfg.get("series") else ""
+    return fig, (f"Line figure (`lines.png`): each metric against `{x}`{series}; a point is the mean over a "
+                 f"variant's seeds with its 95 % interval (Wilson's for a 0/1 outcome such as `sph_success`, "
+                 f"Student-t otherwise)."
+                 + (f" {left}." if left else "") + missing)
 
 
 def completeness(t: dict) -> str:
@@ -310,7 +385,7 @@ def _cell(vals: np.ndarray) -> str:
 
 
 def _header(m: str) -> str:
-    u = UNITS.get(m)
+    u = UNITS.get(m) or ("ms" if m.startswith("time.") and "_ms" in m else None)
     return f"{m} [{u}]" if u else m
 
 
@@ -617,6 +692,14 @@ def write_report(directory: str | Path, experiment: str | None = None,
     else:  # an earlier report's comparison would otherwise stay beside this one
         for ext in ("png", "svg", "csv"):
             (files / f"paired.{ext}").unlink(missing_ok=True)
+    lines_note = ""
+    if t["lines"]:
+        fig, lines_note = _lines_figure(t)
+        if fig is not None:
+            charts.append(("lines", fig))
+    if not any(stem == "lines" for stem, _ in charts):
+        for ext in ("png", "svg"):
+            (files / f"lines.{ext}").unlink(missing_ok=True)
     diff_spec = t["differences"]
     if diff_spec:
         diff_metrics = list(diff_spec.get("metrics") or [])
@@ -640,6 +723,8 @@ def write_report(directory: str | Path, experiment: str | None = None,
           "", settings(t), "", ref_note]
     if pair_note:
         md += ["", pair_note]
+    if lines_note:
+        md += ["", lines_note]
     for tab in tabs:
         md += ["", f"## {tab['title']}", ""] + ([tab["note"], ""] if tab.get("note") else [])
         md += ["| " + " | ".join(c["label"] for c in tab["columns"]) + " |",
@@ -681,6 +766,7 @@ img {{ max-width: 100%; }}
 <p>{_inline_html(settings(t))}</p>
 <p>{_inline_html(ref_note)}</p>
 {f"<p>{_inline_html(pair_note)}</p>" if pair_note else ""}
+{f"<p>{_inline_html(lines_note)}</p>" if lines_note else ""}
 <section id="results">
 {"".join(_html_table(tab) for tab in tabs)}</section>
 {imgs}

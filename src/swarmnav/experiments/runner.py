@@ -190,8 +190,8 @@ def _spec_meta(exp: Experiment, jobs: list[Job]) -> dict:
     return {
         "name": exp.name, "description": exp.description, "seeds": list(exp.seeds),
         "overrides": dict(exp.overrides),
-        "variants": [{"name": v.name, "columns": v.columns(), "config": variant_key(first[v.name])}
-                     for v in exp.variants],
+        "variants": [{"name": v.name, "columns": v.columns(), "config": variant_key(first[v.name]),
+                      "variables": v.variables} for v in exp.variants],
         "keys": [j.key for j in jobs], "jobs": [[j.key, j.variant.name, j.seed] for j in jobs], "report": exp.report,
     }
 

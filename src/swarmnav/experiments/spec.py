@@ -28,6 +28,8 @@ the pair of variants whose paired-seed percent changes (B against A) the report 
 ``[report.differences]`` table lists pairs ``[A, B]`` whose B − A the report gives with 95 %
 intervals: ``success = "sph_success"`` (a 0/1 metric), ``metrics = ["flight_distance"]``
 (continuous, over the seeds where both succeeded) and ``pairs = [["sph/0.15", "mader/0.15"]]``.
+A ``[report.lines]`` table draws metrics against a variable, one line per value of another
+(:mod:`swarmnav.experiments.lines`): ``x = "n"``, ``series = "density"``, ``metrics = [...]``.
 
 ``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
 ``n`` (swarm size), a declared scenario variable, or a method parameter. ``key=a|b|c`` sweeps:
@@ -49,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmnav.errors import ConfigError
+from swarmnav.experiments import lines
 from swarmnav.experiments.paired import check_variants
 from swarmnav.params import coerce, flatten
 
@@ -56,7 +59,7 @@ _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "
               "matrix",
               "report", "scenario_vars"}
 _REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "metric_map", "figures", "compare",
-                "differences"}
+                "differences", "lines"}
 _DIFFERENCES_KEYS = {"success", "metrics", "pairs"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "horizon", "n", "params"}
@@ -74,6 +77,9 @@ class Variant:
     n: int | None = None
     params: dict[str, Any] = field(default_factory=dict)
     horizon: float | None = None  # [s] if set, steps = horizon / the method's dt (equal time across methods)
+    #: what places the variant in the sweep: its [matrix] values, the scenario variables and the
+    #: --set values (``{"n": 15, "density": "0.25"}``); the report's line figure reads x and series here
+    variables: dict[str, Any] = field(default_factory=dict)
 
     def columns(self) -> dict[str, Any]:
         """Config columns of runs.csv for this variant."""
@@ -130,12 +136,14 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
     matrix = data.get("matrix", {})
     if not isinstance(matrix, dict) or set(matrix) - _MATRIX_KEYS:
         raise ConfigError(f"{source}: [matrix] may only list {sorted(_MATRIX_KEYS)}")
+    placed = [{} for _ in raw_variants]  # each variant's matrix values
     if matrix:
         axes = list(matrix)
         lists = [m if isinstance(m, list) else [m] for m in matrix.values()]
         for combo in itertools.product(*lists):
             raw_variants.append({"name": "/".join(str(c) for c in combo), **dict(zip(axes, combo))})
-    raw_variants = raw_variants or [{"name": "default"}]
+            placed.append(dict(zip(axes, combo)))
+    raw_variants, placed = (raw_variants, placed) if raw_variants else ([{"name": "default"}], [{}])
     report = data.get("report", {})
     if not isinstance(report, dict) or set(report) - _REPORT_KEYS:
         raise ConfigError(f"{source}: [report] unknown key(s) {sorted(set(report) - _REPORT_KEYS)} "
@@ -157,7 +165,7 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
             cfg["steps"] = steps_for(str(cfg["method"]), params, horizon)
         variants.append(Variant(
             name=str(v.get("name", f"v{k}")), method=str(cfg["method"]), scenario=str(cfg["scenario"]),
-            steps=int(cfg["steps"]), n=cfg.get("n"), params=params, horizon=horizon,
+            steps=int(cfg["steps"]), n=cfg.get("n"), params=params, horizon=horizon, variables=placed[k],
         ))
     svars = data.get("scenario_vars", {})
     if not isinstance(svars, dict) or set(svars) & (_RUN_KEYS | {"seed"}) or not all(
@@ -171,6 +179,9 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
     if "differences" in report:
         _check_differences(report["differences"], [v.name for v in variants], f"{source}: [report.differences]")
     variants = _apply_overrides(variants, overrides, svars)
+    if "lines" in report:
+        lines.check(report["lines"], [(v.name, v.variables) for v in variants], set(matrix) | set(svars) | set(overrides),
+                    f"{source}: [report.lines]")
     _check_params(variants, source)
     seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
     names = [v.name for v in variants]
@@ -245,7 +256,8 @@ def _fill_scenario(template: str, values: dict[str, Any]) -> str:
 def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: dict[str, Any]) -> list[Variant]:
     if not overrides:
         return [Variant(name=v.name, method=v.method, scenario=_fill_scenario(v.scenario, svars), steps=v.steps,
-                        n=v.n, params=v.params, horizon=v.horizon) for v in variants]
+                        n=v.n, params=v.params, horizon=v.horizon, variables={**v.variables, **svars})
+                for v in variants]
     keys = list(overrides)
     choices = [str(overrides[k]).split("|") for k in keys]
     swept = [k for k, c in zip(keys, choices) if len(c) > 1]
@@ -274,7 +286,10 @@ def _apply_overrides(variants: list[Variant], overrides: dict[str, str], svars: 
                 cfg["steps"] = steps_for(cfg["method"], params, horizon)
             suffix = ",".join(f"{k}={val}" for k, val in zip(keys, combo) if k in swept)
             name = f"{v.name}[{suffix}]" if suffix else v.name
-            out.append(Variant(name=name, params=params, horizon=horizon, **cfg))
+            variables = {**v.variables, **values, **dict(zip(keys, combo))}
+            if "n" in keys:
+                variables["n"] = cfg["n"]
+            out.append(Variant(name=name, params=params, horizon=horizon, variables=variables, **cfg))
     return out
 
 
