@@ -11,7 +11,8 @@ from swarmnav.params import param
 #: The paper build's values of the parameters in which it differs from the default build
 #: (``swarmnav``); every other preset starts from it.
 PAPER: dict[str, Any] = {"plan_v_max": 0.0, "ref_reset": 0.5, "yield_range": 0.0, "goal_reset": 0.0,
-                         "band_guard": False, "retime": 0.0, "by_dim": False}
+                         "band_guard": False, "retime": 0.0, "by_dim": False,
+                         "rep_cutoff": 0.0, "crowd_guard": False}
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,6 +118,10 @@ class SphParams:
         "cut-off of the 1/r repulsion (Alg. 1 line 9): only robots closer than this repel, with the "
         "paper's k_rep / r, so a large crowd does not press its edge robots into obstacles "
         "(0 = none, the paper: every visible robot within R)")
+    crowd_guard: bool = param(False, "", None, "ours",
+        "inside the obstacle band (d < d_thr) the swarm's push (Alg. 1 density and repulsion terms) "
+        "loses its component towards the obstacle, as band_guard does for the tracking term: a crowd "
+        "may push a robot along an obstacle, never into it")
     esdf_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "ESDF grid, as the released sdf_map")
     grid_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "grid-search cell, as the released A*")
     max_map_bytes: int = param(2 * 2**30, "B", "[1, inf)", "ours",
