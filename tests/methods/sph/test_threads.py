@@ -15,7 +15,9 @@ import swarmnav
 from swarmnav.cli import main
 from swarmnav.experiments import load_experiment, plan
 from swarmnav.methods import registry
+from swarmnav.methods.sph.method import map_bytes
 from swarmnav.params import as_dict, identity
+from swarmnav.planning.maps import grid_cells
 from swarmnav.world import load_scenario
 
 FOREST_2D = "random_forest:density=0.35,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0"
@@ -87,3 +89,9 @@ def test_threads_from_the_cli_and_experiment_specs_leave_the_run_key_alone(tmp_p
     plain, threaded = (plan(load_experiment("sph-scaling", overrides=o, seeds="1-2")) for o in ({}, {"threads": "2"}))
     assert [j.key for j in plain] == [j.key for j in threaded]
     assert all(j.variant.params["threads"] == "2" for j in threaded)
+
+
+def test_the_map_limit_counts_every_threads_search_arrays():
+    scn = load_scenario(FOREST_2D, n=15)
+    one, two = (map_bytes(scn, registry.make("sph", threads=t).params) for t in (1, 2))
+    assert two - one == 17 * grid_cells(scn.bounds, registry.make("sph").params.grid_resolution)

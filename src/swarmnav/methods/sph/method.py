@@ -56,12 +56,13 @@ _YIELD_BYTES = {2: 330, 3: 970}
 def map_bytes(scenario: Scenario, p: SphParams) -> float:
     """Memory [B] the maps of an SPH run on ``scenario`` take at once: the ESDF (8 B a node at
     ``esdf_resolution``), the robots' occupancy grids with their searches
-    (:func:`~swarmnav.planning.maps.bytes_per_cell` at ``grid_resolution``) and, with
+    (:func:`~swarmnav.planning.maps.bytes_per_cell` at ``grid_resolution``, one set of search
+    work arrays per planning thread) and, with
     yielding on, the yield field being built (at ``yield_resolution``)."""
     b, d = scenario.bounds, scenario.dim
     need = 8.0 * grid_nodes(b, p.esdf_resolution)
     need += grid_cells(b, p.grid_resolution) * bytes_per_cell(d, scenario.n, p.search_3d == "field",
-                                                              p.plan_neighbours > 0)
+                                                              p.plan_neighbours > 0, p.threads)
     if p.yield_range > 0:
         step = max(1, int(round(p.yield_resolution / p.esdf_resolution)))
         need += _YIELD_BYTES[d] * grid_nodes(b, p.esdf_resolution * step)
