@@ -10,7 +10,7 @@ Trials (each in a fresh subprocess, one after the other, so no run warms another
 - ``threads T``: the ``sph-scaling`` trial (the Table II forest, 8 m x 8 m spawn area) at
   ``--density`` with ``--n`` robots, forest and run seed ``--seed``, ``--horizon`` seconds, default
   build, ``threads = T``;
-- ``gil`` (``--gil-horizon`` seconds, 0 skips it): the same trial with one thread, every compiled
+- ``gil`` (``--gil-horizon`` seconds, default the same, 0 skips it): the trial with one thread, every compiled
   kernel that releases the GIL (the A* searches, the L-BFGS spline) timed, to give the share of the
   planning time that can run in parallel and the share of the run that planning is.
 
@@ -98,7 +98,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--horizon", type=float, default=90.0, help="simulated seconds of each trial")
     ap.add_argument("--threads", default="1,2", help="thread counts to fly, the first is the baseline")
-    ap.add_argument("--gil-horizon", type=float, default=15.0, help="simulated seconds of the GIL trial (0: skip)")
+    ap.add_argument("--gil-horizon", type=float, default=-1.0,
+                    help="simulated seconds of the GIL trial (default: --horizon; 0: skip)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--threads-one", dest="threads_one", type=int, default=1, help=argparse.SUPPRESS)
     ap.add_argument("--gil", action="store_true", help=argparse.SUPPRESS)
@@ -119,6 +120,8 @@ def main() -> None:
         same = "same" if r["digest"] == base["digest"] else "DIFFERENT"
         print(f"{t:>7} {r['wall']:>7.1f} {r['cpu']:>7.1f} {r['sim'] / r['wall']:>7.2f} "
               f"{base['wall'] / r['wall']:>7.2f}x {r['plan']:>8.2f} {r['digest']:>13} {same}", flush=True)
+    if a.gil_horizon < 0:
+        a.gil_horizon = a.horizon
     if a.gil_horizon > 0:
         g = trial(a, 1, a.gil_horizon, gil=True)
         free = g["nogil"] / g["plan_total"]

@@ -23,6 +23,7 @@ trilinear ESDF) and the grid search (8- or 26-connected) differ, chosen by the s
 
 from __future__ import annotations
 
+import itertools
 import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, NamedTuple
@@ -161,8 +162,8 @@ class Sph:
         self._coord_ms: list[float] = []
         self._log_plans = PlanLog(scenario.dim)
         self.close()  # a pool of an earlier run that was not closed
-        if p.threads > 1:
-            self._pool = ThreadPoolExecutor(p.threads, thread_name_prefix="sph-plan")
+        if p.threads > 1:  # threads - 1 helpers: the stepping thread plans too
+            self._pool = ThreadPoolExecutor(p.threads - 1, thread_name_prefix="sph-plan")
 
     def close(self) -> None:
         """End the run's planning threads (the rollout calls it when the run ends; a later
@@ -309,9 +310,9 @@ class Sph:
             done = [self._plan_one(*job) for job in jobs]
         elif self.maps.order_dependent:  # the 3-D field search: paths in robot order, splines in parallel
             paths = [self._path(*job) for job in jobs]
-            done = list(self._pool.map(self._spline, jobs, paths))
-        else:  # Executor.map returns the results in robot order, whichever thread finished first
-            done = list(self._pool.map(lambda job: self._plan_one(*job), jobs))
+            done = self._in_parallel(lambda r: self._spline(jobs[r], paths[r]), n)
+        else:
+            done = self._in_parallel(lambda r: self._plan_one(*jobs[r]), n)
         for r, out in enumerate(done):
             plans.append(out.plan)
             self._search_failures += out.failed
@@ -331,6 +332,27 @@ class Sph:
         self._schedule.done(step)
         if not p.plan_once:
             self._hold[:] = 0.0  # the new reference starts at this step
+
+    def _in_parallel(self, plan: Any, n: int) -> list[_Planned]:
+        """``[plan(0), ..., plan(n - 1)]``, computed by this thread and the pool's together: each
+        takes the next robot index from a shared counter (a robot per pull, so a long search does not
+        hold up the others), and each result is stored at its robot's index, whatever thread made it."""
+        out: list[Any] = [None] * n
+        ticket = itertools.count()  # next() on it is atomic under the GIL
+
+        def work() -> None:
+            r = next(ticket)
+            while r < n:
+                out[r] = plan(r)
+                r = next(ticket)
+
+        helpers = [self._pool.submit(work) for _ in range(self.flown.threads - 1)]
+        try:
+            work()
+        finally:
+            for h in helpers:
+                h.result()  # wait for every helper (and raise a helper's error)
+        return out
 
     def _guide(self, pts: np.ndarray, reaches_end: bool) -> np.ndarray:
         """Initial interior control points C_3 .. C_{K-3} from path points ``pts`` (ctrl_spacing apart)."""
