@@ -58,8 +58,8 @@ def map_bytes(scenario: Scenario, p: SphParams) -> float:
     """Memory [B] the maps of an SPH run on ``scenario`` take at once: the ESDF (8 B a node at
     ``esdf_resolution``), the robots' occupancy grids with their searches
     (:func:`~swarmnav.planning.maps.bytes_per_cell` at ``grid_resolution``, one set of search
-    work arrays per planning thread) and, with
-    yielding on, the yield field being built (at ``yield_resolution``)."""
+    work arrays per planning thread) and, with yielding on, the yield field being built (at
+    ``yield_resolution``)."""
     b, d = scenario.bounds, scenario.dim
     need = 8.0 * grid_nodes(b, p.esdf_resolution)
     need += grid_cells(b, p.grid_resolution) * bytes_per_cell(d, scenario.n, p.search_3d == "field",
