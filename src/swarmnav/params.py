@@ -69,7 +69,8 @@ def _number(text: str) -> float:
     return float(text)
 
 
-def param(default: Any, unit: str = "", range: str | None = None, source: str = "ours", doc: str = "") -> Any:
+def param(default: Any, unit: str = "", range: str | None = None, source: str = "ours", doc: str = "", *,
+          results: bool = True) -> Any:
     """Declare a parameter field: ``dt: float = param(0.1, "s", "(0, 1]", "Sec. 5.1", "step")``.
 
     Args:
@@ -79,8 +80,12 @@ def param(default: Any, unit: str = "", range: str | None = None, source: str = 
             finite. None for switches, choices and text.
         source: where the default comes from: the paper's table / equation / section, or "ours".
         doc: what the parameter does, in one line.
+        results: False for a parameter of how a run is computed, not of what it computes (a
+            thread count): runs differing only in it are identical, so :func:`identity` leaves
+            it out of a run's key.
     """
-    meta = {"unit": unit, "range": None if range is None else Range.parse(range), "source": source, "doc": doc}
+    meta = {"unit": unit, "range": None if range is None else Range.parse(range), "source": source, "doc": doc,
+            "results": results}
     return dataclasses.field(default=default, metadata=meta)
 
 
@@ -325,3 +330,10 @@ def as_dict(record: Any) -> dict[str, Any]:
         else:
             out[f.name] = value
     return out
+
+
+def identity(record: Any) -> dict[str, Any]:
+    """:func:`as_dict` without the parameters declared ``results=False`` (:func:`param`): the
+    parameters a run's results depend on, which identify it (the experiment store's run key)."""
+    skip = {name for name, f, _ in _leaves(type(record)) if not f.metadata.get("results", True)}
+    return {k: v for k, v in as_dict(record).items() if k not in skip}

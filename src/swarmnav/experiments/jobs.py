@@ -38,11 +38,12 @@ def plan(exp: Experiment) -> list[Job]:
     """The experiment's jobs in spec order, each keyed by the hash of its configuration.
 
     Fails fast (before any worker starts) on a bad method, parameter or scene. The key covers
-    the method, its fully resolved parameters (defaults included), the scene's identity (the
-    text of a scene file, or a generator spec), swarm size, steps and seed.
+    the method, its fully resolved parameters (defaults included; not those of how a run is
+    computed, such as SPH's ``threads``, which give identical results: :func:`swarmnav.params.identity`),
+    the scene's identity (the text of a scene file, or a generator spec), swarm size, steps and seed.
     """
     from swarmnav.methods import registry
-    from swarmnav.params import as_dict
+    from swarmnav.params import identity
     from swarmnav.sim.rollout import RUN_OPTIONS
     from swarmnav.world.catalog import load_scenario
 
@@ -50,7 +51,7 @@ def plan(exp: Experiment) -> list[Job]:
     for v in exp.variants:
         try:
             method_params = {k: x for k, x in v.params.items() if k not in RUN_OPTIONS}
-            params = as_dict(registry.make(v.method, **method_params).params)
+            params = identity(registry.make(v.method, **method_params).params)
             params.update({k: v.params[k] for k in RUN_OPTIONS if k in v.params})
             load_scenario(v.scenario.replace("{seed}", str(exp.seeds[0])), n=v.n)
         except SwarmnavError as e:

@@ -16,7 +16,9 @@ An optional ``timings()`` returns wall-clock figures (``RunResult.timings``, nev
 optional ``plans()`` returns the trajectories the method committed, as flat arrays ``step``
 (P,), ``robot`` (P,), ``offsets`` (P + 1,), ``points`` (M, d) [m] and ``times`` (M,) [s]
 (``swarmnav.planning.plan_log.PlanLog`` builds them), kept in ``RunResult.plans`` and drawn by
-the replay viewer. docs/methods/contract.md states the whole contract.
+the replay viewer. An optional ``close()`` releases what ``reset`` started (planning threads);
+the rollout calls it when the steps end, however they end. docs/methods/contract.md states the
+whole contract.
 """
 
 from __future__ import annotations

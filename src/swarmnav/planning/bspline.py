@@ -253,7 +253,7 @@ def _cost_grad(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origi
     return lam_s * js + lam_c * jc + lam_f * jf
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # releases the GIL: robots' plans may be optimised in parallel threads
 def _lbfgs_spline(ctrl, dt, lam_s, lam_c, lam_f, d_thr, v_max, a_max, values, origin, res, max_iter):
     """L-BFGS (Nocedal & Wright, Alg. 7.4/7.5) on the interior rows ``ctrl[3:-3]``, in place.
 

@@ -23,11 +23,17 @@ search is a function of the robot's map (the obstacles it knows), its start and 
 the expansion cap, so the maps remember the last searches by those and answer a repeated one
 (a robot that stands still, or one at a cell where another searched from the same map) with the
 same path without searching again.
+
+Robots may search from several threads at once: each thread keeps its own work arrays, the
+remembered searches (and the 3-D labels and fields) are shared behind a lock, and the compiled
+kernels release the GIL. Every search but the 3-D field search is a function of its inputs, so
+the paths do not depend on which thread searched first (:attr:`OccupancyMaps.order_dependent`).
 """
 
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 from numba import njit
@@ -66,16 +72,20 @@ def grid_cells(bounds, resolution: float) -> float:
     return total
 
 
-def bytes_per_cell(dim: int, n_robots: int, field_3d: bool, marked: bool) -> int:
+def bytes_per_cell(dim: int, n_robots: int, field_3d: bool, marked: bool, threads: int = 1) -> int:
     """Bytes an :class:`OccupancyMaps` holds per grid cell, searches included: a uint8 class per
     robot; planar A*: its cost, parent and mark arrays kept between searches (16 B, counted as the
     17 B of the fresh arrays it once allocated), a copy of the map when neighbours are marked; 3-D:
     the search work arrays kept between searches (24 B), and either the kept
     cost-to-go fields with the one being built (``field_3d``: 6 x 8 + 9 B) or the kept component
-    labels with the passable mask being labelled (6 x 4 + 1 B)."""
+    labels with the passable mask being labelled (6 x 4 + 1 B). With ``threads`` searching at once
+    each has its own work arrays, map copy and labelling (the field search runs in one thread:
+    :attr:`OccupancyMaps.order_dependent`)."""
     if dim == 2:
-        return n_robots + 17 + int(marked)
-    return n_robots + 24 + int(marked) + (_FIELDS_KEPT * 8 + 9 if field_3d else _FIELDS_KEPT * 4 + 1)
+        return n_robots + threads * (17 + int(marked))
+    if field_3d:
+        return n_robots + 24 + int(marked) + _FIELDS_KEPT * 8 + 9
+    return n_robots + threads * (24 + int(marked) + 1) + _FIELDS_KEPT * 4
 
 
 class OccupancyMaps:
@@ -115,11 +125,7 @@ class OccupancyMaps:
         self.bbox_lo = np.array(lo).reshape(-1, dim)
         self.bbox_hi = np.array(hi).reshape(-1, dim)
         self.footprints = cells
-        if dim == 3:  # the 3-D search's work arrays, reused by every search (see the module docstring)
-            n = int(np.prod(self.shape))
-            self._work = (np.empty(n), np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.int32),
-                          np.zeros(n, dtype=np.int32), np.empty(1024), np.empty(1024, dtype=np.int64))
-            self._searches = 0
+        if dim == 3:
             self.weight_3d = float(weight_3d)
         self.field_3d = bool(field_3d)
         self._fields: dict[tuple, tuple] = {}  # (field, known obstacles) by (map, goal, tier); newest last
@@ -130,8 +136,35 @@ class OccupancyMaps:
         # stands still, or one where another stood, with the same map, repeats a search exactly
         self._searched: dict[tuple, tuple[np.ndarray, bool]] = {}
         self._searched_kept = _SEARCHES_KEPT_PER_ROBOT * max(n_robots, 1)
-        self._work2 = None  # the planar A*'s work arrays, made at its first search
-        self._searches2 = 0
+        # the A* work arrays (see the module docstring), one set per thread that searches, made at its
+        # first search; the remembered searches, fields and labels are shared, behind one lock
+        self._local = threading.local()
+        self._lock = threading.Lock()
+
+    @property
+    def order_dependent(self) -> bool:
+        """Whether a search's path may depend on the searches made before it: the 3-D field search
+        (a kept field of another map guides the A*, and which fields are kept depends on the order
+        of the searches). Every other search is a function of the robot's map, the cells and the
+        cap, so robots may search concurrently and find the same paths in any order."""
+        return self.dim == 3 and self.field_3d
+
+    def _work(self) -> tuple[tuple[np.ndarray, ...], int]:
+        """This thread's A* work arrays and the number of its next search (a fresh set every
+        ``_MAX_SEARCH_ID`` searches, when the int32 marks would run out)."""
+        local = self._local
+        work = getattr(local, "work", None)
+        if work is None or local.searches >= _MAX_SEARCH_ID:
+            n = int(np.prod(self.shape))
+            if self.dim == 2:  # cost, parent (int32), mark (int32), heap keys, heap values
+                work = (np.empty(n), np.empty(n, dtype=np.int32), np.zeros(n, dtype=np.int32),
+                        np.empty(1024), np.empty(1024, dtype=np.int64))
+            else:  # cost, parent (int64), seen (int32), closed (int32), heap keys, heap values
+                work = (np.empty(n), np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.int32),
+                        np.zeros(n, dtype=np.int32), np.empty(1024), np.empty(1024, dtype=np.int64))
+            local.work, local.searches = work, 0
+        local.searches += 1
+        return work, local.searches
 
     def _footprint(self, g: Geometry, lo, hi, inflation: float) -> tuple[np.ndarray, np.ndarray]:
         """Flat indices and clearance classes (see the module docstring) of the cells around
@@ -196,12 +229,17 @@ class OccupancyMaps:
         key = None
         if self.dim == 2 and not marked:  # a planar search is a function of the map, the cells and the cap
             key = (self.known[robot].tobytes(), sc, gc, int(max_expand))
-            found = self._searched.pop(key, None)
-            if found is None:
+            with self._lock:
+                found = self._searched.pop(key, None)
+                if found is not None:
+                    self._searched[key] = found  # most recently used last
+            if found is None:  # searched outside the lock: another thread may find the same path meanwhile
                 found = self._search_cells(robot, occ, sc, gc, max_expand, marked)
-                while len(self._searched) >= self._searched_kept:
-                    self._searched.pop(next(iter(self._searched)))
-            self._searched[key] = found  # most recently used last
+                with self._lock:
+                    self._searched.pop(key, None)
+                    while len(self._searched) >= self._searched_kept:
+                        self._searched.pop(next(iter(self._searched)))
+                    self._searched[key] = found
         else:
             found = self._search_cells(robot, occ, sc, gc, max_expand, marked)
         idx, at_goal = found
@@ -242,12 +280,17 @@ class OccupancyMaps:
         whole component (or its expansion cap) and fails; knowing that beforehand gives the same
         result for a lookup."""
         key = (self.known[robot].tobytes(), blocked)
-        labels = self._components.pop(key, None)
-        if labels is None:
+        with self._lock:
+            labels = self._components.pop(key, None)
+            if labels is not None:
+                self._components[key] = labels  # most recently used last
+        if labels is None:  # labelled outside the lock (the labels are a function of the key)
             labels, _ = ndimage.label(occ < blocked, structure=ndimage.generate_binary_structure(3, 1))
-            while len(self._components) >= _FIELDS_KEPT:
-                self._components.pop(next(iter(self._components)))
-        self._components[key] = labels
+            with self._lock:
+                self._components.pop(key, None)
+                while len(self._components) >= _FIELDS_KEPT:
+                    self._components.pop(next(iter(self._components)))
+                self._components[key] = labels
         return bool(labels[s] == labels[g] != 0)
 
     def _descend(self, robot: int, occ, s, g, blocked) -> np.ndarray:
@@ -266,12 +309,11 @@ class OccupancyMaps:
             guides = [(int(k.sum()), f) for (_, kg, kb), (f, k) in self._fields.items()
                       if kg == g and kb == blocked and not np.any(k & ~known)]
             if guides:
-                self._searches += 1
                 field = max(guides, key=lambda c: c[0])[1]
-                gcost, parent, seen, closed, keys, vals = self._work
-                idx, keys, vals = _astar3h(occ, s, g, blocked, self.cost, _STEPS3, field, self._searches,
+                (gcost, parent, seen, closed, keys, vals), sid = self._work()
+                idx, keys, vals = _astar3h(occ, s, g, blocked, self.cost, _STEPS3, field, sid,
                                            gcost, parent, seen, closed, keys, vals)
-                self._work = (gcost, parent, seen, closed, keys, vals)
+                self._local.work = (gcost, parent, seen, closed, keys, vals)
                 return idx
         field = _cost_to_go3(occ, g, blocked, self.cost, _STEPS3)
         self.fields_built += 1
@@ -282,27 +324,21 @@ class OccupancyMaps:
 
     def _astar(self, occ, s, g, max_expand, blocked) -> np.ndarray:
         """Flat cell indices of the A* path between free cells ``s`` and ``g`` (empty: none)."""
+        work, sid = self._work()
         if self.dim == 2:
-            if self._work2 is None or self._searches2 >= _MAX_SEARCH_ID:
-                n = occ.size
-                self._work2 = (np.empty(n), np.empty(n, dtype=np.int32), np.zeros(n, dtype=np.int32),
-                               np.empty(1024), np.empty(1024, dtype=np.int64))
-                self._searches2 = 0
-            self._searches2 += 1
-            g_, parent, mark, keys, vals = self._work2
+            g_, parent, mark, keys, vals = work
             idx, keys, vals = _astar(occ, s[0], s[1], g[0], g[1], max_expand, blocked, self.cost,
-                                     self._searches2, g_, parent, mark, keys, vals)
-            self._work2 = (g_, parent, mark, keys, vals)
+                                     sid, g_, parent, mark, keys, vals)
+            self._local.work = (g_, parent, mark, keys, vals)  # the heap arrays may have grown
             return idx
-        self._searches += 1
-        gcost, parent, seen, closed, keys, vals = self._work
-        idx, keys, vals = _astar3(occ, s, g, max_expand, blocked, self.cost, _STEPS3, self._searches,
+        gcost, parent, seen, closed, keys, vals = work
+        idx, keys, vals = _astar3(occ, s, g, max_expand, blocked, self.cost, _STEPS3, sid,
                                   gcost, parent, seen, closed, keys, vals, self.weight_3d)
-        self._work = (gcost, parent, seen, closed, keys, vals)
+        self._local.work = (gcost, parent, seen, closed, keys, vals)
         return idx
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _mark_discs(occ, centres, radius):
     """Raise cells within ``radius`` [cells] of each centre [cells] to at least class 1."""
     ny, nx = occ.shape
@@ -315,7 +351,7 @@ def _mark_discs(occ, centres, radius):
                     occ[y, x] = 1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _mark_balls(occ, centres, radius):
     """Raise voxels within ``radius`` [cells] of each centre [cells, (x, y, z)] to at least class 1."""
     nz, ny, nx = occ.shape
@@ -329,7 +365,7 @@ def _mark_balls(occ, centres, radius):
                         occ[z, y, x] = 1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _nearest_free3(occ, iz, iy, ix, max_r, blocked):
     """Nearest voxel with ``occ < blocked`` (Chebyshev shells, Euclidean within a shell) to
     (iz, iy, ix); (-1, -1, -1) if none within ``max_r`` cells."""
@@ -354,7 +390,7 @@ def _nearest_free3(occ, iz, iy, ix, max_r, blocked):
     return -1, -1, -1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _nearest_free(occ, iy, ix, max_r, blocked):
     """Nearest cell with ``occ < blocked`` (Chebyshev rings, Euclidean within a ring) to
     (iy, ix); (-1, -1) if none within ``max_r`` cells."""
@@ -449,7 +485,7 @@ def _walk_back(parent, s, goal):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost, sid, g, parent, mark, keys, vals):
     """A* over the cells with ``occ < blocked`` of an 8-connected grid, step length 1 (diagonal
     sqrt(2)) times ``cost[occ]`` of the entered cell (all >= 1), no corner cutting, octile
@@ -520,7 +556,7 @@ def _astar(occ, sy, sx, gy, gx, max_expand, blocked, cost, sid, g, parent, mark,
     return _walk_back(parent, s, goal), keys, vals
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _astar3(occ, s3, g3, max_expand, blocked, cost, steps, sid, g, parent, seen, closed, keys, vals, weight):
     """A* over the voxels with ``occ < blocked`` of the 26-connected grid: step length 1,
     sqrt(2) or sqrt(3) times ``cost[occ]`` of the entered voxel, no corner cutting (every voxel
@@ -602,7 +638,7 @@ def _passable3(occ, cz, cy, cx, dz, dy, dx, blocked):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _cost_to_go3(occ, g3, blocked, cost, steps):
     """Cost of the cheapest 26-connected path from every voxel to ``g3`` (inf: unreachable), by
     Dijkstra backwards from the goal over the voxels with ``occ < blocked``: a step costs its
@@ -641,7 +677,7 @@ def _cost_to_go3(occ, g3, blocked, cost, steps):
     return dist.reshape(occ.shape)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _astar3h(occ, s3, g3, blocked, cost, steps, h, sid, g, parent, seen, closed, keys, vals):
     """A* as ``_astar3`` (same steps, costs, corner rule and work arrays) with the heuristic read
     from ``h`` (a cost-to-go field of a map with fewer obstacles; voxels it cannot reach are not
@@ -691,7 +727,7 @@ def _astar3h(occ, s3, g3, blocked, cost, steps, h, sid, g, parent, seen, closed,
     return _walk_back(parent, s, goal), keys, vals
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _descend3(occ, field, s3, g3, blocked, cost, steps):
     """Flat voxel indices of the path from ``s3`` to ``g3`` that takes, from each voxel, the
     step minimising step cost + cost-to-go (the first such step in ``steps`` order): an optimal

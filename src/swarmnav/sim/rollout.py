@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import time
 from typing import Any
 
@@ -138,7 +139,7 @@ def run(
         events += referee.judge(0, P[0], C[0], pos)
     # a diverging state is reported in one line (DivergedError below), not by NumPy's floating-point
     # warnings on the way there (an overflow in a power, inf - inf): they only repeat it
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), _closing(m):
         for k in range(steps):
             cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
             pos, vel = m.dynamics.step(pos, vel, cmd, dt)
@@ -342,6 +343,18 @@ def steps_for_horizon(horizon: Any, dt: float) -> int:
     if steps > 100_000_000:
         raise ConfigError(f"horizon {h:g} s is {steps:.3g} steps of dt = {dt:g} s; at most 1e8")
     return max(1, int(steps))
+
+
+@contextlib.contextmanager
+def _closing(m: Method):
+    """Call the method's optional ``close()`` hook (its threads, docs/methods/contract.md) when the
+    steps end, however they end."""
+    try:
+        yield
+    finally:
+        close = getattr(m, "close", None)
+        if callable(close):
+            close()
 
 
 def _identity(x: np.ndarray) -> np.ndarray:

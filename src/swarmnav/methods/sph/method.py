@@ -11,8 +11,10 @@ Every control step (Algorithm 2):
 4. the command is the tracking law of eq. (13):
    ``a_i = F_i / m + k_p (q* - q_i) + k_v (v* - v_i) + a*``, saturated by the dynamics (eq. 2).
 
-Planning is per robot (a Python loop over robots, by design of the paper: each UAV plans
-independently); the coordination force and visibility are array operations.
+Planning is per robot (by design of the paper: each UAV plans independently), in a loop over
+robots or, with ``threads`` > 1, on a pool of threads (the compiled search and optimiser release
+the GIL; results are collected by robot index, so they are identical for any thread count); the
+coordination force and visibility are array operations.
 
 The same code flies planar and 3-D scenes (the paper's Fig. 3 (C, D)): positions, forces,
 splines and references are (N, d) with d = ``scenario.dim``; only the field (bilinear or
@@ -21,8 +23,10 @@ trilinear ESDF) and the grid search (8- or 26-connected) differ, chosen by the s
 
 from __future__ import annotations
 
+import itertools
 import time
-from typing import Any
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -53,12 +57,13 @@ _YIELD_BYTES = {2: 330, 3: 970}
 def map_bytes(scenario: Scenario, p: SphParams) -> float:
     """Memory [B] the maps of an SPH run on ``scenario`` take at once: the ESDF (8 B a node at
     ``esdf_resolution``), the robots' occupancy grids with their searches
-    (:func:`~swarmnav.planning.maps.bytes_per_cell` at ``grid_resolution``) and, with
-    yielding on, the yield field being built (at ``yield_resolution``)."""
+    (:func:`~swarmnav.planning.maps.bytes_per_cell` at ``grid_resolution``, one set of search
+    work arrays per planning thread) and, with yielding on, the yield field being built (at
+    ``yield_resolution``)."""
     b, d = scenario.bounds, scenario.dim
     need = 8.0 * grid_nodes(b, p.esdf_resolution)
     need += grid_cells(b, p.grid_resolution) * bytes_per_cell(d, scenario.n, p.search_3d == "field",
-                                                              p.plan_neighbours > 0)
+                                                              p.plan_neighbours > 0, p.threads)
     if p.yield_range > 0:
         step = max(1, int(round(p.yield_resolution / p.esdf_resolution)))
         need += _YIELD_BYTES[d] * grid_nodes(b, p.esdf_resolution * step)
@@ -81,6 +86,18 @@ class AxisClampedDoubleIntegrator:
         return p + dt * v_new, v_new
 
 
+class _Planned(NamedTuple):
+    """One robot's replan, as :meth:`Sph._plan_one` returns it: its spline and what the run
+    counts of it (added up by robot index, whatever thread planned it)."""
+
+    plan: Any  # SplinePlan
+    failed: bool  # the grid search found no path (the spline heads straight for the goal)
+    reaches_end: bool  # the local plan ends at the robot's goal
+    iterations: int  # optimiser iterations, re-timing included
+    retimed: bool
+    ms: float  # wall-clock time of the replan [ms]
+
+
 class Sph:
     """The SPH navigation method (see module docstring)."""
 
@@ -101,6 +118,7 @@ class Sph:
         self._costs = SplineCosts(p.lambda_s, p.lambda_c, p.lambda_f, p.d_thr, self._plan_v, plan_a)
         # knot span [s]: control points ctrl_spacing apart at plan_speed * (planner's) v_max
         self._dt_knot = p.ctrl_spacing / (p.plan_speed * self._plan_v)
+        self._pool: ThreadPoolExecutor | None = None  # the planning threads of a run (threads > 1)
 
     # ------------------------------------------------------------------ contract
 
@@ -143,6 +161,16 @@ class Sph:
         self._plan_ms: list[float] = []
         self._coord_ms: list[float] = []
         self._log_plans = PlanLog(scenario.dim)
+        self.close()  # a pool of an earlier run that was not closed
+        if p.threads > 1:  # threads - 1 helpers: the stepping thread plans too
+            self._pool = ThreadPoolExecutor(p.threads - 1, thread_name_prefix="sph-plan")
+
+    def close(self) -> None:
+        """End the run's planning threads (the rollout calls it when the run ends; a later
+        :meth:`reset` starts new ones)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.flown
@@ -283,11 +311,22 @@ class Sph:
             close = dist < p.plan_neighbours_range
             a, b = vi[close], vj[close]
             near = [np.concatenate([b[a == r], a[b == r]]) for r in range(n)]
-        for r in range(n):
-            t0 = time.perf_counter()
-            others = x[near[r]] if near is not None else None
-            plans.append(self._plan_one(r, start_q[r], start_v[r], start_a[r], others))
-            self._plan_ms.append(1e3 * (time.perf_counter() - t0))
+        jobs = [(r, start_q[r], start_v[r], start_a[r], x[near[r]] if near is not None else None) for r in range(n)]
+        if self._pool is None:
+            done = [self._plan_one(*job) for job in jobs]
+        elif self.maps.order_dependent:  # the 3-D field search: paths in robot order, splines in parallel
+            paths = [self._path(*job) for job in jobs]
+            done = self._in_parallel(lambda r: self._spline(jobs[r], paths[r]), n)
+        else:
+            done = self._in_parallel(lambda r: self._plan_one(*jobs[r]), n)
+        for r, out in enumerate(done):
+            plans.append(out.plan)
+            self._search_failures += out.failed
+            self._final[r] = out.reaches_end
+            self._plans += 1
+            self._iterations += out.iterations
+            self._retimes += out.retimed
+            self._plan_ms.append(out.ms)
         if p.plan_once:
             length = int(np.ceil(max(pl.duration for pl in plans) / p.dt)) + 1
         else:
@@ -300,6 +339,27 @@ class Sph:
         if not p.plan_once:
             self._hold[:] = 0.0  # the new reference starts at this step
 
+    def _in_parallel(self, plan: Any, n: int) -> list[_Planned]:
+        """``[plan(0), ..., plan(n - 1)]``, computed by this thread and the pool's together: each
+        takes the next robot index from a shared counter (a robot per pull, so a long search does not
+        hold up the others), and each result is stored at its robot's index, whatever thread made it."""
+        out: list[Any] = [None] * n
+        ticket = itertools.count()  # next() on it is atomic under the GIL
+
+        def work() -> None:
+            r = next(ticket)
+            while r < n:
+                out[r] = plan(r)
+                r = next(ticket)
+
+        helpers = [self._pool.submit(work) for _ in range(self.flown.threads - 1)]
+        try:
+            work()
+        finally:
+            for h in helpers:
+                h.result()  # wait for every helper (and raise a helper's error)
+        return out
+
     def _guide(self, pts: np.ndarray, reaches_end: bool) -> np.ndarray:
         """Initial interior control points C_3 .. C_{K-3} from path points ``pts`` (ctrl_spacing apart)."""
         p = self.flown
@@ -311,20 +371,35 @@ class Sph:
             return pts[2:-1] if reaches_end or p.end_state == "rest" else pts[2:-2]
         return pts[1:-1]  # released: C_3 .. C_{K-3} = path[1] .. path[-2] (two knots on repeated points)
 
-    def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, others: np.ndarray | None = None):
-        """One robot's replan: update its map, grid search to its goal, optimise the spline."""
+    def _plan_one(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+                  others: np.ndarray | None = None) -> _Planned:
+        """One robot's replan: update its map, grid search to its goal, optimise the spline. It
+        touches only robot ``r``'s map and the maps' locked caches, so robots may plan in parallel."""
+        return self._spline((r, q, v, a, others), self._path(r, q, v, a, others))
+
+    def _path(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+              others: np.ndarray | None = None) -> tuple[np.ndarray | None, float]:
+        """Robot ``r``'s map update and grid search from ``q`` to its goal: ``(path or None, ms)``."""
+        t0 = time.perf_counter()
         p = self.flown
         self.maps.observe(r, q)
+        path = self.maps.search(r, q, self.goals[r], p.max_expand, others, p.plan_neighbours)
+        return path, 1e3 * (time.perf_counter() - t0)
+
+    def _spline(self, job: tuple, searched: tuple[np.ndarray | None, float]) -> _Planned:
+        """The spline of robot ``r`` (``job = (r, q, v, a, others)``) along its searched path."""
+        t0 = time.perf_counter()
+        p = self.flown
+        r, q, v, a, _ = job
+        path, search_ms = searched
         goal = self.goals[r]
-        path = self.maps.search(r, q, goal, p.max_expand, others, p.plan_neighbours)
-        if path is None:  # no path on the robot's map: head straight for the goal
-            self._search_failures += 1
+        failed = path is None
+        if failed:  # no path on the robot's map: head straight for the goal
             path = np.vstack([q, goal])
         pts = resample(path, p.ctrl_spacing)
         if len(pts) < 2:
             pts = np.vstack([q, path[-1]])
         reaches_end = p.plan_once or p.horizon_points == 0 or len(pts) - 1 <= p.horizon_points
-        self._final[r] = reaches_end
         if not reaches_end:
             pts = pts[: p.horizon_points + 1]
         end_v = np.zeros_like(q)
@@ -334,14 +409,14 @@ class Sph:
         end = (pts[-1], end_v, np.zeros_like(q))
         guide = self._guide(pts, reaches_end)
         plan = optimize((q, v, a), end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
-        self._plans += 1
-        self._iterations += plan.iterations
+        iterations = plan.iterations
+        again = None
         if p.retime > 0 and len(guide):
             again = retimed(plan, (q, v, a), end, pts, p.retime, p.ctrl_spacing,
                             lambda curve: self._guide(curve, reaches_end), self._dt_knot, self.esdf, self._costs,
                             p.max_iter)
             if again is not None:
-                self._retimes += 1
-                self._iterations += again.iterations
+                iterations += again.iterations
                 plan = again
-        return plan
+        return _Planned(plan, failed, bool(reaches_end), int(iterations), again is not None,
+                        search_ms + 1e3 * (time.perf_counter() - t0))

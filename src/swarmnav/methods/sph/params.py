@@ -227,6 +227,11 @@ class SphParams:
         "stops at once_hold (v* = phi v, a* = phi^2 a), and the position error is capped at "
         "once_hold (ours: k_p once_hold = k_rep / (2 body radius)); 0 = off, the reference runs "
         "on by time alone")
+    # --- execution (how a run is computed, not what: left out of run keys) ---
+    threads: int = param(1, "", "[1, 64]", "ours",
+        "threads that plan robots at a replan (each robot's map update, grid search and spline); "
+        "results are identical for any value, so it is not part of a run's key (docs/methods/sph.md, "
+        "*Threads*)", results=False)
 
 
 def for_dim(p: SphParams, dim: int) -> SphParams:
