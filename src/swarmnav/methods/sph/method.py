@@ -124,7 +124,7 @@ class Sph:
 
     def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray,
               rng: np.random.Generator) -> None:
-        p = self.flown = for_dim(self.params, scenario.dim)  # by_dim: the set of the scene's dimension
+        p = self.flown = for_dim(self.params, scenario.dim, scenario.n)  # by_dim: the set of the scene's dimension and size
         self.scenario = scenario
         self.geom = scenario.geometry
         n = scenario.n

@@ -54,7 +54,8 @@ class SphParams:
     DEFAULT_BUILD: ClassVar[str] = "swarmnav"
     PRESET_DOCS: ClassVar[dict[str, str]] = {
         "swarmnav": "ours, the default: guard on a 2-D scene, retime on a 3-D scene (by_dim), each chosen on "
-                    "training forests and checked on held-out forests and unseen scenes",
+                    "training forests and checked on held-out forests and unseen scenes; 2-D swarms of 30 robots or "
+                    "more also with the crowd parts (rep_cutoff, crowd_guard)",
         "paper": "Table I and the paper's algorithm, with our readings where it is silent (docs/methods/sph.md): "
                  "the paper rows of docs/reproduction.md (--set preset=paper)",
         "headroom": "ours: paper with the tracking kept below what the swarm forces can hold (plan at 0.8 v_max, "
@@ -114,14 +115,18 @@ class SphParams:
         "tracking law and the obstacle force (False: the released sph_zhang_3d.cpp, whose z command "
         "has no SPH term)")
     r_floor: float = param(0.05, "m", "(0, inf)", "ours", "distance floor in the 1/r repulsion (finite force)")
-    rep_cutoff: float = param(0.0, "m", "[0, inf)", "ours",
+    rep_cutoff: float = param(3.0, "m", "[0, inf)", "ours",
         "cut-off of the 1/r repulsion (Alg. 1 line 9): only robots closer than this repel, with the "
         "paper's k_rep / r, so a large crowd does not press its edge robots into obstacles "
         "(0 = none, the paper: every visible robot within R)")
-    crowd_guard: bool = param(False, "", None, "ours",
+    crowd_guard: bool = param(True, "", None, "ours",
         "inside the obstacle band (d < d_thr) the swarm's push (Alg. 1 density and repulsion terms) "
         "loses its component towards the obstacle, as band_guard does for the tracking term: a crowd "
         "may push a robot along an obstacle, never into it")
+    crowd_size: int = param(30, "", "[1, inf)", "ours",
+        "with by_dim (the default build), rep_cutoff and crowd_guard act on 2-D swarms of this many "
+        "robots or more; smaller swarms fly the paper's repulsion and no crowd guard (Table II's 15 and "
+        "Fig. 3 B's 20 robots were chosen and measured so; 3-D not measured with them yet)")
     esdf_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "ESDF grid, as the released sdf_map")
     grid_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "grid-search cell, as the released A*")
     max_map_bytes: int = param(2 * 2**30, "B", "[1, inf)", "ours",
@@ -190,9 +195,9 @@ class SphParams:
         "obstacle: the reference never presses a robot into an obstacle, the ESDF force and the "
         "swarm alone set how close it comes (False: eq. 13 as printed)")
     by_dim: bool = param(True, "", None, "ours",
-        "the recommended set of the scene's dimension: on a 2-D scene retime is off (guard's set), "
-        "on a 3-D scene goal_reset and band_guard are off (retime's set); False: every value as "
-        "given")
+        "the recommended set of the scene's dimension and swarm size: on a 2-D scene retime is off "
+        "(guard's set), on a 3-D scene goal_reset and band_guard are off (retime's set), rep_cutoff "
+        "and crowd_guard act on 2-D scenes of crowd_size robots or more only; False: every value as given")
     start_clearance: float = param(0.0, "m", "[0, inf)", "ours",
         "\"reference\" mode: a replan whose start (the reference state) is closer than this to an "
         "obstacle starts from the robot's measured position and velocity instead, at rest in "
@@ -234,12 +239,16 @@ class SphParams:
         "*Threads*)", results=False)
 
 
-def for_dim(p: SphParams, dim: int) -> SphParams:
-    """The parameters a run on a ``dim``-D scene flies: ``p`` itself unless ``p.by_dim``; with it,
-    the recommended set of that dimension (2-D: ``guard``'s, so ``retime`` off; 3-D: ``retime``'s,
-    so ``goal_reset`` and ``band_guard`` off), the other values as given."""
+def for_dim(p: SphParams, dim: int, n: int | None = None) -> SphParams:
+    """The parameters a run of ``n`` robots on a ``dim``-D scene flies: ``p`` itself unless
+    ``p.by_dim``; with it, the recommended set of that dimension (2-D: ``guard``'s, so ``retime``
+    off; 3-D: ``retime``'s, so ``goal_reset`` and ``band_guard`` off) and of that swarm size (the
+    crowd parts ``rep_cutoff`` and ``crowd_guard`` on a 2-D scene of ``crowd_size`` robots or
+    more only: they were chosen on 2-D forests), the other values as given."""
     if not p.by_dim:
         return p
+    if dim != 2 or (n is not None and n < p.crowd_size):  # chosen on 2-D forests; not measured in 3-D yet
+        p = replace(p, rep_cutoff=0.0, crowd_guard=False)
     if dim == 2:
         return replace(p, retime=0.0)
     return replace(p, goal_reset=0.0, band_guard=False)
