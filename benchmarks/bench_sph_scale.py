@@ -3,7 +3,7 @@ coordination and planning cost per step, and the 15-robot Table II trial; option
 trials on an older commit, in the same run, with a digest that shows both fly the same.
 
     PYTHONPATH=src python benchmarks/bench_sph_scale.py                       # 90 s trials, this checkout
-    PYTHONPATH=src python benchmarks/bench_sph_scale.py --horizon 20 --before 8f7b9e5
+    PYTHONPATH=src python benchmarks/bench_sph_scale.py --horizon 20 --before 8f7b9e5 --preset guard
 
 Trials (one core, one process at a time, each in a fresh subprocess so no run warms another):
 
@@ -54,8 +54,9 @@ def worker(a) -> None:
 
     spawn = ",spawn_length=8" if a.geometry == "scaling" else ""
     scn = load_scenario(FOREST.format(density=a.density, seed=a.seed, spawn=spawn), n=a.n)
-    swarmnav.run(Sph(), scn, seed=a.seed, steps=3)  # load the compiled kernels outside the measurement
-    m = Sph()
+    build = {"preset": a.preset} if a.preset else {}
+    swarmnav.run(Sph(**build), scn, seed=a.seed, steps=3)  # load the compiled kernels outside the measurement
+    m = Sph(**build)
     t0 = time.process_time()
     r = swarmnav.run(m, scn, seed=a.seed, horizon=a.horizon, plans=False)
     cpu = time.process_time() - t0
@@ -68,7 +69,8 @@ def worker(a) -> None:
 
 def trial(src: str, geometry: str, n: int, horizon: float, a) -> dict:
     cmd = [sys.executable, __file__, "--worker", "--src", src, "--geometry", geometry, "--n", str(n),
-           "--horizon", str(horizon), "--density", str(a.density), "--seed", str(a.seed)]
+           "--horizon", str(horizon), "--density", str(a.density), "--seed", str(a.seed)] + (
+        ["--preset", a.preset] if a.preset else [])
     p = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "PYTHONPATH": src})
     if p.returncode != 0:
         sys.exit(f"bench_sph_scale: the trial failed: {(p.stderr.strip().splitlines() or ['?'])[-1]}")
@@ -83,6 +85,8 @@ def main() -> None:
     ap.add_argument("--horizon", type=float, default=90.0, help="simulated seconds of each scaling trial")
     ap.add_argument("--table2-horizon", type=float, default=90.0, help="of the 15-robot Table II trial (0: skip)")
     ap.add_argument("--before", default="", help="git revision to fly the same trials with first")
+    ap.add_argument("--preset", default="", help="SPH preset flown by both (default: each revision's default build; "
+                    "--preset guard flies the same build on revisions before the crowd parts of 30+ robot swarms)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--src", default=str(ROOT / "src"), help=argparse.SUPPRESS)
     ap.add_argument("--geometry", default="scaling", help=argparse.SUPPRESS)
