@@ -44,3 +44,16 @@ def _push_towards_wall(crowd_guard: bool) -> float:
 def test_crowd_guard_keeps_the_crowd_from_pressing_a_robot_into_an_obstacle():
     assert _push_towards_wall(False) > 0.0  # the crowd's 1/r push beats the ESDF force at 0.3 m
     assert _push_towards_wall(True) < 0.0  # guarded: only the ESDF force acts across the band
+
+
+def test_default_build_flies_the_crowd_parts_on_2d_swarms_of_thirty_or_more_only():
+    forest = "random_forest:density=0.35,seed=2,length=12,r_min=1.0,r_max=2.0,min_passage=1.0,spawn_length=8"
+
+    from swarmnav.world import load_scenario
+
+    def pos(n, **params):
+        return swarmnav.run("sph", load_scenario(forest, n=n), seed=2, steps=150, **params).positions
+
+    crowd = dict(preset="guard", rep_cutoff=3.0, crowd_guard=True)
+    assert np.array_equal(pos(30), pos(30, **crowd)) and not np.array_equal(pos(30), pos(30, preset="guard"))
+    assert np.array_equal(pos(29), pos(29, preset="guard"))  # below crowd_size: guard's set, bit for bit
