@@ -388,7 +388,8 @@ def test_run_into_a_directory_of_other_files_needs_no_force(tmp_path):
 
 @pytest.mark.parametrize("method, default, n_diff, differs", [
     ("hes", "swarmnav", 16, ["passage.on              true -> false", "core.merge_rule         swarmnav -> paper_cooldown"]),
-    ("sph", "swarmnav", 7, ["retime       0.8 -> 0", "band_guard   true -> false"]),
+    ("sph", "swarmnav", 9, ["retime       0.8 -> 0", "band_guard   true -> false", "rep_cutoff   3 -> 0",
+             "crowd_guard  true -> false"]),
     ("hwvem", "mission", 1, ["wrap_neighbours  true -> false"]),
     ("ego-swarm", "swarmnav", 2, ["retry_guide     astar -> previous"]),
 ])
@@ -408,7 +409,9 @@ def test_methods_names_the_default_and_the_paper_build_and_what_differs(method, 
             assert f"      {d}" in listed
     if method == "sph":  # our recommended sets are named, with what they change
         guard = next(i for i, line in enumerate(lines) if line.startswith("  guard: ours, recommended in 2-D"))
-        assert "      retime  0.8 -> 0" in lines[guard + 2: guard + 8]  # guard = the default's 2-D set, retime off
-        assert "      by_dim  true -> false" in lines[guard + 2: guard + 8]
+        # guard = the default's 2-D set below 30 robots: retime and the crowd parts off
+        listed = [line.split() for line in lines[guard + 2: guard + 8]]
+        assert ["retime", "0.8", "->", "0"] in listed and ["by_dim", "true", "->", "false"] in listed
+        assert ["rep_cutoff", "3", "->", "0"] in listed and ["crowd_guard", "true", "->", "false"] in listed
     if method == "hes":
         assert "  faithful: the earlier name of preset paper (still accepted, same values)" in out
