@@ -26,13 +26,12 @@ import numpy as np
 
 
 def recompute(store: Path, traj: str, scenario: str, n: int, metrics: dict, body_radius: float) -> float:
-    from swarmnav.metrics.flight import FlightParams
+    from swarmnav.metrics.flight import swarm_goal_radius
     from swarmnav.world import load_scenario
 
     positions = np.load(store / traj)["positions"]
     goal = load_scenario(scenario, n=positions.shape[1]).goal_array
-    fp = FlightParams()
-    r = fp.r_goal * float(np.sqrt(max(positions.shape[1], fp.n_ref) / fp.n_ref))
+    r = swarm_goal_radius(positions.shape[1])
     arrived = (np.linalg.norm(positions - goal, axis=2) <= r).any(axis=0)
     clean = (metrics["min_inter_robot_distance"] >= 2 * body_radius
              and metrics["min_robot_obstacle_distance"] >= body_radius and metrics.get("crashes", 0.0) == 0.0)

@@ -66,6 +66,11 @@ class FlightParams:
     #                         median flight speed [-] (our choice; the paper does not define it)
 
 
+def swarm_goal_radius(n: int, params: FlightParams = FlightParams()) -> float:
+    """r(N) of the swarm test: ``r_goal sqrt(max(N, n_ref) / n_ref)`` [m] (module docstring)."""
+    return params.r_goal * float(np.sqrt(max(n, params.n_ref) / params.n_ref))
+
+
 def flight_metrics(
     positions: np.ndarray,
     velocities: np.ndarray,
@@ -104,7 +109,7 @@ def flight_metrics(
     min_obs = float(clearance.min()) if clearance.size else float("inf")
     touched = min_ij < 2 * p.body_radius or min_obs < p.body_radius
     success = bool(inside[-1].all()) and not touched
-    r_swarm = p.r_goal * float(np.sqrt(max(n, p.n_ref) / p.n_ref))
+    r_swarm = swarm_goal_radius(n, p)
     arrived = (dist_goal <= r_swarm).any(axis=0)  # (N,) inside r(N) at some step
     crash_free = crashed is None or not bool(np.any(crashed))
     swarm_success = bool(arrived.all()) and not touched and crash_free

@@ -191,17 +191,16 @@ class Sph:
         self._prev_labels = labels
         self._prev_visible = keys[vis]
         # Algorithm 1 over the visible neighbours, plus the ESDF environment force
-        force, _, parts = sph_forces(x, v, vi, vj, h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep,
-                                     k_vis=p.k_vis, rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor,
-                                     rep_cutoff=p.rep_cutoff)
+        _, _, parts = sph_forces(x, v, vi, vj, h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep,
+                                 k_vis=p.k_vis, rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor,
+                                 rep_cutoff=p.rep_cutoff)
+        d, grad = self.esdf.query(x)
+        push = parts["density"] + parts["repulsive"]
+        if p.crowd_guard:  # ours: the swarm's push may not press a robot in the band into the obstacle
+            push = band_guard(push, d, grad, p.d_thr)
+        force = push + parts["viscosity"]  # sph_forces' own sum, in its order
         if not p.swarm_vertical and x.shape[1] == 3:  # released 3-D: Algorithm 1 acts in x, y only
             force[:, 2] = 0.0
-        d, grad = self.esdf.query(x)
-        if p.crowd_guard:  # ours: the swarm's push may not press a robot in the band into the obstacle
-            push = band_guard(parts["density"] + parts["repulsive"], d, grad, p.d_thr)
-            force = push + parts["viscosity"]
-            if not p.swarm_vertical and x.shape[1] == 3:
-                force[:, 2] = 0.0
         if p.env_law == "paper":
             force += environment_force(d, grad, p.k_env, p.d_thr)
         else:
