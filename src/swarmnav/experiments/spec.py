@@ -137,6 +137,12 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
     if not isinstance(matrix, dict) or set(matrix) - _MATRIX_KEYS:
         raise ConfigError(f"{source}: [matrix] may only list {sorted(_MATRIX_KEYS)}")
     placed = [{} for _ in raw_variants]  # each variant's matrix values
+    given = dict(overrides)
+    if set(matrix) & set(overrides):  # --set on a matrix axis replaces the axis: `--set n=60` flies 60 only
+        matrix, overrides = dict(matrix), dict(overrides)
+        for k in set(matrix) & set(overrides):
+            vals = str(overrides.pop(k)).split("|")
+            matrix[k] = [coerce(x, int, f"--set {k}") for x in vals] if k in ("n", "steps") else vals
     if matrix:
         axes = list(matrix)
         lists = [m if isinstance(m, list) else [m] for m in matrix.values()]
@@ -188,7 +194,7 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
     if len(set(names)) != len(names):
         raise ConfigError(f"{source}: variant names must be unique, got {names}")
     return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants),
-                      seeds=seed_list, report=dict(report), overrides=dict(overrides))
+                      seeds=seed_list, report=dict(report), overrides=given)
 
 
 def _check_differences(table: Any, known: list[str], where: str) -> None:
