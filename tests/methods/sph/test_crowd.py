@@ -54,6 +54,6 @@ def test_default_build_flies_the_crowd_parts_on_2d_swarms_of_thirty_or_more_only
     def pos(n, **params):
         return swarmnav.run("sph", load_scenario(forest, n=n), seed=2, steps=150, **params).positions
 
-    crowd = dict(preset="guard", rep_cutoff=3.0, crowd_guard=True)
+    crowd = dict(preset="guard", rep_cutoff=3.0, crowd_guard=True, pair_guard=True)
     assert np.array_equal(pos(30), pos(30, **crowd)) and not np.array_equal(pos(30), pos(30, preset="guard"))
     assert np.array_equal(pos(29), pos(29, preset="guard"))  # below crowd_size: guard's set, bit for bit

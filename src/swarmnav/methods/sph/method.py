@@ -36,6 +36,7 @@ from swarmnav.methods.sph.kernel import environment_force, released_environment_
 from swarmnav.methods.sph.params import SphParams, for_dim
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.parts.guard import band_guard
+from swarmnav.methods.sph.parts.pairs import pair_guard
 from swarmnav.methods.sph.parts.retime import retimed
 from swarmnav.methods.sph.parts.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
@@ -148,6 +149,8 @@ class Sph:
         self._final = np.zeros(n, dtype=bool)  # each robot's last local plan ended at its goal
         self._hold = np.zeros(n)  # steps each robot's reference clock stood still (since the last plan)
         self._yield_steps = 0.0  # robot-steps with a slowed reference clock
+        self._pair_guarded = 0  # robot-steps whose command the pair guard changed
+        self._pair_infeasible = 0  # of them, robot-steps no command met every pair constraint
         self._prev_labels: np.ndarray | None = None
         self._prev_visible = np.zeros(0, dtype=np.int64)
         self._plans = 0
@@ -243,6 +246,11 @@ class Sph:
             a = force / p.m + band_guard(track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v), d, grad, p.d_thr)
         else:
             a = track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v, feedforward=force / p.m)
+        if p.pair_guard:  # ours: no command drives a robot into another (parts/pairs.py)
+            a, changed, infeasible = pair_guard(a, x, v, 2.0 * self.scenario.rules.body_radius + p.pair_margin,
+                                                p.pair_decel, p.pair_gamma, p.a_max, p.v_max, p.dt)
+            self._pair_guarded += changed
+            self._pair_infeasible += infeasible
         return a, {"labels": labels, "events": events}
 
     def summary(self) -> dict[str, float]:
@@ -256,6 +264,8 @@ class Sph:
             "sph_link_splits": float(self._link_splits),
             "sph_visible_neighbours_mean": self._neighbours / max(self._steps, 1),
             "sph_waiting_fraction": self._yield_steps / max(self._steps * len(self._hold), 1),
+            **({"sph_pair_guarded_fraction": self._pair_guarded / max(self._steps * len(self._hold), 1),
+                "sph_pair_infeasible_steps": float(self._pair_infeasible)} if self.flown.pair_guard else {}),
             **self._comm.summary(self._steps * self.params.dt),
         }
 

@@ -12,7 +12,7 @@ from swarmnav.params import param
 #: (``swarmnav``); every other preset starts from it.
 PAPER: dict[str, Any] = {"plan_v_max": 0.0, "ref_reset": 0.5, "yield_range": 0.0, "goal_reset": 0.0,
                          "band_guard": False, "retime": 0.0, "by_dim": False,
-                         "rep_cutoff": 0.0, "crowd_guard": False}
+                         "rep_cutoff": 0.0, "crowd_guard": False, "pair_guard": False}
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,7 +55,7 @@ class SphParams:
     PRESET_DOCS: ClassVar[dict[str, str]] = {
         "swarmnav": "ours, the default: guard on a 2-D scene, retime on a 3-D scene (by_dim), each chosen on "
                     "training forests and checked on held-out forests and unseen scenes; 2-D swarms of 30 robots or "
-                    "more also with the crowd parts (rep_cutoff, crowd_guard)",
+                    "more also with the crowd parts (rep_cutoff, crowd_guard, pair_guard)",
         "paper": "Table I and the paper's algorithm, with our readings where it is silent (docs/methods/sph.md): "
                  "the paper rows of docs/reproduction.md (--set preset=paper)",
         "headroom": "ours: paper with the tracking kept below what the swarm forces can hold (plan at 0.8 v_max, "
@@ -123,8 +123,20 @@ class SphParams:
         "inside the obstacle band (d < d_thr) the swarm's push (Alg. 1 density and repulsion terms) "
         "loses its component towards the obstacle, as band_guard does for the tracking term: a crowd "
         "may push a robot along an obstacle, never into it")
+    pair_guard: bool = param(True, "", None, "ours (Wang, Ames & Egerstedt, T-RO 2017)",
+        "each robot's command is changed as little as possible so that no pair of robots closes faster "
+        "than both can brake before 2 body radii + pair_margin (safety barrier certificates for double "
+        "integrators, each robot half of each pair's constraint): a queue pressed from behind stops "
+        "short of contact")
+    pair_margin: float = param(0.02, "m", "[0, inf)", "ours",
+        "pair_guard: the pair stops this far beyond contact (2 body radii)")
+    pair_decel: float = param(0.75, "m/s^2", "(0, inf)", "ours",
+        "pair_guard: the braking each robot of a pair is assumed to have (half a_max, the rest left "
+        "to the other terms)")
+    pair_gamma: float = param(2.0, "1/s", "(0, inf)", "ours (Wang et al.'s class-K function, linear)",
+        "pair_guard: how fast a pair may use up its braking margin (dh/dt >= -pair_gamma h)")
     crowd_size: int = param(30, "", "[1, inf)", "ours",
-        "with by_dim (the default build), rep_cutoff and crowd_guard act on 2-D swarms of this many "
+        "with by_dim (the default build), rep_cutoff, crowd_guard and pair_guard act on 2-D swarms of this many "
         "robots or more; smaller swarms fly the paper's repulsion and no crowd guard (Table II's 15 and "
         "Fig. 3 B's 20 robots were chosen and measured so; 3-D not measured with them yet)")
     esdf_resolution: float = param(0.1, "m", "[0.01, 1]", "ours", "ESDF grid, as the released sdf_map")
@@ -243,12 +255,12 @@ def for_dim(p: SphParams, dim: int, n: int | None = None) -> SphParams:
     """The parameters a run of ``n`` robots on a ``dim``-D scene flies: ``p`` itself unless
     ``p.by_dim``; with it, the recommended set of that dimension (2-D: ``guard``'s, so ``retime``
     off; 3-D: ``retime``'s, so ``goal_reset`` and ``band_guard`` off) and of that swarm size (the
-    crowd parts ``rep_cutoff`` and ``crowd_guard`` on a 2-D scene of ``crowd_size`` robots or
+    crowd parts ``rep_cutoff``, ``crowd_guard`` and ``pair_guard`` on a 2-D scene of ``crowd_size`` robots or
     more only: they were chosen on 2-D forests), the other values as given."""
     if not p.by_dim:
         return p
     if dim != 2 or (n is not None and n < p.crowd_size):  # chosen on 2-D forests; not measured in 3-D yet
-        p = replace(p, rep_cutoff=0.0, crowd_guard=False)
+        p = replace(p, rep_cutoff=0.0, crowd_guard=False, pair_guard=False)
     if dim == 2:
         return replace(p, retime=0.0)
     return replace(p, goal_reset=0.0, band_guard=False)

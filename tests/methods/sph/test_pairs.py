@@ -1,0 +1,104 @@
+"""The pair guard of SPH (ours, parts/pairs.py; docs/methods/sph.md, *A crowd that does not crush
+itself*): safety barrier certificates for double integrators, half of each pair's constraint per robot."""
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import minimize
+
+import swarmnav
+from swarmnav.methods.sph.parts.pairs import pair_constraints, pair_guard
+from swarmnav.world import from_dict
+
+D_SAFE, DECEL, GAMMA, V_MAX, DT = 0.42, 0.75, 2.0, 1.0, 0.01
+
+
+def _rows(a, x, v, a_max):
+    """Each robot's half-space constraints ``g . a_r <= c`` as the module states them."""
+    pairs, n, b = pair_constraints(x, v, D_SAFE, DECEL, GAMMA, a_max, V_MAX, DT)
+    rows = [[] for _ in range(len(a))]
+    for (i, j), nn, bb in zip(pairs, n, b):
+        rows[i].append((-nn, bb / 2))
+        rows[j].append((nn, bb / 2))
+    return rows
+
+
+def _nearest(a0, rows):
+    """The nearest command to ``a0`` meeting ``rows``, by SciPy's SLSQP."""
+    cons = [{"type": "ineq", "fun": (lambda a, g=g, c=c: c - g @ a), "jac": (lambda a, g=g: -g)} for g, c in rows]
+    res = minimize(lambda a: np.sum((a - a0) ** 2), a0, jac=lambda a: 2 * (a - a0), constraints=cons,
+                   method="SLSQP", options={"ftol": 1e-14, "maxiter": 500})
+    return res.x, res.success
+
+
+crowds = st.integers(2, 7).flatmap(lambda n: st.tuples(
+    st.lists(st.tuples(st.floats(-1.2, 1.2), st.floats(-1.2, 1.2)), min_size=n, max_size=n),
+    st.lists(st.tuples(st.floats(-0.7, 0.7), st.floats(-0.7, 0.7)), min_size=n, max_size=n),
+    st.lists(st.tuples(st.floats(-1.0, 1.0), st.floats(-1.0, 1.0)), min_size=n, max_size=n)))
+
+
+@settings(max_examples=60, deadline=None)
+@given(crowds)
+def test_guard_gives_each_robot_the_nearest_command_meeting_its_constraints(crowd):
+    x, v, a0 = (np.array(c, dtype=float) for c in crowd)
+    d = np.linalg.norm(x[:, None] - x[None], axis=2) + 10 * np.eye(len(x))
+    if d.min() < D_SAFE + 0.01:  # a pair already inside d_safe may have no feasible command
+        return
+    a_max = 1.5
+    out, changed, infeasible = pair_guard(a0, x, v, D_SAFE, DECEL, GAMMA, a_max, V_MAX, DT)
+    rows = _rows(a0, x, v, a_max)
+    moved = 0
+    for r in range(len(x)):
+        cut = a0[r] * min(1.0, a_max / max(np.linalg.norm(a0[r]), 1e-300))  # as the dynamics cut it
+        if not rows[r] or all(g @ cut <= c + 1e-9 for g, c in rows[r]):
+            assert np.array_equal(out[r], a0[r])  # a robot whose command breaks nothing keeps it
+            continue
+        moved += 1
+        ref, success = _nearest(cut, rows[r])
+        feasible = success and all(g @ ref <= c + 1e-7 for g, c in rows[r])
+        if feasible:  # the exact solution is SLSQP's, and meets every constraint
+            assert np.allclose(out[r], ref, atol=1e-6), (r, out[r], ref)
+            assert all(g @ out[r] <= c + 1e-8 for g, c in rows[r])
+    assert changed == moved
+
+
+def _close_in(guard: bool, n: int = 40, seconds: float = 12.0, dt: float = 0.01) -> float:
+    """Closest distance [m] of ``n`` double integrators (|v| <= 1, |a| <= 1.5) that all steer for
+    one point with a PD law, from a ring of radius 3 m."""
+    ang = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    x = 3.0 * np.c_[np.cos(ang), np.sin(ang)]
+    v = np.zeros_like(x)
+    closest = np.inf
+    for _ in range(int(seconds / dt)):
+        a = 2.0 * (0.0 - x) - 2.0 * v
+        if guard:
+            a, _, _ = pair_guard(a, x, v, D_SAFE, DECEL, GAMMA, 1.5, V_MAX, dt)
+        norm = np.linalg.norm(a, axis=1, keepdims=True)
+        a = a * np.minimum(1.0, 1.5 / np.maximum(norm, 1e-12))
+        v = v + a * dt
+        speed = np.linalg.norm(v, axis=1, keepdims=True)
+        v = v * np.minimum(1.0, V_MAX / np.maximum(speed, 1e-12))
+        x = x + v * dt
+        d = np.linalg.norm(x[:, None] - x[None], axis=2) + 10 * np.eye(n)
+        closest = min(closest, float(d.min()))
+    return closest
+
+
+def test_guard_keeps_robots_that_all_head_for_one_point_out_of_contact():
+    assert _close_in(False) < 0.1  # unguarded they pile onto the point
+    assert _close_in(True) >= 0.4  # guarded none comes within the contact distance
+
+
+def test_default_build_guards_pairs_on_crowds_only_and_paper_never():
+    # 30 robots gather at one goal in an open plane: the default build (crowd parts on from 30
+    # robots) guards pairs as they pack, and no pair comes within 2 body radii + pair_margin
+    scn = {"name": "gather", "world": {"bounds": [-12.0, -14.0, 28.0, 14.0]},
+           "swarm": {"n": 30, "spawn": [-8.0, -4.0, 0.0, 4.0]}, "goal": {"position": [14.0, 0.0]}}
+    crowd = swarmnav.run("sph", from_dict(scn), seed=1, horizon=40.0)
+    assert 0.0 < crowd.metrics["sph_pair_guarded_fraction"] < 1.0
+    assert crowd.metrics["min_inter_robot_distance"] >= 0.42 - 1e-3
+    assert crowd.metrics["sph_swarm_success"] == 1.0
+    small = swarmnav.run("sph", from_dict({**scn, "swarm": {**scn["swarm"], "n": 15}}), seed=1, steps=200)
+    assert "sph_pair_guarded_fraction" not in small.metrics
+    paper = swarmnav.run("sph", from_dict(scn), seed=1, steps=200, preset="paper")
+    assert "sph_pair_guarded_fraction" not in paper.metrics
