@@ -1,4 +1,4 @@
-"""The two crowd parts of SPH (ours, docs/methods/sph.md, *A crowd that does not crush itself*):
+"""The two crowd parts of SPH (ours, docs/methods/sph-crowd.md):
 the repulsion cut-off (``rep_cutoff``) and the crowd guard (``crowd_guard``)."""
 
 import numpy as np

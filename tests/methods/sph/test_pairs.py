@@ -1,5 +1,5 @@
-"""The pair guard of SPH (ours, parts/pairs.py; docs/methods/sph.md, *A crowd that does not crush
-itself*): safety barrier certificates for double integrators, half of each pair's constraint per robot."""
+"""The pair guard of SPH (ours, parts/pairs.py; docs/methods/sph-crowd.md): safety barrier
+certificates for double integrators, half of each pair's constraint per robot."""
 
 import numpy as np
 from hypothesis import given, settings

@@ -100,7 +100,7 @@ def sph_forces(
         rep_cutoff: 0 (the paper): line 9 sums over every pair passed in. Positive: only pairs
             closer than ``rep_cutoff`` [m] repel, with line 9's unchanged 1/r (a hard cut, as the
             released code's neighbour search cuts every pair term at 2h; ours,
-            docs/methods/sph.md, *A crowd that does not crush itself*).
+            docs/methods/sph-crowd.md).
 
     Returns:
         ``(force (N, D), density (N,), parts)``: the sum of the three inter-agent terms

@@ -3,8 +3,8 @@
 Algorithm 1 keeps robots apart only through its 1/r repulsion and the density pressure. In a
 crowd of 60-100 robots queueing at the gaps of a forest, the robots behind press the queue
 forward (their tracking pulls them on, the density term pushes), and two robots at its head meet
-at 0.391-0.399 m, inside the 0.4 m contact distance (docs/methods/sph.md, *A crowd that does not
-crush itself*). A force that grows as 1/r cannot promise a distance; a constraint on the command can.
+at 0.391-0.399 m, inside the 0.4 m contact distance (docs/methods/sph-crowd.md). A force that
+grows as 1/r cannot promise a distance; a constraint on the command can.
 
 The guard is the safety barrier certificate of Wang, Ames and Egerstedt ("Safety barrier
 certificates for collisions-free multirobot systems", IEEE T-RO 33(3), 2017) for double
