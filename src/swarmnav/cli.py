@@ -177,6 +177,13 @@ def _print_params(spec, out) -> None:
                                                       if tuple(dims) == (2,) else "")
           + (", plans = false keeps no committed trajectories (docs/methods/contract.md)"
              if callable(getattr(spec.factory, "plans", None)) else ""), file=out)
+    if getattr(spec.factory, "networked", False):
+        from swarmnav.sim.network import NetParams
+
+        net = ", ".join(f"net.{i.name} [{i.unit or '-'}] {i.range}" for i in describe(NetParams))
+        print(f"network (--set net.NAME; docs/network.md; defaults: the ideal network): {net}", file=out)
+    else:
+        print("network: the ideal one only (this method does not read the others through a network yet)", file=out)
     table = presets(spec.params)
     if table:
         cls, default = spec.params, default_build(spec.params)

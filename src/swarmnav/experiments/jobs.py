@@ -44,15 +44,19 @@ def plan(exp: Experiment) -> list[Job]:
     """
     from swarmnav.methods import registry
     from swarmnav.params import identity
-    from swarmnav.sim.rollout import RUN_OPTIONS
+    from swarmnav.sim.network import PREFIX as NET_PREFIX, net_params, record as net_record
+    from swarmnav.sim.rollout import is_run_option
     from swarmnav.world.catalog import load_scenario
 
     jobs = []
     for v in exp.variants:
         try:
-            method_params = {k: x for k, x in v.params.items() if k not in RUN_OPTIONS}
+            method_params = {k: x for k, x in v.params.items() if not is_run_option(k)}
             params = identity(registry.make(v.method, **method_params).params)
-            params.update({k: v.params[k] for k in RUN_OPTIONS if k in v.params})
+            params.update({k: x for k, x in v.params.items() if is_run_option(k) and not k.startswith(NET_PREFIX)})
+            net = net_params({k: x for k, x in v.params.items() if k.startswith(NET_PREFIX)})
+            if not net.ideal:  # the network as resolved: `net.loss=0.30` and `net.loss=0.3` are one run,
+                params["net"] = net_record(net)  # and an ideal network leaves the key as without one
             load_scenario(v.scenario.replace("{seed}", str(exp.seeds[0])), n=v.n)
         except SwarmnavError as e:
             raise ConfigError(f"{exp.name} variant '{v.name}': {e}") from None

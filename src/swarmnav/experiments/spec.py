@@ -233,7 +233,7 @@ def _check_params(variants: list[Variant], source: str) -> None:
     """Build every variant's method once, so a bad parameter fails the whole experiment before
     its first run (one line naming the variant), not every run of it."""
     from swarmnav.methods import registry
-    from swarmnav.sim.rollout import RUN_OPTIONS
+    from swarmnav.sim.rollout import is_run_option
 
     seen = set()
     for v in variants:
@@ -242,7 +242,7 @@ def _check_params(variants: list[Variant], source: str) -> None:
             continue
         seen.add(key)
         try:
-            registry.make(v.method, **{k: x for k, x in v.params.items() if k not in RUN_OPTIONS})
+            registry.make(v.method, **{k: x for k, x in v.params.items() if not is_run_option(k)})
         except ConfigError as e:
             raise ConfigError(f"{source}: variant {v.name}: {e}") from None
 
@@ -303,9 +303,9 @@ def steps_for(method: str, params: dict[str, Any], horizon: float) -> int:
     """Steps that cover ``horizon`` seconds with the method's own integration step."""
     from swarmnav.methods import registry
 
-    from swarmnav.sim.rollout import RUN_OPTIONS, steps_for_horizon
+    from swarmnav.sim.rollout import is_run_option, steps_for_horizon
 
-    dt = float(registry.make(method, **{k: v for k, v in params.items() if k not in RUN_OPTIONS}).dt)
+    dt = float(registry.make(method, **{k: v for k, v in params.items() if not is_run_option(k)}).dt)
     return steps_for_horizon(horizon, dt)
 
 

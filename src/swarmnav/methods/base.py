@@ -35,12 +35,35 @@ from swarmnav.world.scenario import Scenario
 
 @dataclass(frozen=True, slots=True)
 class Observation:
-    """What every agent knows at step ``step`` (global state; methods restrict themselves)."""
+    """What the agents know at step ``step``: each its own state (``positions[i]``,
+    ``velocities[i]``), and the others' states as its network delivered them (``view``; None: the
+    ideal network, every agent's true state at once). A method reads another agent's state only
+    through :meth:`others` (docs/network.md)."""
 
     step: int
     time: float  # [s]
     positions: np.ndarray  # (N, d) [m], d = the world's dimension
     velocities: np.ndarray  # (N, d) [m/s]
+    view: Any = None  # swarmnav.sim.network.View, or None (ideal network)
+
+    def others(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Agent ``j[p]``'s position (P, d) [m] and velocity (P, d) [m/s] as agent ``i[p]`` last
+        received them, and whether it has received any (P,) bool (a pair never heard must be
+        left out). The ideal network gives the true states."""
+        if self.view is None:
+            return self.positions[j], self.velocities[j], np.ones(len(j), dtype=bool)
+        return self.view.positions[i, j], self.view.velocities[i, j], np.isfinite(self.view.age[i, j])
+
+    def known(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every agent's picture of every other: positions (N, N, d) [m] and velocities (N, N, d)
+        [m/s] of agent j as agent i last received them, and (N, N) bool heard; row i, column i
+        is agent i's own state. All pairs: for methods whose kernels take all pairs at once."""
+        n = len(self.positions)
+        if self.view is None:
+            shape = (n, *self.positions.shape)
+            return (np.broadcast_to(self.positions, shape), np.broadcast_to(self.velocities, shape),
+                    np.ones((n, n), dtype=bool))
+        return self.view.positions, self.view.velocities, np.isfinite(self.view.age)
 
 
 class Dynamics(Protocol):
@@ -55,6 +78,9 @@ class Method(Protocol):
     dynamics: Dynamics
     dt: float  # integration step [s] the method is designed for
     dims: tuple[int, ...]  # world dimensions flown natively; (2,): a 3-D scene is flown in its slice at z_fly
+    # optional ``networked: bool`` (absent: False): True for a method that reads every other agent
+    # only through ``Observation.others`` / ``known``; the rollout refuses a non-ideal network
+    # (``net.*``) for any other method with one line
     # optional ``periodic: bool`` (absent: True): False for a method that cannot fly a periodic
     # box (the trajectory planners); the rollout refuses such a run with one line
 

@@ -18,6 +18,7 @@ from swarmnav.metrics.navigation import MetricParams, goal_reached, navigation_m
 from swarmnav.params import as_dict, coerce
 from swarmnav.portable import numerics
 from swarmnav.sensing import PreparedGeometry
+from swarmnav.sim.network import PREFIX as NET_PREFIX, Network, net_params, record as net_record
 from swarmnav.sim.referee import Referee
 from swarmnav.sim.result import Plans, RunResult
 from swarmnav.world.catalog import load_scenario
@@ -29,6 +30,12 @@ SCENE_OPTIONS = ("boundary", "contact", "goal_radius", "d_safe", "body_radius")
 #: Options of the run itself, accepted by :func:`run` beside the method's parameters (and by
 #: ``--set`` on the command line and in experiment specs).
 RUN_OPTIONS = ("z_fly", *SCENE_OPTIONS, "plans")
+
+
+def is_run_option(key: str) -> bool:
+    """A ``--set`` key of the run rather than of its method: :data:`RUN_OPTIONS` and the
+    network's ``net.*`` (docs/network.md)."""
+    return key in RUN_OPTIONS or key.startswith(NET_PREFIX)
 
 
 def run(
@@ -73,7 +80,8 @@ def run(
         plans: keep the trajectories a planner committed (its optional ``plans()`` hook,
             docs/methods/contract.md) in ``RunResult.plans``; False (or ``"false"``) keeps
             none. Either way the run flies the same.
-        **params: method parameters (unknown names raise ConfigError).
+        **params: method parameters (unknown names raise ConfigError), and the network's
+            ``net.*`` options (pass them as ``**{"net.latency": 0.15}``; docs/network.md).
 
     The same (method, params, scene, seed, steps) always gives identical arrays.
     """
@@ -81,7 +89,11 @@ def run(
     scn = with_rules(scn, boundary=boundary, contact=contact, goal_radius=goal_radius, d_safe=d_safe,
                      body_radius=body_radius)
     keep_plans = coerce(plans, bool, "plans")
+    net = net_params({k: params.pop(k) for k in [k for k in params if k.startswith(NET_PREFIX)]})
     m = registry.make(method, **params) if isinstance(method, str) else method
+    if not net.ideal and not getattr(m, "networked", False):
+        raise ConfigError(f"{m.name} does not read the other agents through the network yet, so it cannot fly "
+                          f"a non-ideal one (net.*); methods that can: {', '.join(_networked()) or 'none'}")
     if (steps is None) == (horizon is None):
         raise ConfigError("give exactly one of steps or horizon")
     if steps is None:
@@ -99,6 +111,10 @@ def run(
     vel = np.zeros_like(pos)
     m.reset(world, pos.copy(), vel.copy(), rng)
     dt = float(m.dt)
+    network = None
+    if not net.ideal:  # the agents send at net.rate, else at the method's own broadcast rate, else every step
+        own_rate = float(getattr(m.params, "broadcast_hz", 0.0) or 0.0)
+        network = Network(net, scn.n, pos.shape[1], dt, seed, rate=net.rate or own_rate)
     N = scn.n
     d = scn.dim
     P = np.empty((steps + 1, N, d))
@@ -141,7 +157,8 @@ def run(
     # warnings on the way there (an overflow in a power, inf - inf): they only repeat it
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), _closing(m):
         for k in range(steps):
-            cmd, info = m.act(Observation(k, k * dt, pos, vel), rng)
+            view = None if network is None else network.step(k * dt, pos, vel)
+            cmd, info = m.act(Observation(k, k * dt, pos, vel, view), rng)
             pos, vel = m.dynamics.step(pos, vel, cmd, dt)
             if referee is not None:
                 referee.hold(pos, vel)
@@ -204,6 +221,7 @@ def run(
             "horizon": int(steps) * dt,  # [s] simulated time asked for (a method may end the run early)
             **({"plane": {"z_fly": plane_z, "reason": f"{m.name} is planar: it flew the scene's "
                           f"horizontal slice at z = {plane_z:g} m"}} if plane_z is not None else {}),
+            **({"net": net_record(net)} if network is not None else {}),
         },
         positions=P, velocities=V, clearance=C, labels=lab, roles=roles, events=events, wall_time=wall,
     )
@@ -223,6 +241,8 @@ def run(
         metrics.update(flight_metrics(P, V, C, scn.goal_array, dt, FlightParams(body_radius=rules.body_radius),
                                       min_pair=metrics["min_inter_agent_distance"], crashed=crashed))
     metrics.update(m.summary())
+    if network is not None:
+        metrics.update(network.summary())
     result.metrics = metrics
     timings = getattr(m, "timings", None)  # optional hook: wall-clock figures, never metrics
     if callable(timings):
@@ -398,3 +418,8 @@ def _progress(progress, steps):
             bar.close()
 
     return update
+
+
+def _networked() -> list[str]:
+    """Registered methods that read the other agents only through the network (a class attribute)."""
+    return [n for n in registry.names() if getattr(registry.spec(n).factory, "networked", False)]

@@ -96,12 +96,12 @@ def write_store_viewers(directory: str | Path, experiment: str | None = None,
         ``dt``); else the method made from the variant's declared parameters says it (the
         resolved set of an older version may name parameters that no longer exist)."""
         from swarmnav.methods import registry
-        from swarmnav.sim.rollout import RUN_OPTIONS
+        from swarmnav.sim.rollout import is_run_option
 
         resolved = (row.get("config") or {}).get("params") or {}
         if isinstance(resolved.get("dt"), (int, float)):
             return float(resolved["dt"])
-        params = {k: v for k, v in row["params"].items() if k not in RUN_OPTIONS}
+        params = {k: v for k, v in row["params"].items() if not is_run_option(k)}
         key = row["method"] + json.dumps(params, sort_keys=True, default=str)
         if key not in dts:
             dts[key] = float(registry.make(row["method"], **params).dt)

@@ -4,6 +4,7 @@ in sight, at the wall's distance, pointing at it; and the held broadcasts counte
 import numpy as np
 import pytest
 
+from swarmnav.methods.base import Observation
 from swarmnav.methods.flocking.common import (
     STATE_BYTES,
     RangeSensor,
@@ -41,7 +42,8 @@ def test_broadcasts_are_held_between_sends_and_counted():
     board = StateBoard(10.0, 0.02)  # every 5th step
     x = np.zeros((4, 2))
     for k in range(12):
-        hx, _ = board.update(k, x + k, x)
+        hx, _, heard = board.update(Observation(k, 0.02 * k, x + k, x))
+        assert heard is None
         assert np.all(hx == (k // 5) * 5)  # the last broadcast
     s = board.summary()
     assert s["comm_messages"] == 3 * 4 and s["comm_bytes"] == 3 * 4 * STATE_BYTES == 3 * 4 * 88

@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from swarmnav.methods.apf import fibonacci_sphere
+from swarmnav.methods.base import Observation
 from swarmnav.planning.messages import FLOAT, HEADERS, INT, CommLog
 from swarmnav.sensing import PreparedGeometry, lidar_ring
 from swarmnav.world.scenario import Scenario
@@ -27,6 +28,9 @@ from swarmnav.world.scenario import Scenario
 #: [B] one state message: sender id (4 B), time stamp (8 B), position and velocity (3 floats each),
 #: with the UDP/IPv4 headers; 3 floats whatever the world's dimension, as the position message
 STATE_BYTES = HEADERS + INT + FLOAT + 6 * FLOAT  # 88 B
+#: [m] where a robot that has heard nothing of another places it: far beyond every interaction
+#: range of the flocking laws, so the pair contributes nothing
+UNHEARD = 1e9
 
 
 class RangeSensor:
@@ -114,12 +118,18 @@ def sphere_neighbours(dirs: np.ndarray, k: int = 6) -> np.ndarray:
 
 
 def pair_differences(x: np.ndarray, others: np.ndarray | None = None,
-                     period: np.ndarray | None = None) -> np.ndarray:
+                     period: np.ndarray | None = None, heard: np.ndarray | None = None) -> np.ndarray:
     """(N, N, d) ``others[j] - x[i]`` at ``[i, j]`` (``others`` defaults to ``x``: what robot i knows
-    of robot j against its own state); the nearest image in a periodic box of side ``period`` (d,)."""
-    diff = (x if others is None else others)[None, :, :] - x[:, None, :]
+    of robot j against its own state; (N, N, d) ``others[i, j]``: each robot's own picture, from
+    the network); the nearest image in a periodic box of side ``period`` (d,); pairs not ``heard``
+    (N, N) placed :data:`UNHEARD` away."""
+    o = x if others is None else others
+    diff = (o if o.ndim == 3 else o[None, :, :]) - x[:, None, :]
     if period is not None:
         diff -= period * np.round(diff / period)
+    if heard is not None:  # a robot never heard: far beyond every interaction range, so it adds nothing
+        diff[~heard] = 0.0
+        diff[~heard, 0] = UNHEARD
     return diff
 
 
@@ -136,16 +146,27 @@ class StateBoard:
         self.v: np.ndarray | None = None
         self._steps = 0
 
-    def update(self, step: int, x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Broadcast at ``step`` if it is a sending step (the first step always is); return the
-        states held: ``(x, v)`` (N, d) each."""
+    def update(self, obs: Observation) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Broadcast at ``obs.step`` if it is a sending step (the first step always is); return the
+        states held: ``(x, v)`` (N, d) each, every robot's broadcast; or, on a network
+        (``obs.view``), (N, N, d) each, robot i's picture of robot j at ``[i, j]``; and the (N, N)
+        pairs heard (None: all), for :func:`pair_differences`."""
+        x, v = obs.positions, obs.velocities
         every = max(1, int(round(1.0 / (self.rate_hz * self.dt))))
-        if self.x is None or step % every == 0:
+        if self.x is None or obs.step % every == 0:
             self.x, self.v = x.copy(), v.copy()
             self.log.send(len(x), STATE_BYTES)
         self._steps += 1
-        return self.x, self.v
+        if obs.view is None:
+            return self.x, self.v, None
+        kx, kv, heard = obs.known()
+        return kx, kv, (None if heard.all() else heard)
 
     def summary(self) -> dict[str, float]:
         return self.log.summary(self._steps * self.dt)
 
+
+def velocity_differences(v: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """(N, N, d) ``others[j] - v[i]`` at ``[i, j]``, or ``others[i, j] - v[i]`` for (N, N, d)
+    ``others`` (each robot's own picture, from the network)."""
+    return (others if others.ndim == 3 else others[None, :, :]) - v[:, None, :]

@@ -35,7 +35,7 @@ import numpy as np
 from swarmnav.dynamics import SaturatedDoubleIntegrator
 from swarmnav.errors import ConfigError
 from swarmnav.methods.base import Observation
-from swarmnav.methods.flocking.common import RangeSensor, StateBoard, pair_differences
+from swarmnav.methods.flocking.common import RangeSensor, StateBoard, pair_differences, velocity_differences
 from swarmnav.methods.registry import register
 from swarmnav.params import build, param
 from swarmnav.world.scenario import Scenario
@@ -172,6 +172,7 @@ class OlfatiSaber:
 
     name = "olfati-saber"
     dims = (2, 3)
+    networked = True  # reads the others only through the network (Observation.known; docs/network.md)
 
     def __init__(self, **overrides: Any):
         p = build(OlfatiSaberParams, overrides, context="olfati-saber")
@@ -194,9 +195,9 @@ class OlfatiSaber:
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.params
         x, v = obs.positions, obs.velocities
-        hx, hv = self._board.update(obs.step, x, v)  # what the others last received
-        diff = pair_differences(x, hx, self._period)
-        u = alpha_term(diff, hv[None, :, :] - v[:, None, :], p)
+        hx, hv, heard = self._board.update(obs)  # what the others last received
+        diff = pair_differences(x, hx, self._period, heard)
+        u = alpha_term(diff, velocity_differences(v, hv), p)
         agent, dist, normal = self._sensor.surface_points(x, p.r_obs)
         u += beta_term(v, agent, dist, normal, p)
         u += gamma_term(x, v, self.goal, np.zeros_like(self.goal), p)

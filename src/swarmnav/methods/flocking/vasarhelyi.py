@@ -34,7 +34,7 @@ import numpy as np
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator, clip_norm
 from swarmnav.methods.base import Observation
-from swarmnav.methods.flocking.common import RangeSensor, StateBoard, pair_differences
+from swarmnav.methods.flocking.common import RangeSensor, StateBoard, pair_differences, velocity_differences
 from swarmnav.methods.registry import register
 from swarmnav.params import build, param
 from swarmnav.world.scenario import Scenario
@@ -175,6 +175,7 @@ class Vasarhelyi:
 
     name = "vasarhelyi"
     dims = (2, 3)
+    networked = True  # reads the others only through the network (Observation.known; docs/network.md)
 
     def __init__(self, **overrides: Any):
         p = build(VasarhelyiParams, overrides, context="vasarhelyi")
@@ -193,16 +194,18 @@ class Vasarhelyi:
         self._shill = 0
         self._cut = 0
 
-    def desired_velocity(self, x: np.ndarray, v: np.ndarray, hx: np.ndarray, hv: np.ndarray) -> np.ndarray:
+    def desired_velocity(self, x: np.ndarray, v: np.ndarray, hx: np.ndarray, hv: np.ndarray,
+                         heard: np.ndarray | None = None) -> np.ndarray:
         """``v_d`` (N, d) [m/s] before the cut at ``v_max``, from the robots' own states and the held
-        broadcasts ``hx``, ``hv`` of the others."""
+        broadcasts ``hx``, ``hv`` of the others ((N, d), or (N, N, d) each robot's picture on a
+        network, ``heard`` the pairs it has heard)."""
         s, p = self.scaled, self.params
-        diff = pair_differences(x, hx, self._period)
+        diff = pair_differences(x, hx, self._period, heard)
         g = self.goal - x
         gn = np.sqrt(np.einsum("ij,ij->i", g, g))
         vd = s.v_flock * g / np.maximum(gn, p.r_slow)[:, None]
         vd += repulsion(diff, s)
-        vd += friction(diff, hv[None, :, :] - v[:, None, :], s)
+        vd += friction(diff, velocity_differences(v, hv), s)
         agent, dist, normal = self._sensor.surface_points(x, np.inf)  # within shill_reach
         vd += shill(v, agent, dist - p.shill_offset, normal, s)
         self._shill += len(agent)
@@ -211,8 +214,8 @@ class Vasarhelyi:
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.params
         x, v = obs.positions, obs.velocities
-        hx, hv = self._board.update(obs.step, x, v)
-        vd = self.desired_velocity(x, v, hx, hv)
+        hx, hv, heard = self._board.update(obs)
+        vd = self.desired_velocity(x, v, hx, hv, heard)
         self._cut += int(np.count_nonzero(np.einsum("ij,ij->i", vd, vd) > p.v_max * p.v_max))
         vd = clip_norm(vd, p.v_max)
         self._steps += 1

@@ -36,7 +36,8 @@ from swarmnav.methods.sph.kernel import environment_force, released_environment_
 from swarmnav.methods.sph.params import SphParams, for_dim
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.parts.guard import band_guard
-from swarmnav.methods.sph.parts.pairs import pair_guard
+from swarmnav.methods.sph.networked import directed_forces, directed_yield_rates, heard_pairs
+from swarmnav.methods.sph.parts.pairs import pair_guard, pair_guard_known
 from swarmnav.methods.sph.parts.retime import retimed
 from swarmnav.methods.sph.parts.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
@@ -104,6 +105,7 @@ class Sph:
 
     name = "sph"
     dims = (2, 3)  # flies planar and 3-D scenes natively: every array is (N, d), d from the scene
+    networked = True  # reads the others only through Observation.known (docs/network.md)
 
     def __init__(self, **overrides: Any):
         p = build(SphParams, overrides, context="sph")
@@ -180,8 +182,13 @@ class Sph:
         x, v = obs.positions, obs.velocities
         n = x.shape[0]
         t0 = time.perf_counter()
+        view = obs.view  # None: the ideal network, every robot's true state (docs/network.md)
         # Algorithm 2: raycast visibility, sub-swarms, split / merge
-        i, j, vis = visible_pairs(self.geom, x, p.R)
+        if view is None:
+            i, j, vis = visible_pairs(self.geom, x, p.R)
+        else:  # each robot's own directed pairs, from what it received
+            kx, kv, heard = obs.known()
+            i, j, vis = heard_pairs(self.geom, x, kx, heard, p.R)
         vi, vj = i[vis], j[vis]
         labels = components(n, vi, vj)
         keys = i * n + j
@@ -194,9 +201,12 @@ class Sph:
         self._prev_labels = labels
         self._prev_visible = keys[vis]
         # Algorithm 1 over the visible neighbours, plus the ESDF environment force
-        _, _, parts = sph_forces(x, v, vi, vj, h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep,
-                                 k_vis=p.k_vis, rho0=p.rho0, gamma=p.gamma, kind=p.kernel, r_floor=p.r_floor,
-                                 rep_cutoff=p.rep_cutoff)
+        terms = dict(h=p.h, c=p.c, m=p.m, k_den=p.k_den, k_rep=p.k_rep, k_vis=p.k_vis, rho0=p.rho0, gamma=p.gamma,
+                     kind=p.kernel, r_floor=p.r_floor, rep_cutoff=p.rep_cutoff)
+        if view is None:
+            _, _, parts = sph_forces(x, v, vi, vj, **terms)
+        else:
+            parts = directed_forces(x, v, kx, kv, vi, vj, **terms)
         d, grad = self.esdf.query(x)
         push = parts["density"] + parts["repulsive"]
         if p.crowd_guard:  # ours: the swarm's push may not press a robot in the band into the obstacle
@@ -215,6 +225,7 @@ class Sph:
         # trajectory planning every T_p (or once, Fig. 3B protocol)
         if self.references.empty or (not p.plan_once and self._schedule.due(obs.step)):
             self._visible = (vi, vj)
+            self._seen = None if view is None else kx
             self._replan(obs.step, x, v, d)
         q_ref, v_ref, a_ref = self._reference(obs.step)
         hold = p.once_hold if p.plan_once else p.ref_hold
@@ -229,7 +240,14 @@ class Sph:
             phi = np.clip(2.0 - 2.0 * lag / hold, 0.0, 1.0)
         if p.yield_range > 0:  # a queue in narrow places (parts/yielding.py)
             to_goal, _ = self._to_goal.query(x)
-            phi = np.minimum(phi, yield_rates(to_goal, x, d, vi, vj, p.yield_range, p.yield_clearance))
+            if view is None:
+                phi = np.minimum(phi, yield_rates(to_goal, x, d, vi, vj, p.yield_range, p.yield_clearance))
+            else:  # each robot judges its neighbours where it believes them to be
+                seen = np.ascontiguousarray(kx[vi, vj])
+                to_goal_of = self._to_goal.query(seen)[0] if len(vi) else np.zeros(0)
+                clear_of = self.esdf.query(seen)[0] if len(vi) else np.zeros(0)
+                phi = np.minimum(phi, directed_yield_rates(to_goal, to_goal_of, x, seen, d, clear_of, vi, vj,
+                                                           p.yield_range, p.yield_clearance))
         if hold > 0 or p.yield_range > 0:
             self._hold += 1.0 - phi
             self._yield_steps += float(np.sum(phi < 1.0))
@@ -247,8 +265,12 @@ class Sph:
         else:
             a = track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v, feedforward=force / p.m)
         if p.pair_guard:  # ours: no command drives a robot into another (parts/pairs.py)
-            a, changed, infeasible = pair_guard(a, x, v, 2.0 * self.scenario.rules.body_radius + p.pair_margin,
-                                                p.pair_decel, p.pair_gamma, p.a_max, p.v_max, p.dt)
+            safe = 2.0 * self.scenario.rules.body_radius + p.pair_margin
+            if view is None:
+                a, changed, infeasible = pair_guard(a, x, v, safe, p.pair_decel, p.pair_gamma, p.a_max, p.v_max, p.dt)
+            else:
+                a, changed, infeasible = pair_guard_known(a, x, v, kx, kv, heard, safe, p.pair_decel, p.pair_gamma,
+                                                          p.a_max, p.v_max, p.dt)
             self._pair_guarded += changed
             self._pair_infeasible += infeasible
         return a, {"labels": labels, "events": events}
@@ -314,13 +336,18 @@ class Sph:
                 start_q[bad], start_v[bad], start_a[bad] = x[bad], v[bad], 0.0
         plans = []
         near = None
-        if p.plan_neighbours > 0:  # visible neighbours within plan_neighbours_range, by robot
+        if p.plan_neighbours > 0 and self._seen is None:  # visible neighbours within plan_neighbours_range, by robot
             vi, vj = self._visible
             dist = np.linalg.norm(x[vi] - x[vj], axis=1)
             close = dist < p.plan_neighbours_range
             a, b = vi[close], vj[close]
-            near = [np.concatenate([b[a == r], a[b == r]]) for r in range(n)]
-        jobs = [(r, start_q[r], start_v[r], start_a[r], x[near[r]] if near is not None else None) for r in range(n)]
+            near = [x[np.concatenate([b[a == r], a[b == r]])] for r in range(n)]
+        elif p.plan_neighbours > 0:  # on a network: where each robot believes its visible neighbours are
+            vi, vj = self._visible
+            seen = self._seen[vi, vj]
+            close = np.linalg.norm(x[vi] - seen, axis=1) < p.plan_neighbours_range
+            near = [seen[close & (vi == r)] for r in range(n)]
+        jobs = [(r, start_q[r], start_v[r], start_a[r], near[r] if near is not None else None) for r in range(n)]
         if self._pool is None:
             done = [self._plan_one(*job) for job in jobs]
         elif self.maps.order_dependent:  # the 3-D field search: paths in robot order, splines in parallel

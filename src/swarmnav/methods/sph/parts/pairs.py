@@ -46,7 +46,6 @@ def pair_constraints(x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, 
     The barrier's braking term ``2 decel s / root`` grows without bound as the pair nears
     ``d_safe``; applied over a control step ``dt`` [s] it would overshoot, so ``root`` is floored at
     ``4 decel dt`` there (the term's gain times dt stays at most 1/2)."""
-    root_floor = 4.0 * decel * dt
     n_robots, dim = x.shape
     # beyond this distance b >= gamma (root - 2 v_max) - 2 decel >= 2 a_max for any |dv| <= 2 v_max
     root = 2.0 * v_max + (2.0 * a_max + 2.0 * decel) / gamma
@@ -56,8 +55,16 @@ def pair_constraints(x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, 
         return np.zeros((0, 2), np.int64), np.zeros((0, dim)), np.zeros(0)
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]  # the tree's order is not ours
     i, j = pairs[:, 0], pairs[:, 1]
-    dp = x[i] - x[j]
-    dv = v[i] - v[j]
+    n, b = _barrier(x[i] - x[j], v[i] - v[j], d_safe, decel, gamma, dt)
+    keep = b < 2.0 * a_max  # |n . (a_i - a_j)| <= 2 a_max: these constraints cannot bind
+    return pairs[keep], n[keep], b[keep]
+
+
+def _barrier(dp: np.ndarray, dv: np.ndarray, d_safe: float, decel: float, gamma: float,
+             dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Unit ``n`` (P, D) along ``dp`` and bound ``b`` (P,) of ``-n . (a_i - a_j) <= b`` for pairs
+    at offsets ``dp = p_i - p_j`` [m] moving apart at ``dv = v_i - v_j`` [m/s]."""
+    root_floor = 4.0 * decel * dt
     d = np.sqrt(np.einsum("pd,pd->p", dp, dp))
     n = dp / np.maximum(d, 1e-12)[:, None]
     s = np.einsum("pd,pd->p", n, dv)
@@ -66,8 +73,7 @@ def pair_constraints(x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, 
     h = root + s
     tangential = np.maximum(np.einsum("pd,pd->p", dv, dv) - s * s, 0.0) / np.maximum(d, 1e-12)
     b = gamma * h + 2.0 * decel * s / np.maximum(np.abs(root), root_floor) + tangential
-    keep = b < 2.0 * a_max  # |n . (a_i - a_j)| <= 2 a_max: these constraints cannot bind
-    return pairs[keep], n[keep], b[keep]
+    return n, b
 
 
 def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, gamma: float,
@@ -85,6 +91,30 @@ def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel
     order = np.argsort(rows, kind="stable")
     rows, normals, bounds = rows[order], normals[order], bounds[order]
     starts = np.searchsorted(rows, np.arange(a.shape[0] + 1))
+    out = np.ascontiguousarray(a, dtype=np.float64).copy()
+    changed, infeasible = _guard(out, normals, bounds, starts, a_max)
+    return out, changed, infeasible
+
+
+def pair_guard_known(a: np.ndarray, x: np.ndarray, v: np.ndarray, kx: np.ndarray, kv: np.ndarray,
+                     heard: np.ndarray, d_safe: float, decel: float, gamma: float, a_max: float, v_max: float,
+                     dt: float) -> tuple[np.ndarray, int, int]:
+    """:func:`pair_guard` on a network (docs/network.md): robot i keeps its half of the bound of
+    every pair (i, j) it has heard, from its own state and its picture ``kx[i, j]``, ``kv[i, j]``
+    of robot j (N, N, D), trusting j to keep the other half."""
+    n_robots = x.shape[0]
+    root = 2.0 * v_max + (2.0 * a_max + 2.0 * decel) / gamma
+    reach = d_safe + root * root / (4.0 * decel)
+    i, j = np.nonzero(heard & ~np.eye(n_robots, dtype=bool))
+    dp = x[i] - kx[i, j]
+    near = np.einsum("pd,pd->p", dp, dp) < reach * reach
+    i, j, dp = i[near], j[near], dp[near]
+    if len(i) == 0:
+        return a, 0, 0
+    n, b = _barrier(dp, v[i] - kv[i, j], d_safe, decel, gamma, dt)
+    keep = b < 2.0 * a_max
+    rows, normals, bounds = i[keep], -n[keep], 0.5 * b[keep]  # already sorted by robot
+    starts = np.searchsorted(rows, np.arange(n_robots + 1))
     out = np.ascontiguousarray(a, dtype=np.float64).copy()
     changed, infeasible = _guard(out, normals, bounds, starts, a_max)
     return out, changed, infeasible

@@ -1,0 +1,140 @@
+"""The network between the agents (swarmnav/sim/network.py, docs/network.md): delay, loss in
+bursts, range; seeded; the ideal network changes nothing; a lost message leaves an agent alone."""
+
+import numpy as np
+import pytest
+
+import swarmnav
+from _helpers.cli import run_cli
+from swarmnav.methods import registry
+from swarmnav.methods.base import Observation
+from swarmnav.sim.network import NetParams, Network, View, net_params
+from swarmnav.world import from_dict
+
+
+def _walk(p: NetParams, n=6, steps=400, dt=0.1, seed=3, spread=1.0, rate=None):
+    """A network over ``steps`` steps of agents on a line ``spread`` m apart; the views."""
+    net = Network(p, n, 2, dt, seed, rate=rate)
+    pos = np.c_[np.arange(n) * spread, np.zeros(n)]
+    views = [net.step(k * dt, pos + [0.01 * k, 0.0], np.zeros((n, 2))) for k in range(steps)]
+    return net, views
+
+
+def test_latency_makes_every_state_that_much_older():
+    net, views = _walk(NetParams(latency=0.25))
+    # sent every 0.1 s step, delivered 0.25 s later: the newest state at a step is 0.3 s old
+    off = ~np.eye(6, dtype=bool)
+    assert np.allclose(views[-1].age[off], 0.3) and np.all(views[-1].age[~off] == 0.0)
+    assert np.all(np.isinf(views[0].age[off]))  # nothing has arrived at the first step
+    # what agent 0 holds of agent 3 is agent 3's state 3 steps ago
+    assert np.allclose(views[-1].positions[0, 3], [3.0 + 0.01 * 396, 0.0])
+
+
+def test_jitter_spreads_the_ages_within_latency_and_latency_plus_jitter():
+    _, views = _walk(NetParams(latency=0.1, jitter=0.5))
+    off = ~np.eye(6, dtype=bool)
+    ages = np.concatenate([v.age[off] for v in views[50:]])
+    assert ages.min() >= 0.1 - 1e-9 and ages.max() <= 0.1 + 0.5 + 0.1 + 1e-9  # + one step to the next send
+    assert ages.std() > 0.05
+
+
+def test_independent_loss_loses_its_fraction():
+    net, _ = _walk(NetParams(loss=0.3), steps=2000)
+    s = net.summary()
+    assert abs(s["net_lost_fraction"] - 0.3) < 0.01  # 60 000 messages: 3 sigma = 0.006
+    assert s["net_delivered_fraction"] == pytest.approx(1.0 - s["net_lost_fraction"], abs=1e-3)
+
+
+def test_bursty_loss_keeps_its_fraction_and_loses_in_runs_of_the_mean_length():
+    p = NetParams(loss=0.3, burst=5.0)
+    n, steps = 4, 6000
+    net = Network(p, n, 2, 0.1, 7)
+    pos = np.c_[np.arange(n) * 1.0, np.zeros(n)]
+    heard = []
+    for k in range(steps):
+        v = net.step(k * 0.1, pos, np.zeros((n, 2)))
+        heard.append(v.age[0, 1] < 0.05)  # agent 0 got agent 1's state of this very step
+    lost = ~np.array(heard[1:])
+    assert abs(lost.mean() - 0.3) < 0.03
+    runs, k = [], 0
+    for x in lost:
+        if x:
+            k += 1
+        elif k:
+            runs.append(k)
+            k = 0
+    assert 4.0 < np.mean(runs) < 6.0  # independent losses at 0.3 would give runs of 1.43
+
+
+def test_range_keeps_far_agents_unheard():
+    _, views = _walk(NetParams(range=2.5), spread=1.0)
+    heard = views[-1].heard
+    dist = np.abs(np.arange(6)[:, None] - np.arange(6)[None, :])
+    assert np.array_equal(heard, dist <= 2)
+
+
+def test_rate_sends_at_that_rate():
+    net, _ = _walk(NetParams(latency=0.01), steps=1000, dt=0.01, rate=10.0)
+    assert net.summary()["net_messages"] == pytest.approx(10.0 * 6 * 5 * 10.0, rel=0.02)  # 10 s, 6 x 5 links
+
+
+def test_same_seed_loses_the_same_messages_and_leaves_the_method_draws_alone():
+    scene = "narrow_alternating_gates"
+    a = swarmnav.run("vasarhelyi", scene, seed=4, steps=150, **{"net.loss": 0.4, "net.jitter": 0.2})
+    b = swarmnav.run("vasarhelyi", scene, seed=4, steps=150, **{"net.loss": 0.4, "net.jitter": 0.2})
+    c = swarmnav.run("vasarhelyi", scene, seed=4, steps=150, **{"net.loss": 0.4, "net.jitter": 0.3})
+    assert np.array_equal(a.positions, b.positions) and a.metrics == b.metrics
+    assert not np.array_equal(a.positions, c.positions)
+    assert np.array_equal(a.positions[0], c.positions[0])  # the same spawn: the method's stream is its own
+    assert a.config["net"]["loss"] == 0.4
+
+
+def test_ideal_network_is_no_network():
+    assert NetParams().ideal and net_params({}).ideal
+    plain = swarmnav.run("olfati-saber", "narrow_alternating_gates", seed=2, steps=120)
+    zero = swarmnav.run("olfati-saber", "narrow_alternating_gates", seed=2, steps=120,
+                        **{"net.latency": 0.0, "net.loss": 0.0})
+    assert np.array_equal(plain.positions, zero.positions) and plain.metrics == zero.metrics
+    assert "net" not in zero.config and "net_messages" not in zero.metrics
+
+
+@pytest.mark.parametrize("method", ["olfati-saber", "vasarhelyi"])
+def test_an_agent_that_hears_nothing_acts_as_if_alone(method):
+    # five robots close together; with every message lost, robot 2's command is the one it gives
+    # when it is the only robot in the world
+    base = {"name": "five", "world": {"bounds": [-10.0, -10.0, 10.0, 10.0]}, "goal": {"position": [8.0, 0.0]}}
+    x = np.array([[0.0, 0.0], [0.8, 0.1], [0.4, 0.6], [-0.5, 0.3], [0.2, -0.7]])
+    v = np.array([[0.3, 0.0], [0.0, 0.2], [0.1, -0.1], [0.2, 0.2], [-0.1, 0.0]])
+    crowd = registry.make(method)
+    crowd.reset(from_dict({**base, "swarm": {"n": 5, "spawn": [-1.0, -1.0, 1.0, 1.0]}}), x, v, np.random.default_rng(0))
+    deaf = View(np.broadcast_to(x, (5, 5, 2)).copy(), np.broadcast_to(v, (5, 5, 2)).copy(), np.full((5, 5), np.inf))
+    np.fill_diagonal(deaf.age, 0.0)
+    a_deaf, _ = crowd.act(Observation(0, 0.0, x, v, deaf), np.random.default_rng(0))
+    a_all, _ = crowd.act(Observation(0, 0.0, x, v), np.random.default_rng(0))
+    alone = registry.make(method)
+    one = from_dict({**base, "swarm": {"n": 1, "spawn": [-1.0, -1.0, 1.0, 1.0]}})
+    alone.reset(one, x[2:3], v[2:3], np.random.default_rng(0))
+    a_alone, _ = alone.act(Observation(0, 0.0, x[2:3], v[2:3]), np.random.default_rng(0))
+    assert np.allclose(a_deaf[2], a_alone[0], atol=1e-12)
+    assert not np.allclose(a_all[2], a_alone[0])  # with its neighbours heard it does act differently
+
+
+@pytest.mark.parametrize("setting, words", [
+    ("net.latency=-0.1", "latency"), ("net.loss=1.5", "loss"), ("net.range=-1", "range"),
+    ("net.jitter=nan", "jitter"), ("net.lag=1", "unknown parameter 'lag'"),
+    ("net.burst=0.5", "burst"),
+])
+def test_impossible_network_is_one_line_and_exit_2(tmp_path, setting, words):
+    extra = ["--set", "net.loss=0.2"] if setting == "net.burst=0.5" else []
+    r = run_cli("run", "--method", "vasarhelyi", "--scenario", "default_corridor", "--steps", "5",
+                "--out", str(tmp_path / "r"), "--set", setting, *extra)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_a_method_that_cannot_use_the_network_is_refused_in_one_line(tmp_path):
+    r = run_cli("run", "--method", "apf", "--scenario", "default_corridor", "--steps", "5",
+                "--out", str(tmp_path / "r"), "--set", "net.loss=0.3")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "apf does not read the other agents through the network" in r.stderr
+    assert "olfati-saber" in r.stderr and "vasarhelyi" in r.stderr
