@@ -98,7 +98,7 @@ def test_ideal_network_is_no_network():
     assert "net" not in zero.config and "net_messages" not in zero.metrics
 
 
-@pytest.mark.parametrize("method", ["olfati-saber", "vasarhelyi"])
+@pytest.mark.parametrize("method", ["olfati-saber", "vasarhelyi", "apf"])
 def test_an_agent_that_hears_nothing_acts_as_if_alone(method):
     # five robots close together; with every message lost, robot 2's command is the one it gives
     # when it is the only robot in the world
@@ -117,6 +117,10 @@ def test_an_agent_that_hears_nothing_acts_as_if_alone(method):
     a_alone, _ = alone.act(Observation(0, 0.0, x[2:3], v[2:3]), np.random.default_rng(0))
     assert np.allclose(a_deaf[2], a_alone[0], atol=1e-12)
     assert not np.allclose(a_all[2], a_alone[0])  # with its neighbours heard it does act differently
+    truth = View(np.broadcast_to(x, (5, 5, 2)).copy(), np.broadcast_to(v, (5, 5, 2)).copy(), np.zeros((5, 5)))
+    if method == "apf":  # stateless: every true picture over the network is the ideal network
+        a_true, _ = crowd.act(Observation(0, 0.0, x, v, truth), np.random.default_rng(0))
+        assert np.allclose(a_true, a_all, rtol=1e-12, atol=1e-12)
 
 
 @pytest.mark.parametrize("setting, words", [
@@ -133,8 +137,8 @@ def test_impossible_network_is_one_line_and_exit_2(tmp_path, setting, words):
 
 
 def test_a_method_that_cannot_use_the_network_is_refused_in_one_line(tmp_path):
-    r = run_cli("run", "--method", "apf", "--scenario", "default_corridor", "--steps", "5",
+    r = run_cli("run", "--method", "vem", "--scenario", "default_corridor", "--steps", "5",
                 "--out", str(tmp_path / "r"), "--set", "net.loss=0.3")
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "apf does not read the other agents through the network" in r.stderr
-    assert "olfati-saber" in r.stderr and "vasarhelyi" in r.stderr
+    assert "vem does not read the other agents through the network" in r.stderr
+    assert all(m in r.stderr for m in ("apf", "olfati-saber", "sph", "vasarhelyi"))

@@ -74,6 +74,7 @@ class ApfParams:
 class Apf:
     name = "apf"
     dims = (2, 3)  # a range ring in the plane, a range sphere in 3-D
+    networked = True  # the separation term reads the others through Observation.known (docs/network.md)
 
     def __init__(self, **overrides: Any):
         self.params = build(ApfParams, overrides, context="apf")
@@ -117,7 +118,11 @@ class Apf:
                 n = len(x)  # push away from each return
                 for c in range(x.shape[1]):
                     a[:, c] -= np.bincount(agent, w * self._dirs[ray, c], minlength=n)
-        a += separation(x, p.k_sep, p.r_sep, p.d_floor)
+        if obs.view is None:
+            a += separation(x, p.k_sep, p.r_sep, p.d_floor)
+        else:  # each robot from its own picture of the others
+            kx, _, heard = obs.known()
+            a += separation_known(x, kx, heard, p.k_sep, p.r_sep, p.d_floor)
         a -= p.k_damp * v
         return clip_norm(a, p.a_max), {}
 
@@ -145,6 +150,26 @@ def separation(x: np.ndarray, k: float, r: float, d_floor: float) -> np.ndarray:
     f = (k * (1.0 / d - 1.0 / r) / d**3)[:, None] * diff
     for c in range(x.shape[1]):
         out[:, c] = np.bincount(i, f[:, c], minlength=n) - np.bincount(j, f[:, c], minlength=n)
+    return out
+
+
+def separation_known(x: np.ndarray, kx: np.ndarray, heard: np.ndarray, k: float, r: float,
+                     d_floor: float) -> np.ndarray:
+    """:func:`separation` on a network: robot i is pushed by every robot j it has heard, from
+    where it believes j is (``kx[i, j]``, (N, N, d)), and j by its own picture of i."""
+    n = len(x)
+    i, j = np.nonzero(heard & ~np.eye(n, dtype=bool))
+    diff = x[i] - kx[i, j]
+    d2 = np.einsum("ij,ij->i", diff, diff)
+    near = d2 < r * r
+    i, diff = i[near], diff[near]
+    out = np.zeros_like(x)
+    if len(i) == 0:
+        return out
+    d = np.maximum(np.sqrt(np.einsum("ij,ij->i", diff, diff)), d_floor)
+    f = (k * (1.0 / d - 1.0 / r) / d**3)[:, None] * diff
+    for c in range(x.shape[1]):
+        out[:, c] = np.bincount(i, f[:, c], minlength=n)
     return out
 
 
