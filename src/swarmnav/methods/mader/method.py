@@ -124,7 +124,7 @@ class MaderMethod:
         self.next_event = (np.arange(n) * self.L) // max(n, 1)
         self.pending: list[dict | None] = [None] * n
         self.stats = {"plans": 0, "commits": 0, "fallbacks": 0, "check_fails": 0, "evals": 0, "planes": 0,
-                      "search_failures": 0, "idle": 0}
+                      "search_failures": 0, "idle": 0, "infeasible_starts": 0}
         self._plan_ms: list[float] = []
         self._steps = 0
 
@@ -151,6 +151,7 @@ class MaderMethod:
             "mader_fallbacks": float(s["fallbacks"]),
             "mader_check_fails": float(s["check_fails"]),
             "mader_search_failures": float(s["search_failures"]),
+            "mader_infeasible_starts": float(s["infeasible_starts"]),
             "mader_evals_mean": s["evals"] / max(s["plans"], 1),
             "mader_planes_mean": s["planes"] / max(s["plans"], 1),
             **self.comm.summary(self._steps * self.params.dt),
@@ -297,7 +298,9 @@ class MaderMethod:
         if self._force_fail:
             return None
         if p.algorithm == "ipopt":
-            res = S.solve_ipopt(pb, free0, n0, d0, p.max_iter, p.eps_tol, p.basis, p.Ra + 4.0, p.plane_bound, p.knots)
+            res = S.solve_ipopt(pb, free0, n0, d0, p.max_iter, p.eps_tol, p.basis, p.Ra + 4.0, p.plane_bound, p.knots,
+                                precheck=p.precheck)
+            self.stats["infeasible_starts"] += res.status == "infeasible-start"
         else:
             res = S.solve(pb, free0, n0, d0, p.max_eval, p.eps_tol, p.xtol_rel, p.ftol_rel, p.algorithm, p.Ra + 4.0,
                           p.plane_bound)
