@@ -344,6 +344,7 @@ def infeasible_start(pb: Problem, tol: float, plane_bound: float) -> bool:
     n_max = np.full(P, plane_bound * math.sqrt(D))
     if pb.radius is not None:
         n_max = np.minimum(n_max, 2.0 * math.sqrt(1.0 + tol) / np.asarray(pb.radius, float))
+    n_max *= 1.0 + 1e-6  # IPOPT relaxes the variable bounds by 1e-8 (bound_relax_factor): stay on the safe side
     reach = 2.0 * (1.0 - tol) / n_max  # (P,) hulls closer than this cannot be separated
     lo, hi = pb.verts.min(axis=1), pb.verts.max(axis=1)  # (P, D)
     for s in range(3):
