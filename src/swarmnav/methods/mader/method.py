@@ -124,7 +124,7 @@ class MaderMethod:
         self.next_event = (np.arange(n) * self.L) // max(n, 1)
         self.pending: list[dict | None] = [None] * n
         self.stats = {"plans": 0, "commits": 0, "fallbacks": 0, "check_fails": 0, "evals": 0, "planes": 0,
-                      "search_failures": 0, "idle": 0}
+                      "search_failures": 0, "idle": 0, "infeasible_starts": 0}
         self._plan_ms: list[float] = []
         self._steps = 0
 
@@ -151,6 +151,7 @@ class MaderMethod:
             "mader_fallbacks": float(s["fallbacks"]),
             "mader_check_fails": float(s["check_fails"]),
             "mader_search_failures": float(s["search_failures"]),
+            "mader_infeasible_starts": float(s["infeasible_starts"]),
             "mader_evals_mean": s["evals"] / max(s["plans"], 1),
             "mader_planes_mean": s["planes"] / max(s["plans"], 1),
             **self.comm.summary(self._steps * self.params.dt),
@@ -172,7 +173,7 @@ class MaderMethod:
         p = self.params
         self.ctrl[r], self.dtk[r], self.t0[r], self.commit_step[r] = ctrl, dtk, step * p.dt, step
         dur = (ctrl.shape[0] - 3) * dtk
-        self.board.publish(r, lambda tau, c=ctrl, h=dtk: self._eval(c, h, tau), step * p.dt, dur, ctrl.shape[0])
+        self.board.publish(r, lambda tau, c=ctrl, h=dtk: (self._pos(c, h, tau),), step * p.dt, dur, ctrl.shape[0])
         length = int(math.ceil(dur / p.dt)) + 1
         if length > self.ref_q.shape[1]:  # grow the buffers, holding each robot's last sample
             extra = length - self.ref_q.shape[1]
@@ -191,6 +192,12 @@ class MaderMethod:
             return clamped.evaluate(ctrl, dtk, tau)
         return bspline.evaluate(ctrl, dtk, tau)
 
+    def _pos(self, ctrl: np.ndarray, dtk: float, tau: np.ndarray) -> np.ndarray:
+        """Position of a plan at times ``tau`` [s] from its start (``_eval``'s first array)."""
+        if self.params.knots == "clamped":
+            return clamped.position(ctrl, dtk, tau)
+        return bspline.evaluate(ctrl, dtk, tau)[0]
+
     def _state(self, r: int, t: float):
         q, v, a = self._eval(self.ctrl[r], self.dtk[r], np.array([t - self.t0[r]]))
         return q[0], v[0], a[0]
@@ -206,7 +213,7 @@ class MaderMethod:
             ctrl, dtk = pend["ctrl"], pend["dtk"]
             dur = (ctrl.shape[0] - 3) * dtk
             t = k * p.dt + np.arange(0.0, dur + p.check_step, p.check_step)
-            mine = self._eval(ctrl, dtk, t - k * p.dt)[0]
+            mine = self._pos(ctrl, dtk, t - k * p.dt)
             theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
             if p.check_norm == "box":  # the optimisation's own measure: each pair's inflation
                 gaps = self._gap(theirs - mine[None])  # (J, T)
@@ -297,7 +304,9 @@ class MaderMethod:
         if self._force_fail:
             return None
         if p.algorithm == "ipopt":
-            res = S.solve_ipopt(pb, free0, n0, d0, p.max_iter, p.eps_tol, p.basis, p.Ra + 4.0, p.plane_bound, p.knots)
+            res = S.solve_ipopt(pb, free0, n0, d0, p.max_iter, p.eps_tol, p.basis, p.Ra + 4.0, p.plane_bound, p.knots,
+                                precheck=p.precheck)
+            self.stats["infeasible_starts"] += res.status == "infeasible-start"
         else:
             res = S.solve(pb, free0, n0, d0, p.max_eval, p.eps_tol, p.xtol_rel, p.ftol_rel, p.algorithm, p.Ra + 4.0,
                           p.plane_bound)
@@ -358,7 +367,8 @@ class MaderMethod:
                 continue
             infl = p.agent_inflation
             if p.crowd_shrink > 0.0:  # the pair's gap at point A (me: this robot's start there)
-                infl = float(self._pair_inflation(self._gap(self._state(j, t_a)[0] - me)))
+                there = self._pos(self.ctrl[j], self.dtk[j], np.array([t_a - self.t0[j]]))[0]
+                infl = float(self._pair_inflation(self._gap(there - me)))
             for s in range(p.num_pol):
                 pts = interval_points(self.ctrl[j], self.dtk[j], self.t0[j], t_a + s * dtk, t_a + (s + 1) * dtk)
                 if np.any(pts.min(axis=0) - infl > hi[s]) or np.any(pts.max(axis=0) + infl < lo[s]):

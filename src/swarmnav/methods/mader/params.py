@@ -56,6 +56,9 @@ class MaderParams:
         "planning/bspline.py spline, whose start points lie v dt around the robot)")
     basis: Literal["bspline", "bezier"] = param("bspline", "", None, "mader.yaml basis (MINVO there; not built here: docs)",
         "hull of each segment: bspline (its control points) or bezier (its Bezier points, a tighter hull)")
+    precheck: bool = param(True, "", None, "ours (result-neutral: docs, 'Solver cost')",
+        "skip IPOPT on a problem whose fixed start control points already lie within the clearance of a set they "
+        "must be separated from (a certificate of infeasibility within eps_tol): the same fallback, without the solve")
     plane_bound: float = param(100.0, "1/m", "(0, inf)", "ours",
         "bound on each component of a plane normal (the margin 2/|n| stays above 2/(plane_bound sqrt(D)))")
     max_eval: int = param(300, "", "[1, 100000]", "ours",

@@ -21,10 +21,13 @@ over ``dt^5``. Every constraint and its Jacobian are array expressions.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from scipy.optimize import nnls
 
 from swarmnav.planning import clamped
 from swarmnav.planning.bspline import smoothness_cost
@@ -259,7 +262,7 @@ def hull_matrices(num_pol: int, basis: str, knots: str) -> np.ndarray:
 
 
 def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: int, tol: float, knots: str,
-                  ball: bool = False, norm_limits: bool = False):
+                  ball: bool = False, norm_limits: bool = False, options: tuple = ()):
     """The compiled CasADi/IPOPT problem for a shape (cached): variables ``x = [free (F, D),
     n (P, D), d (P,)]``, parameters ``[C_0..C_2, G, dt_knot, v_max, a_max, weight, verts (P, V, D),
     segment (P,)]`` and, with ``ball``, ``radius (P,)``. The segment of each plane is a parameter,
@@ -268,7 +271,7 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
     ``ball``: each plane also keeps ``|n_p| <= 2 / radius_p`` (a convex bound): with the margins
     +-1 the two sets are then at least ``radius_p`` apart along n, so the Euclidean distance
     between them is at least ``radius_p`` -- a ball of that radius instead of a box."""
-    key = (D, num_pol, P, V, basis, max_iter, tol, knots, ball, norm_limits)
+    key = (D, num_pol, P, V, basis, max_iter, tol, knots, ball, norm_limits, options)
     hit = _IPOPT_CACHE.get(key)
     if hit is not None:
         return hit
@@ -316,24 +319,65 @@ def _ipopt_solver(D: int, num_pol: int, P: int, V: int, basis: str, max_iter: in
         lbg, ubg = np.concatenate([lbg, np.full(P, -np.inf)]), np.concatenate([ubg, np.ones(P)])
     opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": int(max_iter),
             "ipopt.tol": float(tol), "ipopt.mu_strategy": "adaptive"}
+    opts.update({"ipopt." + k: v for k, v in options})
     solver = ca.nlpsol("mader", "ipopt", {"x": x, "p": par, "f": f, "g": g}, opts)
     _IPOPT_CACHE[key] = (solver, lbg, ubg)
     return _IPOPT_CACHE[key]
 
 
+def infeasible_start(pb: Problem, tol: float, plane_bound: float) -> bool:
+    """True if the fixed control points prove ``pb`` infeasible before any solve (B-spline hulls).
+
+    The first three control points C_0..C_2 are fixed by the start state; segment s <= 2 has
+    C_s..C_2 among its hull points. Its plane p needs n.a + d <= -1 at every point a of their hull
+    A and n.v + d >= 1 at every point v of the vertices' hull V, so n.(v - a) >= 2: with
+    |n| <= n_max the two hulls must be at least 2 / n_max apart. Within the solver's tolerance
+    ``tol`` (the margins -1 + tol, 1 - tol and, with a ball clearance, |n| r / 2 <= sqrt(1 + tol)),
+    a point q = v - a of the hull of the differences with |q| n_max < 2 (1 - tol) certifies that no
+    point is feasible: IPOPT could only fail on it. n_max is plane_bound sqrt(D) (the bounds on
+    n), or 2 sqrt(1 + tol) / r_p with a ball. q is found by NNLS, its weights normalised to sum 1,
+    so q lies in that hull whatever the NNLS error: the test can only err towards solving."""
+    P = len(pb.seg)
+    if P == 0:
+        return False
+    D = pb.start.shape[1]
+    n_max = np.full(P, plane_bound * math.sqrt(D))
+    if pb.radius is not None:
+        n_max = np.minimum(n_max, 2.0 * math.sqrt(1.0 + tol) / np.asarray(pb.radius, float))
+    n_max *= 1.0 + 1e-6  # IPOPT relaxes the variable bounds by 1e-8 (bound_relax_factor): stay on the safe side
+    reach = 2.0 * (1.0 - tol) / n_max  # (P,) hulls closer than this cannot be separated
+    lo, hi = pb.verts.min(axis=1), pb.verts.max(axis=1)  # (P, D)
+    for s in range(3):
+        planes = np.nonzero(pb.seg == s)[0]
+        A = pb.start[s:3]
+        a_lo, a_hi = A.min(axis=0), A.max(axis=0)
+        box_gap = np.linalg.norm(np.maximum(lo[planes] - a_hi, 0.0) + np.maximum(a_lo - hi[planes], 0.0), axis=1)
+        for p in planes[box_gap < reach[planes]]:  # the hulls are at least as far apart as their boxes
+            M = (pb.verts[p][None, :, :] - A[:, None, :]).reshape(-1, D)  # differences v - a
+            w = 1e3 * (1.0 + float(np.abs(M).max()))  # the weight of sum(lambda) = 1
+            lam, _ = nnls(np.vstack([M.T, np.full(len(M), w)]), np.concatenate([np.zeros(D), [w]]))
+            if lam.sum() > 0.0 and np.linalg.norm(M.T @ (lam / lam.sum())) < reach[p]:
+                return True
+    return False
+
+
 def solve_ipopt(pb: Problem, free0: np.ndarray, n0: np.ndarray, d0: np.ndarray, max_iter: int, tol: float,
                 basis: str = "bspline", box: float = 12.0, plane_bound: float = 100.0,
-                knots: str = "uniform") -> Result:
+                knots: str = "uniform", options: tuple = (), precheck: bool = False) -> Result:
     """Solve ``pb`` with IPOPT (interior point, exact Hessian, MUMPS) through CasADi. The plane
     normals are bounded by ``plane_bound`` [1/m] (the separation's margin is 2 / |n|, so the
     bound admits gaps down to 2 / (plane_bound sqrt(D)) m): without a bound the barrier pushes the
-    planes' scale to infinity. Feasible means every constraint within ``tol``."""
+    planes' scale to infinity. Feasible means every constraint within ``tol``. With ``precheck``
+    (B-spline hulls only) a problem :func:`infeasible_start` proves infeasible is not solved
+    (status ``infeasible-start``, 0 iterations): the same outcome as IPOPT's, without its cost."""
+    if precheck and basis == "bspline" and infeasible_start(pb, tol, plane_bound):
+        return Result(None, 0, float("inf"), "infeasible-start")
     D = pb.start.shape[1]
     P = len(pb.seg)
     V = pb.verts.shape[1] if P else 0
     F = pb.num_pol - 2
     ball = pb.radius is not None
-    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol, knots, ball, pb.norm_limits)
+    solver, lbg, ubg = _ipopt_solver(D, pb.num_pol, P, V, basis, max_iter, tol, knots, ball, pb.norm_limits, options)
     par = np.concatenate([pb.start.ravel(), pb.goal, [pb.dt_knot, pb.v_max, pb.a_max, pb.weight],
                           pb.verts.reshape(-1), pb.seg.astype(float)] + ([np.asarray(pb.radius, float)] if ball else []))
     x0 = np.concatenate([free0.ravel(), n0.ravel(), d0])
