@@ -140,7 +140,8 @@ def repulsion(diff: np.ndarray, s: Scaled) -> np.ndarray:
     """Sum over j of  (N, d) [m/s] from ``diff[i, j] = r_j - r_i`` (N, N, d), diagonal left out."""
     dist = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
     np.fill_diagonal(dist, np.inf)
-    w = np.where(dist < s.r0_rep, s.p_rep * (s.r0_rep - dist) / np.maximum(dist, 1e-12), 0.0)
+    with np.errstate(invalid="ignore"):  # the diagonal's inf / inf, never selected
+        w = np.where(dist < s.r0_rep, s.p_rep * (s.r0_rep - dist) / np.maximum(dist, 1e-12), 0.0)
     return -np.einsum("ij,ijk->ik", w, diff)
 
 
