@@ -143,13 +143,22 @@ def separation(x: np.ndarray, k: float, r: float, d_floor: float) -> np.ndarray:
     else:
         i, j = neighbor_pairs(x, r)
         diff = x[i] - x[j]
-    out = np.zeros_like(x)
+    return _khatib(n, x.shape[1], i, j, diff, k, r, d_floor)
+
+
+def _khatib(n: int, dim: int, i: np.ndarray, j: np.ndarray | None, diff: np.ndarray, k: float, r: float,
+            d_floor: float) -> np.ndarray:
+    """The Khatib push of pairs ``(i, j)`` at offsets ``diff = x_i - x_j``, summed onto robot i and,
+    with the opposite sign, onto robot j (``j`` None: onto i only, the directed pairs of a network)."""
+    out = np.zeros((n, dim))
     if len(i) == 0:
         return out
     d = np.maximum(np.sqrt(np.einsum("ij,ij->i", diff, diff)), d_floor)
     f = (k * (1.0 / d - 1.0 / r) / d**3)[:, None] * diff
-    for c in range(x.shape[1]):
-        out[:, c] = np.bincount(i, f[:, c], minlength=n) - np.bincount(j, f[:, c], minlength=n)
+    for c in range(dim):
+        out[:, c] = np.bincount(i, f[:, c], minlength=n)
+        if j is not None:
+            out[:, c] -= np.bincount(j, f[:, c], minlength=n)
     return out
 
 
@@ -162,15 +171,7 @@ def separation_known(x: np.ndarray, kx: np.ndarray, heard: np.ndarray, k: float,
     diff = x[i] - kx[i, j]
     d2 = np.einsum("ij,ij->i", diff, diff)
     near = d2 < r * r
-    i, diff = i[near], diff[near]
-    out = np.zeros_like(x)
-    if len(i) == 0:
-        return out
-    d = np.maximum(np.sqrt(np.einsum("ij,ij->i", diff, diff)), d_floor)
-    f = (k * (1.0 / d - 1.0 / r) / d**3)[:, None] * diff
-    for c in range(x.shape[1]):
-        out[:, c] = np.bincount(i, f[:, c], minlength=n)
-    return out
+    return _khatib(n, x.shape[1], i[near], None, diff[near], k, r, d_floor)
 
 
 def fibonacci_sphere(n: int) -> np.ndarray:
