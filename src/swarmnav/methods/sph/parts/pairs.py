@@ -47,10 +47,7 @@ def pair_constraints(x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, 
     ``d_safe``; applied over a control step ``dt`` [s] it would overshoot, so ``root`` is floored at
     ``4 decel dt`` there (the term's gain times dt stays at most 1/2)."""
     n_robots, dim = x.shape
-    # beyond this distance b >= gamma (root - 2 v_max) - 2 decel >= 2 a_max for any |dv| <= 2 v_max
-    root = 2.0 * v_max + (2.0 * a_max + 2.0 * decel) / gamma
-    reach = d_safe + root * root / (4.0 * decel)
-    pairs = cKDTree(x).query_pairs(r=reach, output_type="ndarray")
+    pairs = cKDTree(x).query_pairs(r=_reach(d_safe, decel, gamma, a_max, v_max), output_type="ndarray")
     if pairs.shape[0] == 0:
         return np.zeros((0, 2), np.int64), np.zeros((0, dim)), np.zeros(0)
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]  # the tree's order is not ours
@@ -58,6 +55,13 @@ def pair_constraints(x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, 
     n, b = _barrier(x[i] - x[j], v[i] - v[j], d_safe, decel, gamma, dt)
     keep = b < 2.0 * a_max  # |n . (a_i - a_j)| <= 2 a_max: these constraints cannot bind
     return pairs[keep], n[keep], b[keep]
+
+
+def _reach(d_safe: float, decel: float, gamma: float, a_max: float, v_max: float) -> float:
+    """Distance [m] beyond which no pair's bound can bind: there b >= gamma (root - 2 v_max) -
+    2 decel >= 2 a_max for any closing speed up to 2 v_max."""
+    root = 2.0 * v_max + (2.0 * a_max + 2.0 * decel) / gamma
+    return d_safe + root * root / (4.0 * decel)
 
 
 def _barrier(dp: np.ndarray, dv: np.ndarray, d_safe: float, decel: float, gamma: float,
@@ -103,8 +107,7 @@ def pair_guard_known(a: np.ndarray, x: np.ndarray, v: np.ndarray, kx: np.ndarray
     every pair (i, j) it has heard, from its own state and its picture ``kx[i, j]``, ``kv[i, j]``
     of robot j (N, N, D), trusting j to keep the other half."""
     n_robots = x.shape[0]
-    root = 2.0 * v_max + (2.0 * a_max + 2.0 * decel) / gamma
-    reach = d_safe + root * root / (4.0 * decel)
+    reach = _reach(d_safe, decel, gamma, a_max, v_max)
     i, j = np.nonzero(heard & ~np.eye(n_robots, dtype=bool))
     dp = x[i] - kx[i, j]
     near = np.einsum("pd,pd->p", dp, dp) < reach * reach
