@@ -66,6 +66,45 @@ def test_bursty_loss_keeps_its_fraction_and_loses_in_runs_of_the_mean_length():
     assert 4.0 < np.mean(runs) < 6.0  # independent losses at 0.3 would give runs of 1.43
 
 
+def test_a_publication_travels_with_the_state_it_left_with():
+    """A method's payload (info["publish"]) rides in the same messages as the state: late by the
+    latency, the row of the step it was published before the message left, never its newer rows."""
+    n, dt = 4, 0.1
+    net = Network(NetParams(latency=0.25), n, 2, dt, 3)
+    pos = np.c_[np.arange(n) * 1.0, np.zeros(n)]
+    plans = [f"plan-{j}" for j in range(n)]
+    for k in range(20):
+        view = net.step(k * dt, pos, np.zeros((n, 2)))
+        if k >= 1:
+            got = view.payload("heading")
+            own = np.arange(n)
+            assert np.array_equal(got[own, own, 0], 100 * (k - 1) + own)  # its own last row, at once
+            # the state sent at step k - 3 (age 0.3 s) carries the row published at step k - 4
+            expect = 100 * (k - 4) + np.arange(n) if k >= 4 else np.full(n, np.nan)
+            assert np.array_equal(got[0, :, 0][1:], expect[1:], equal_nan=True)
+            assert np.allclose(view.age[0, 1:], 0.3) or k < 3
+        net.publish({"heading": (100 * k + np.arange(n))[:, None].astype(float), "plan": plans})
+    obj = view.payload("plan")
+    assert obj.dtype == object and obj[2, 1] == "plan-1" and view.payload("nothing") is None
+
+
+def test_a_lost_message_loses_its_publication_too():
+    n, dt = 3, 0.1
+    net = Network(NetParams(loss=1.0), n, 2, dt, 3)
+    pos = np.zeros((n, 2))
+    for k in range(5):
+        view = net.step(k * dt, pos, np.zeros((n, 2)))
+        net.publish({"layer": np.arange(n, dtype=float)})
+    got = view.payload("layer")
+    off = ~np.eye(n, dtype=bool)
+    assert np.all(np.isnan(got[off])) and np.array_equal(np.diag(got), np.arange(n))
+
+
+def test_observation_received_is_none_under_the_ideal_network():
+    obs = Observation(0, 0.0, np.zeros((2, 2)), np.zeros((2, 2)), None)
+    assert obs.received("heading") is None
+
+
 def test_range_keeps_far_agents_unheard():
     _, views = _walk(NetParams(range=2.5), spread=1.0)
     heard = views[-1].heard

@@ -65,6 +65,14 @@ class Observation:
                     np.ones((n, n), dtype=bool))
         return self.view.positions, self.view.velocities, np.isfinite(self.view.age)
 
+    def received(self, name: str) -> np.ndarray | None:
+        """What each agent received of every other's publication ``name`` (a method's ``info
+        ["publish"]``; docs/network.md): an (N, N, ...) float array (NaN: none received yet) or an
+        (N, N) object array (None: none received yet), row i, column i agent i's own last one.
+        None under the ideal network (the method reads its own arrays) and before anything was
+        published under that name."""
+        return None if self.view is None else self.view.payload(name)
+
 
 class Dynamics(Protocol):
     def step(self, p: np.ndarray, v: np.ndarray, command: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]: ...

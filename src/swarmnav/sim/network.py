@@ -19,7 +19,7 @@ Parameters are the run's, not a method's: ``--set net.latency=0.15`` (docs/netwo
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -67,16 +67,25 @@ def net_params(options: dict) -> NetParams:
 class View:
     """What each agent has received of every other: ``positions[i, j]`` [m] and
     ``velocities[i, j]`` [m/s] are agent j's state as agent i last heard it, ``age[i, j]`` [s]
-    how old that is (``inf``: never heard; row i, column i: its own state, age 0)."""
+    how old that is (``inf``: never heard; row i, column i: its own state, age 0).
+    ``data[name]`` is what a method published under ``name`` (:meth:`Network.publish`) as agent i
+    last received it from agent j, in the same message as the state: an (N, N, ...) array (NaN
+    where none arrived yet) or an (N, N) object array (None where none arrived yet); row i, column
+    i is agent i's own last publication."""
 
     positions: np.ndarray  # (N, N, d)
     velocities: np.ndarray  # (N, N, d)
     age: np.ndarray  # (N, N)
+    data: dict = field(default_factory=dict)
 
     @property
     def heard(self) -> np.ndarray:
         """(N, N) bool: agent i has a state of agent j."""
         return np.isfinite(self.age)
+
+    def payload(self, name: str) -> np.ndarray | None:
+        """The (N, N, ...) picture of publication ``name`` (class docstring); None: never published."""
+        return self.data.get(name)
 
 
 class Network:
@@ -98,7 +107,9 @@ class Network:
         self.vel = np.zeros((n, n, dim))
         self.stamp = np.full((n, n), -np.inf)  # send time of the state held
         self.bad = np.zeros((n, n), dtype=bool)  # Gilbert-Elliott channel state per link (receiver, sender)
-        self.pending: list[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]] = []
+        self.pending: list[tuple] = []  # (sent at, receivers, senders, positions, velocities, delays, payloads)
+        self.latest: dict[str, np.ndarray] = {}  # each name's last publication, one row per agent
+        self.data: dict[str, np.ndarray] = {}  # each name's (receiver, sender) picture
         self.sent = 0
         self.delivered = 0
         self.lost = 0
@@ -139,15 +150,39 @@ class Network:
                 delay = delay + self.rng.uniform(0.0, p.jitter, recv.size)
             recv, send, delay = recv[keep], send[keep], delay[keep]
             if recv.size:
-                self.pending.append((t, recv, send, pos[send].copy(), vel[send].copy(), delay))
+                # fancy indexing copies: the message keeps the payload rows as they are when it leaves
+                data = {k: v[send] for k, v in self.latest.items()}
+                self.pending.append((t, recv, send, pos[send].copy(), vel[send].copy(), delay, data))
         self._deliver(t)
         own = np.arange(n)
         self.pos[own, own], self.vel[own, own], self.stamp[own, own] = pos, vel, t
-        return View(self.pos.copy(), self.vel.copy(), t - self.stamp)
+        for k, v in self.latest.items():
+            self.data[k][own, own] = v
+        return View(self.pos.copy(), self.vel.copy(), t - self.stamp, {k: v.copy() for k, v in self.data.items()})
+
+    def publish(self, payloads: dict) -> None:
+        """A method's publications of this step, ``{name: values}`` with one row per agent (an
+        (N, ...) array, or a length-N sequence of any objects). Each message an agent sends from
+        now on carries its row of each name until it publishes that name again; a receiver holds
+        the row of the newest message it received (``View.data``). Objects travel by reference:
+        a method must not change one after publishing it."""
+        for name, values in payloads.items():
+            if isinstance(values, np.ndarray) and values.dtype != object:
+                rows = np.array(values, dtype=np.float64)
+                if name not in self.data:
+                    self.data[name] = np.full((self.n, *rows.shape), np.nan)
+            else:
+                rows = np.empty(self.n, dtype=object)
+                rows[:] = list(values)
+                if name not in self.data:
+                    self.data[name] = np.full((self.n, self.n), None, dtype=object)
+            if len(rows) != self.n:
+                raise ValueError(f"publish: {name!r} has {len(rows)} rows for {self.n} agents")
+            self.latest[name] = rows
 
     def _deliver(self, t: float) -> None:
         keep = []
-        for sent_at, recv, send, pos, vel, delay in self.pending:
+        for sent_at, recv, send, pos, vel, delay, data in self.pending:
             due = sent_at + delay <= t + 1e-9
             if due.any():
                 r, s = recv[due], send[due]
@@ -156,10 +191,13 @@ class Network:
                 self.pos[r, s] = pos[due][newer]
                 self.vel[r, s] = vel[due][newer]
                 self.stamp[r, s] = sent_at
+                for k, v in data.items():
+                    self.data[k][r, s] = v[due][newer]
                 self.delivered += int(due.sum())
             if not due.all():
                 rest = ~due
-                keep.append((sent_at, recv[rest], send[rest], pos[rest], vel[rest], delay[rest]))
+                keep.append((sent_at, recv[rest], send[rest], pos[rest], vel[rest], delay[rest],
+                             {k: v[rest] for k, v in data.items()}))
         self.pending = keep
 
     def summary(self) -> dict[str, float]:

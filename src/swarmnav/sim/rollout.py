@@ -159,6 +159,8 @@ def run(
         for k in range(steps):
             view = None if network is None else network.step(k * dt, pos, vel)
             cmd, info = m.act(Observation(k, k * dt, pos, vel, view), rng)
+            if network is not None and "publish" in info:  # what the agents send from now on
+                network.publish(info["publish"])
             pos, vel = m.dynamics.step(pos, vel, cmd, dt)
             if referee is not None:
                 referee.hold(pos, vel)
