@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize
 
 import swarmnav
-from swarmnav.methods.sph.parts.pairs import pair_constraints, pair_guard
+from swarmnav.methods.sph.parts.pairs import obstacle_constraints, pair_constraints, pair_guard
 from swarmnav.world import from_dict
 
 D_SAFE, DECEL, GAMMA, V_MAX, DT = 0.42, 0.75, 2.0, 1.0, 0.01
@@ -87,6 +87,39 @@ def _close_in(guard: bool, n: int = 40, seconds: float = 12.0, dt: float = 0.01)
 def test_guard_keeps_robots_that_all_head_for_one_point_out_of_contact():
     assert _close_in(False) < 0.1  # unguarded they pile onto the point
     assert _close_in(True) >= 0.4  # guarded none comes within the contact distance
+
+
+def _into_wall(walls: bool, dt: float = 0.01) -> float:
+    """Closest clearance [m] of a robot (body 0.2 m) driven at full thrust (1.5 m/s^2) into a wall
+    at x = 0 from x = 3 m, 1 m/s towards it, with a neighbour beside it; obstacle rows or not."""
+    x = np.array([[3.0, 0.0], [3.0, 1.0]])
+    v = np.array([[-1.0, 0.0], [0.0, 0.0]])
+    closest = np.inf
+    for _ in range(int(6.0 / dt)):
+        a = np.array([[-1.5, 0.0], [0.0, 0.0]])
+        clearance, away = x[:, 0].copy(), np.tile([1.0, 0.0], (2, 1))
+        a, _, _ = pair_guard(a, x, v, D_SAFE, DECEL, GAMMA, 1.5, V_MAX, dt,
+                             (clearance, away, 0.2 + 0.02) if walls else None)
+        v = v + a * dt
+        v = v * np.minimum(1.0, V_MAX / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-12))
+        x = x + v * dt
+        closest = min(closest, float(x[0, 0]))
+    return closest
+
+
+def test_obstacle_rows_stop_a_robot_driven_into_a_wall_short_of_contact():
+    assert _into_wall(False) < 0.0  # the pair guard alone lets it through the wall
+    closest = _into_wall(True)
+    assert 0.2 <= closest <= 0.3  # it stops past contact (body radius 0.2 m), near the 0.22 m asked
+
+
+def test_obstacle_rows_leave_robots_that_cannot_reach_their_obstacle():
+    v = np.array([[1.0, 0.0], [0.0, 0.0], [0.0, -1.0]])
+    clearance = np.array([20.0, np.inf, 0.25])
+    away = np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 1.0]])
+    robots, n, b = obstacle_constraints(v, clearance, away, 0.22, DECEL, GAMMA, 1.5, 0.01)
+    assert robots.tolist() == [2]  # far away or in an empty world: no row
+    assert np.allclose(n, [[0.0, 1.0]]) and b[0] < 0.0  # closing at 1 m/s 3 cm out: it must brake
 
 
 def test_default_build_guards_pairs_on_crowds_only_and_paper_never():

@@ -265,12 +265,15 @@ class Sph:
         else:
             a = track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v, feedforward=force / p.m)
         if p.pair_guard:  # ours: no command drives a robot into another (parts/pairs.py)
-            safe = 2.0 * self.scenario.rules.body_radius + p.pair_margin
+            body = self.scenario.rules.body_radius
+            safe = 2.0 * body + p.pair_margin
+            walls = (d, grad, body + p.pair_margin) if p.pair_obstacles else None
             if view is None:
-                a, changed, infeasible = pair_guard(a, x, v, safe, p.pair_decel, p.pair_gamma, p.a_max, p.v_max, p.dt)
+                a, changed, infeasible = pair_guard(a, x, v, safe, p.pair_decel, p.pair_gamma, p.a_max, p.v_max, p.dt,
+                                                    walls)
             else:
                 a, changed, infeasible = pair_guard_known(a, x, v, kx, kv, heard, safe, p.pair_decel, p.pair_gamma,
-                                                          p.a_max, p.v_max, p.dt)
+                                                          p.a_max, p.v_max, p.dt, walls)
             self._pair_guarded += changed
             self._pair_infeasible += infeasible
         return a, {"labels": labels, "events": events}

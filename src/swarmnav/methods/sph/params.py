@@ -135,6 +135,10 @@ class SphParams:
         "to the other terms)")
     pair_gamma: float = param(2.0, "1/s", "(0, inf)", "ours (Wang et al.'s class-K function, linear)",
         "pair_guard: how fast a pair may use up its braking margin (dh/dt >= -pair_gamma h)")
+    pair_obstacles: bool = param(False, "", None, "ours (Wang, Ames & Egerstedt, T-RO 2017, obstacles as static agents)",
+        "pair_guard: each robot's QP also keeps the barrier against its nearest obstacle (ESDF value and "
+        "gradient; stop body radius + pair_margin from its surface, the robot keeping the whole bound), "
+        "so that the command the guard moves never drives a robot into a trunk")
     crowd_size: int = param(30, "", "[1, inf)", "ours",
         "with by_dim (the default build), rep_cutoff, crowd_guard and pair_guard act on 2-D swarms of this many "
         "robots or more; smaller swarms fly the paper's repulsion and no crowd guard (Table II's 15 and "

@@ -80,18 +80,47 @@ def _barrier(dp: np.ndarray, dv: np.ndarray, d_safe: float, decel: float, gamma:
     return n, b
 
 
+def obstacle_constraints(v: np.ndarray, clearance: np.ndarray, away: np.ndarray, d_safe: float, decel: float,
+                         gamma: float, a_max: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Robots ``r`` (Q,), unit ``n`` (Q, D) pointing away from their nearest obstacle and bound
+    ``b`` (Q,) [m/s^2] of ``-n . a_r <= b``: the pair barrier against a standing obstacle, whose
+    whole bound the robot keeps, for every robot whose bound a command within ``a_max`` could
+    break. ``clearance`` (N,) [m] is each robot centre's distance to its nearest obstacle surface,
+    ``away`` (N, D) the unit direction away from it (the ESDF's value and gradient), ``d_safe``
+    the clearance the robot must stop at (its body radius + a margin)."""
+    near = np.flatnonzero(np.isfinite(clearance) & (clearance > 0.0))
+    if near.size == 0:
+        return near, np.zeros((0, v.shape[1])), np.zeros(0)
+    g = away[near]
+    g = g / np.maximum(np.linalg.norm(g, axis=1), 1e-12)[:, None]
+    n, b = _barrier(g * clearance[near, None], v[near], d_safe, decel, gamma, dt)
+    keep = b < a_max  # |n . a_r| <= a_max: these cannot bind
+    return near[keep], n[keep], b[keep]
+
+
 def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, gamma: float,
-               a_max: float, v_max: float, dt: float) -> tuple[np.ndarray, int, int]:
+               a_max: float, v_max: float, dt: float,
+               obstacles: tuple[np.ndarray, np.ndarray, float] | None = None) -> tuple[np.ndarray, int, int]:
     """Commands ``a`` (N, D) [m/s^2] changed as little as possible so that no pair closes faster
     than both robots can brake before ``d_safe`` [m] (module docstring); how many robots'
-    commands changed, and for how many no command met every constraint."""
+    commands changed, and for how many no command met every constraint. ``obstacles`` =
+    ``(clearance, away, d_safe_obstacle)`` adds a row per robot for its nearest obstacle
+    (:func:`obstacle_constraints`), so that no command the guard moves drives a robot into one."""
     pairs, n, b = pair_constraints(x, v, d_safe, decel, gamma, a_max, v_max, dt)
-    if pairs.shape[0] == 0:
-        return a, 0, 0
     # robot i: (-n) . a_i <= b / 2; robot j: n . a_j <= b / 2
-    rows = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    normals = np.concatenate([-n, n])
-    bounds = np.concatenate([0.5 * b, 0.5 * b])
+    rows, normals, bounds = [pairs[:, 0], pairs[:, 1]], [-n, n], [0.5 * b, 0.5 * b]
+    return _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt)
+
+
+def _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt):
+    """The guard's QPs over the given rows, plus the obstacle rows when ``obstacles`` is given."""
+    if obstacles is not None:
+        r, n, b = obstacle_constraints(v, obstacles[0], obstacles[1], obstacles[2], decel, gamma, a_max, dt)
+        rows, normals, bounds = [*rows, r], [*normals, -n], [*bounds, b]
+    rows = np.concatenate(rows)
+    if rows.size == 0:
+        return a, 0, 0
+    normals, bounds = np.concatenate(normals), np.concatenate(bounds)
     order = np.argsort(rows, kind="stable")
     rows, normals, bounds = rows[order], normals[order], bounds[order]
     starts = np.searchsorted(rows, np.arange(a.shape[0] + 1))
@@ -102,25 +131,21 @@ def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel
 
 def pair_guard_known(a: np.ndarray, x: np.ndarray, v: np.ndarray, kx: np.ndarray, kv: np.ndarray,
                      heard: np.ndarray, d_safe: float, decel: float, gamma: float, a_max: float, v_max: float,
-                     dt: float) -> tuple[np.ndarray, int, int]:
+                     dt: float, obstacles: tuple[np.ndarray, np.ndarray, float] | None = None
+                     ) -> tuple[np.ndarray, int, int]:
     """:func:`pair_guard` on a network (docs/network.md): robot i keeps its half of the bound of
     every pair (i, j) it has heard, from its own state and its picture ``kx[i, j]``, ``kv[i, j]``
-    of robot j (N, N, D), trusting j to keep the other half."""
+    of robot j (N, N, D), trusting j to keep the other half. Obstacles are its own sensing, as in
+    :func:`pair_guard`."""
     n_robots = x.shape[0]
     reach = _reach(d_safe, decel, gamma, a_max, v_max)
     i, j = np.nonzero(heard & ~np.eye(n_robots, dtype=bool))
     dp = x[i] - kx[i, j]
     near = np.einsum("pd,pd->p", dp, dp) < reach * reach
     i, j, dp = i[near], j[near], dp[near]
-    if len(i) == 0:
-        return a, 0, 0
     n, b = _barrier(dp, v[i] - kv[i, j], d_safe, decel, gamma, dt)
     keep = b < 2.0 * a_max
-    rows, normals, bounds = i[keep], -n[keep], 0.5 * b[keep]  # already sorted by robot
-    starts = np.searchsorted(rows, np.arange(n_robots + 1))
-    out = np.ascontiguousarray(a, dtype=np.float64).copy()
-    changed, infeasible = _guard(out, normals, bounds, starts, a_max)
-    return out, changed, infeasible
+    return _solve_rows(a, [i[keep]], [-n[keep]], [0.5 * b[keep]], v, obstacles, decel, gamma, a_max, dt)
 
 
 @njit(cache=True)
