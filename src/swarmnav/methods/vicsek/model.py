@@ -293,18 +293,13 @@ class VicsekFamily:
         args = (self.code, *seen, r2_list, theta_s, self.theta_g, layers_s, avoiding_s, iu, iu_nb, theta_d,
                 p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta, p.k_gamma, p.info_weight, noise, theta_g,
                 _IVEM_RULES[p.ivem_rule], math.pi if p.ivem_range == "unsigned" else 0.0, p.ivem_self)
-        num = None
-        if self.theta_num is None:
-            if ident is None:
-                K.genuine_heading(*args)
-            else:
-                K.genuine_heading(*args, None, None, ident)
+        num = None if self.theta_num is None else np.empty(n)
+        if ident is not None:  # ghost slots: the agent each stands for
+            K.genuine_heading(*args, number_s, num, ident)
+        elif num is None:
+            K.genuine_heading(*args)
         else:
-            num = np.empty(n)
-            if ident is None:
-                K.genuine_heading(*args, number_s, num)
-            else:
-                K.genuine_heading(*args, number_s, num, ident)
+            K.genuine_heading(*args, number_s, num)
 
         theta = theta_g
         avoiding = np.zeros(n, dtype=np.bool_)
