@@ -2,6 +2,7 @@
 before the network existed, and fly the same arrays; a lossy, late network's own cost beside it.
 
     PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b
+    PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b --methods vem,ivem,hwvem
 
 Each trial runs in a fresh subprocess (one core, one at a time) after a 3-step warm-up that loads
 the compiled kernels; the CPU time (``time.process_time``) of ``--repeats`` runs is taken at its
@@ -26,6 +27,14 @@ TRIALS = [  # (method, scene, n, simulated seconds)
     ("vasarhelyi", "narrow_alternating_gates", None, 30.0),
     ("olfati-saber", "narrow_alternating_gates", None, 30.0),
     ("sph", "random_forest:density=0.35,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0", 15, 20.0),
+    # the Vicsek family: dt = 1 step, so the horizon is in steps; the alignment models in the
+    # periodic box of Section 3.1, those with an information UAV on the mission of Section 3.2
+    ("vem", "periodic_box:n=400,rho=4.102", None, 1000.0),
+    ("ivem", "periodic_box:n=400,rho=4.102", None, 1000.0),
+    ("vem-a", "hwvem_mission", 100, 700.0),
+    ("ivem-a", "hwvem_mission", 100, 700.0),
+    ("wvem", "hwvem_mission", 100, 700.0),
+    ("hwvem", "hwvem_mission", 100, 700.0),
 ]
 
 
@@ -69,6 +78,7 @@ def main() -> None:
     ap.add_argument("--before", required=False, default="", help="git revision before the network")
     ap.add_argument("--net", default='{"net.latency": 0.15, "net.jitter": 0.05, "net.loss": 0.3}')
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--methods", default="", help="comma-separated methods of the trials to run (default: all)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--src", default=str(ROOT / "src"), help=argparse.SUPPRESS)
     ap.add_argument("--method", default="", help=argparse.SUPPRESS)
@@ -88,17 +98,21 @@ def main() -> None:
             old = str(Path(tmp) / "src")
         print(f"# CPU s per simulated s, min of {a.repeats}; before = {a.before or '-'}; network = {net}")
         print(f"{'method':>13} {'before':>8} {'ideal':>8} {'ideal/before':>13} {'arrays':>9} {'network':>8} {'net/ideal':>10}")
-        for method, scene, n, horizon in TRIALS:
+        chosen = set(a.methods.split(",")) if a.methods else {t[0] for t in TRIALS}
+        unknown = chosen - {t[0] for t in TRIALS}
+        if unknown:
+            sys.exit(f"bench_network: no trial of {', '.join(sorted(unknown))}")
+        for method, scene, n, horizon in (t for t in TRIALS if t[0] in chosen):
             now = trial(a.src, method, scene, n, horizon, {}, a.repeats)
             line = f"{method:>13} "
             if old:
                 was = trial(old, method, scene, n, horizon, {}, a.repeats)
                 same = "same" if was["digest"] == now["digest"] else "DIFFERENT"
-                line += f"{was['cpu'] / was['sim']:>8.4f} {now['cpu'] / now['sim']:>8.4f} {now['cpu'] / was['cpu']:>13.3f} {same:>9} "
+                line += f"{was['cpu'] / was['sim']:>8.4g} {now['cpu'] / now['sim']:>8.4g} {now['cpu'] / was['cpu']:>13.3f} {same:>9} "
             else:
-                line += f"{'-':>8} {now['cpu'] / now['sim']:>8.4f} {'-':>13} {'-':>9} "
+                line += f"{'-':>8} {now['cpu'] / now['sim']:>8.4g} {'-':>13} {'-':>9} "
             lossy = trial(a.src, method, scene, n, horizon, net, a.repeats)
-            line += f"{lossy['cpu'] / lossy['sim']:>8.4f} {lossy['cpu'] / now['cpu']:>10.2f}"
+            line += f"{lossy['cpu'] / lossy['sim']:>8.4g} {lossy['cpu'] / now['cpu']:>10.2f}"
             print(line, flush=True)
 
 

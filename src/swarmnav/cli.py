@@ -177,7 +177,7 @@ def _print_params(spec, out) -> None:
                                                       if tuple(dims) == (2,) else "")
           + (", plans = false keeps no committed trajectories (docs/methods/contract.md)"
              if callable(getattr(spec.factory, "plans", None)) else ""), file=out)
-    if getattr(spec.factory, "networked", False):
+    if spec.networked:
         from swarmnav.sim.network import NetParams
 
         net = ", ".join(f"net.{i.name} [{i.unit or '-'}] {i.range}" for i in describe(NetParams))

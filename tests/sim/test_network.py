@@ -176,8 +176,8 @@ def test_impossible_network_is_one_line_and_exit_2(tmp_path, setting, words):
 
 
 def test_a_method_that_cannot_use_the_network_is_refused_in_one_line(tmp_path):
-    r = run_cli("run", "--method", "vem", "--scenario", "default_corridor", "--steps", "5",
+    r = run_cli("run", "--method", "ego-swarm", "--scenario", "default_corridor", "--steps", "5",
                 "--out", str(tmp_path / "r"), "--set", "net.loss=0.3")
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "vem does not read the other agents through the network" in r.stderr
-    assert all(m in r.stderr for m in ("apf", "olfati-saber", "sph", "vasarhelyi"))
+    assert "ego-swarm does not read the other agents through the network" in r.stderr
+    assert all(m in r.stderr for m in ("apf", "olfati-saber", "sph", "vasarhelyi", "vem", "hwvem"))

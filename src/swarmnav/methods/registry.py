@@ -18,6 +18,13 @@ class MethodSpec:
     params: type  # the parameter record class (swarmnav.params: declared units, ranges, sources)
     navigation: bool = True  # a goal-seeking method (runs on the navigation scenes)
 
+    @property
+    def networked(self) -> bool:
+        """The method reads the other agents only through the network (its class's ``networked``;
+        a factory that is a ``functools.partial`` of the class answers for it)."""
+        f = self.factory
+        return bool(getattr(f, "networked", False) or getattr(getattr(f, "func", None), "networked", False))
+
 
 _REGISTRY: dict[str, MethodSpec] = {}
 

@@ -424,4 +424,4 @@ def _progress(progress, steps):
 
 def _networked() -> list[str]:
     """Registered methods that read the other agents only through the network (a class attribute)."""
-    return [n for n in registry.names() if getattr(registry.spec(n).factory, "networked", False)]
+    return [n for n in registry.names() if registry.spec(n).networked]

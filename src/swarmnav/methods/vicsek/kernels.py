@@ -15,6 +15,10 @@ Conventions shared by every kernel:
   ``wrap = False`` (or ``box <= 0``) they are plain Euclidean distances of the stored points.
 * A layer is an int64; :data:`NO_LAYER` marks an agent the layer information has not reached.
 * Heading angles live in ``[-pi, pi)``.
+* On a network each agent has its own picture of the others (``networked.py``): a neighbour then
+  is a *ghost slot* N + e holding agent i's picture of agent j (its position, heading, layer),
+  read by agent i only. The per-agent arrays hold the N agents' own values first and the ghosts
+  after them; the loops run over the N rows of ``order``.
 """
 
 from __future__ import annotations
@@ -64,8 +68,9 @@ def next_layers(order, start, end, indices, dist2, r2, layers, iu, out):
 
     ``layers`` are the previous step's layers and the CSR the previous step's neighbours
     (entries farther than ``sqrt(r2)`` are skipped). Unreached agents keep :data:`NO_LAYER`.
+    ``layers`` may hold more slots than there are agents (ghost neighbours, module docstring).
     """
-    n = layers.shape[0]
+    n = order.shape[0]
     for t in range(n):
         i = order[t]
         best = NO_LAYER
@@ -114,7 +119,7 @@ def bfs_layers(order, start, end, indices, dist2, r2, iu, out):
 @njit(cache=True)
 def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g, layers, avoiding, iu, iu_nb,
                     theta_d, p1, p2, use_nei, k_alpha, k_beta, k_gamma, info_weight, noise, out,
-                    ivem_rule=IVEM_PRINTED, ivem_shift=0.0, ivem_self=False, key_in=None, key_out=None):
+                    ivem_rule=IVEM_PRINTED, ivem_shift=0.0, ivem_self=False, key_in=None, key_out=None, ident=None):
     """New genuine desired heading of every agent (HWVEM eq. 18) plus the noise of eq. (6).
 
     Weighted models (VEM, VEM-A, WVEM, HWVEM, and IVEM-A next to the information UAV)::
@@ -151,15 +156,19 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
     each plus its noise and unwrapped (an agent that keeps ``theta_g`` turns its number by
     ``wrap(theta_g - theta)``); the wrapped headings go to ``out`` as always.
 
+    ``theta``, ``layers``, ``avoiding``, ``iu_nb`` and ``key_in`` may hold ghost slots beyond the
+    N agents (module docstring); ``ident`` (slots,) then names the agent each slot stands for (the
+    information UAV's weight); None: slot j is agent j.
+
     An agent with no contributing neighbour keeps ``theta_g``; the information UAV gets
     ``theta_d`` (eq. 9 with ``b_ij = 0`` for ``i`` in layer 1). ``noise`` (N,) [rad] is added to
     every other agent and the sum wrapped to ``[-pi, pi)``; an empty array means no noise.
     """
-    noisy = noise.shape[0] == theta.shape[0]
-    n = theta.shape[0]
+    n = order.shape[0]
+    noisy = noise.shape[0] == n
     filt = r2 < np.inf  # r2 = inf: every entry is within r (the list was built at r)
     any_av = False  # nobody avoiding (always so in open space): skip the o_j lookups
-    for i in range(n):
+    for i in range(avoiding.shape[0]):
         if avoiding[i]:
             any_av = True
             break
@@ -269,14 +278,14 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
             cu += cj
             w = 1.0
             if code == WVEM:
-                if j == iu:
+                if (j if ident is None else ident[j]) == iu:
                     w = k_alpha
                 elif iu_nb[j]:
                     w = k_beta
                 else:
                     w = k_gamma
             elif code == IVEM_A:
-                w = info_weight if j == iu else 1.0
+                w = info_weight if (j if ident is None else ident[j]) == iu else 1.0
             elif code == HWVEM:
                 lj = layers[j]
                 w_nei = 1.0
@@ -318,8 +327,9 @@ def genuine_heading(code, order, start, end, indices, dist2, r2, theta, theta_g,
 def attraction_repulsion(order, start, end, indices, dist2, pos, box, wrap, r_rep, r_att, iu, att, rep):
     """Eq. (23)-(24) with ``x_ij = x_i - x_j``: repulsion ``(r_rep - d)/r_rep`` along ``x_ij`` for
     ``0 < d <= r_rep``, attraction ``(r_rep - d)/(r_att - r_rep)`` along ``x_ij`` (negative:
-    toward j) for ``r_rep < d <= r_att``. The information UAV feels neither (Section 2.4)."""
-    n = pos.shape[0]
+    toward j) for ``r_rep < d <= r_att``. The information UAV feels neither (Section 2.4).
+    ``pos`` may hold ghost slots beyond the N agents (module docstring)."""
+    n = order.shape[0]
     periodic = box > 0.0 and wrap
     for t in range(n):
         i = order[t]

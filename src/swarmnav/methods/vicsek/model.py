@@ -28,6 +28,7 @@ from swarmnav.methods.base import Observation
 from swarmnav.methods.vicsek import kernels as K
 from swarmnav.methods.vicsek.geometry import Polyline, avoidance, pursue, wrap
 from swarmnav.methods.vicsek.measures import deg_con
+from swarmnav.methods.vicsek.networked import AVOIDING, LAYER, NUMBER, THETA, pictures
 from swarmnav.params import build, param
 from swarmnav.sensing import signed_distance
 from swarmnav.world.scenario import Scenario
@@ -180,6 +181,7 @@ class VicsekFamily:
     """One of the six models, chosen by ``model`` (a key of :data:`MODELS`)."""
 
     dims = (2,)  # headings are planar angles: a 3-D scene is flown in its horizontal slice at z_fly
+    networked = True  # neighbours' positions, headings and layers only through the network (networked.py)
 
     def __init__(self, model: str, **overrides: Any):
         if model not in MODELS:
@@ -264,24 +266,40 @@ class VicsekFamily:
         r2 = p.r * p.r
         iu = self.iu
         theta_d = self._theta_d(x) if self.has_info else 0.0
-        iu_nb = np.zeros(n, dtype=np.bool_)
-        if iu >= 0:
-            row = slice(nb[1][iu], nb[2][iu])
-            iu_nb[nb[3][row][nb[4][row] <= r2]] = True
+        # what each agent reads of its neighbours: the true states (ideal network), or its own
+        # picture of them, received over the network (networked.py)
+        seen = nb
+        theta_s, layers_s, avoiding_s, number_s, pos_s, ident = (self.theta, self.layers, self.avoiding,
+                                                                 self.theta_num, x, None)
+        if obs.view is None:
+            iu_nb = np.zeros(n, dtype=np.bool_)
+            if iu >= 0:
+                row = slice(nb[1][iu], nb[2][iu])
+                iu_nb[nb[3][row][nb[4][row] <= r2]] = True
+        else:
+            if iu >= 0 and p.layer_update == "eq4":
+                raise ConfigError(f"{self.name}: layer_update = eq4 takes the layers from the whole neighbour graph "
+                                  "each step, which no agent holds on a network; use eq5 (the layers travel from "
+                                  "neighbour to neighbour) or the ideal network")
+            own = {"theta": self.theta, "avoiding": self.avoiding, "layers": self.layers, "number": self.theta_num}
+            pic = pictures(obs, x, own, self.radius, r2, self.box, p.wrap_neighbours, iu)
+            seen, iu_nb, ident = pic.nb, pic.iu_nb, pic.ident
+            theta_s, layers_s, avoiding_s, number_s, pos_s = pic.theta, pic.layers, pic.avoiding, pic.number, pic.pos
 
         # eq. (6) noise; the information UAV flies its reference heading (the kernel skips it)
         noise = rng.uniform(-p.eta / 2, p.eta / 2, n) if p.eta > 0 else _NO_NOISE
         theta_g = np.empty(n)
         r2_list = np.inf if self.radius <= p.r else r2  # inf: no entry lies beyond r
-        args = (self.code, *nb, r2_list, self.theta, self.theta_g, self.layers, self.avoiding, iu, iu_nb, theta_d,
+        args = (self.code, *seen, r2_list, theta_s, self.theta_g, layers_s, avoiding_s, iu, iu_nb, theta_d,
                 p.p1, p.p2, p.nei_weight, p.k_alpha, p.k_beta, p.k_gamma, p.info_weight, noise, theta_g,
                 _IVEM_RULES[p.ivem_rule], math.pi if p.ivem_range == "unsigned" else 0.0, p.ivem_self)
-        num = None
-        if self.theta_num is None:
+        num = None if self.theta_num is None else np.empty(n)
+        if ident is not None:  # ghost slots: the agent each stands for
+            K.genuine_heading(*args, number_s, num, ident)
+        elif num is None:
             K.genuine_heading(*args)
         else:
-            num = np.empty(n)
-            K.genuine_heading(*args, self.theta_num, num)
+            K.genuine_heading(*args, number_s, num)
 
         theta = theta_g
         avoiding = np.zeros(n, dtype=np.bool_)
@@ -297,7 +315,7 @@ class VicsekFamily:
         if p.c_rep or p.c_att:
             att = np.empty((n, 2))
             rep = np.empty((n, 2))
-            K.attraction_repulsion(*nb, x, self.box, p.wrap_neighbours, p.r_rep, p.r_att, iu, att, rep)
+            K.attraction_repulsion(*seen, pos_s, self.box, p.wrap_neighbours, p.r_rep, p.r_att, iu, att, rep)
         v = np.empty((n, 2))
         K.velocity(theta, avoiding, att, rep, p.c_align * p.v0, p.c_rep, p.c_att, p.v_max,
                    p.avoid_velocity == "tangent", v)
@@ -307,7 +325,7 @@ class VicsekFamily:
         if iu >= 0:
             nxt = np.empty_like(self.layers)
             if p.layer_update == "eq5":
-                K.next_layers(*nb, r2, self.layers, iu, nxt)
+                K.next_layers(*seen, r2, layers_s, iu, nxt)
             else:
                 K.bfs_layers(*nb, r2, iu, nxt)
             self.layers = nxt
@@ -317,7 +335,13 @@ class VicsekFamily:
 
         self.deg_series.append(self._deg_con())
         self._streak = self._streak + 1 if self.deg_series[-1] >= p.deg_con_d else 0
-        info: dict[str, Any] = {}
+        # what every agent sends with its state (read back by the others over a network)
+        publish = {THETA: theta, AVOIDING: avoiding}
+        if iu >= 0:
+            publish[LAYER] = self.layers
+        if num is not None:
+            publish[NUMBER] = num
+        info: dict[str, Any] = {"publish": publish}
         if p.stop_at_convergence and self._streak >= p.converge_hold:
             info["done"] = True
         return v, info
