@@ -201,3 +201,16 @@ def test_the_flocking_pair_reads_its_range_sensor_through_perception():
     # the same seed, the same own-state errors whatever the method (to rounding: (p + n) - p is n
     # up to an ulp of p, and the two methods fly to different p)
     assert errors[0] == pytest.approx(errors[1], rel=1e-12)
+
+
+def test_run_keys_carry_perception_as_resolved():
+    from swarmnav.experiments import plan
+    from swarmnav.experiments.spec import from_dict
+
+    base = {"name": "keys", "method": "apf", "scenario": "default_corridor", "n": 4, "steps": 5, "seeds": "1"}
+    variants = [{"name": "plain"}, {"name": "zero", "params": {"sense.dropout": 0.0}},
+                {"name": "a", "params": {"sense.dropout": "0.10"}}, {"name": "b", "params": {"sense.dropout": 0.1}},
+                {"name": "c", "params": {"sense.dropout": 0.2}}]
+    keys = {j.variant.name: j.key for j in plan(from_dict({**base, "variants": variants}, "k.toml", {}, None))}
+    assert keys["plain"] == keys["zero"]  # perfect perception leaves the key as without it
+    assert keys["a"] == keys["b"] != keys["c"] and keys["a"] != keys["plain"]
