@@ -10,6 +10,7 @@ import pytest
 
 import swarmnav
 from _helpers.cli import run_cli
+from swarmnav.errors import ConfigError
 from swarmnav.methods.base import Observation
 from swarmnav.sensing import lidar_ring, ray_table, signed_distance
 from swarmnav.sensing.perception import Perception, SenseParams, sense_params
@@ -172,11 +173,18 @@ def test_hes_flies_its_ring_through_perception(tmp_path):
     ("sense.pos_noise=-0.1", "pos_noise"), ("sense.dropout=1.5", "dropout"), ("sense.fov=0", "fov"),
     ("sense.fov=400", "fov"), ("sense.drift=nan", "drift"), ("sense.blur=1", "unknown parameter 'blur'"),
 ])
-def test_impossible_perception_is_one_line_and_exit_2(tmp_path, setting, words):
+def test_impossible_perception_is_one_line(setting, words):
+    key, value = setting.split("=")
+    with pytest.raises(ConfigError) as e:
+        swarmnav.run("apf", "default_corridor", seed=1, steps=5, **{key: value})
+    assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_impossible_perception_is_exit_2_on_the_command_line(tmp_path):
     r = run_cli("run", "--method", "apf", "--scenario", "default_corridor", "--steps", "5",
-                "--out", str(tmp_path / "r"), "--set", setting)
+                "--out", str(tmp_path / "r"), "--set", "sense.dropout=1.5")
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert "dropout" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
 def test_a_method_without_a_range_sensor_is_refused_the_range_options_in_one_line(tmp_path):
