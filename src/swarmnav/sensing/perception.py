@@ -103,8 +103,9 @@ class Perception:
         self.cos_half = math.cos(math.radians(p.fov) / 2.0)
         self.heading = np.zeros((n, d))
         self.heading[:, 0] = 1.0
-        if goal is not None and len(goal) == d:
-            to_goal = np.asarray(goal, dtype=np.float64) - positions
+        goal = None if goal is None else np.asarray(goal, dtype=np.float64)
+        if goal is not None and goal.shape in ((d,), (n, d)):  # one goal, or one per agent
+            to_goal = goal - positions
             norm = np.linalg.norm(to_goal, axis=1)
             at = norm > HOVER
             self.heading[at] = to_goal[at] / norm[at, None]
