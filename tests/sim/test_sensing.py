@@ -222,3 +222,15 @@ def test_run_keys_carry_perception_as_resolved():
     keys = {j.variant.name: j.key for j in plan(from_dict({**base, "variants": variants}, "k.toml", {}, None))}
     assert keys["plain"] == keys["zero"]  # perfect perception leaves the key as without it
     assert keys["a"] == keys["b"] != keys["c"] and keys["a"] != keys["plain"]
+
+
+def test_methods_lists_the_perception_options_a_method_honours(capsys):
+    from swarmnav.cli import main
+
+    main(["methods", "hes"])
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("perception"))
+    assert all(f"sense.{k}" in line for k in ("pos_noise", "vel_noise", "drift", "range_noise", "dropout", "fov"))
+    assert "sense.fov [deg] (0, 360]" in line and "sense.drift [m/s] [0, 100]" in line
+    main(["methods", "sph"])
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("perception"))
+    assert "sense.pos_noise [m]" in line and "sense.dropout" not in line and "no range sensor" in line
