@@ -234,3 +234,25 @@ def test_methods_lists_the_perception_options_a_method_honours(capsys):
     main(["methods", "sph"])
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("perception"))
     assert "sense.pos_noise [m]" in line and "sense.dropout" not in line and "no range sensor" in line
+
+
+def test_the_network_carries_what_each_agent_believes_of_itself():
+    from swarmnav.methods.apf import Apf
+
+    class Recording(Apf):  # APF, keeping what it was given each step
+        def reset(self, *args):
+            self.seen = []
+            super().reset(*args)
+
+        def act(self, obs, rng):
+            self.seen.append((obs.positions.copy(), obs.view))
+            return super().act(obs, rng)
+
+    m = Recording()
+    r = swarmnav.run(m, "default_corridor", seed=2, steps=20, **{"sense.pos_noise": 0.3, "net.latency": 0.2})
+    for k, (est, view) in enumerate(m.seen):
+        assert np.abs(est - r.positions[k]).max() > 0.1  # the method sees estimates, the run records the truth
+        assert np.array_equal(view.positions[np.arange(len(est)), np.arange(len(est))], est)  # its own: its estimate
+    # what agent 0 holds of agent 5 at step 10 is agent 5's estimate sent 0.2 s (2 steps) earlier
+    assert np.array_equal(m.seen[10][1].positions[0, 5], m.seen[8][0][5])
+    assert not np.array_equal(m.seen[10][1].positions[0, 5], r.positions[8, 5])
