@@ -184,6 +184,13 @@ def _print_params(spec, out) -> None:
         print(f"network (--set net.NAME; docs/network.md; defaults: the ideal network): {net}", file=out)
     else:
         print("network: the ideal one only (this method does not read the others through a network yet)", file=out)
+    from swarmnav.sensing.perception import RANGE_OPTIONS, SenseParams
+
+    ranged = getattr(spec.factory, "range_sensor", False)
+    sense = ", ".join(f"sense.{i.name} [{i.unit or '-'}] {i.range}" for i in describe(SenseParams)
+                      if ranged or i.name not in RANGE_OPTIONS)
+    print(f"perception (--set sense.NAME; docs/sensing.md; defaults: perfect perception): {sense}"
+          + ("" if ranged else " (no range sensor: the range options do not apply)"), file=out)
     table = presets(spec.params)
     if table:
         cls, default = spec.params, default_build(spec.params)

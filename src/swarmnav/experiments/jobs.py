@@ -44,6 +44,7 @@ def plan(exp: Experiment) -> list[Job]:
     """
     from swarmnav.methods import registry
     from swarmnav.params import identity
+    from swarmnav.sensing.perception import PREFIX as SENSE_PREFIX, record as sense_record, sense_params
     from swarmnav.sim.network import PREFIX as NET_PREFIX, net_params, record as net_record
     from swarmnav.sim.rollout import is_run_option
     from swarmnav.world.catalog import load_scenario
@@ -53,10 +54,14 @@ def plan(exp: Experiment) -> list[Job]:
         try:
             method_params = {k: x for k, x in v.params.items() if not is_run_option(k)}
             params = identity(registry.make(v.method, **method_params).params)
-            params.update({k: x for k, x in v.params.items() if is_run_option(k) and not k.startswith(NET_PREFIX)})
+            params.update({k: x for k, x in v.params.items()
+                           if is_run_option(k) and not k.startswith((NET_PREFIX, SENSE_PREFIX))})
             net = net_params({k: x for k, x in v.params.items() if k.startswith(NET_PREFIX)})
             if not net.ideal:  # the network as resolved: `net.loss=0.30` and `net.loss=0.3` are one run,
                 params["net"] = net_record(net)  # and an ideal network leaves the key as without one
+            sense = sense_params({k: x for k, x in v.params.items() if k.startswith(SENSE_PREFIX)})
+            if not sense.perfect:  # perception as resolved, as the network; perfect leaves the key unchanged
+                params["sense"] = sense_record(sense)
             load_scenario(v.scenario.replace("{seed}", str(exp.seeds[0])), n=v.n)
         except SwarmnavError as e:
             raise ConfigError(f"{exp.name} variant '{v.name}': {e}") from None

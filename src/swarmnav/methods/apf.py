@@ -75,6 +75,7 @@ class Apf:
     name = "apf"
     dims = (2, 3)  # a range ring in the plane, a range sphere in 3-D
     networked = True  # the separation term reads the others through Observation.known (docs/network.md)
+    range_sensor = True  # its LiDAR ring (3-D: range sphere) is read through Observation.scan (docs/sensing.md)
 
     def __init__(self, **overrides: Any):
         self.params = build(ApfParams, overrides, context="apf")
@@ -107,10 +108,12 @@ class Apf:
         geom = self.scenario.geometry
         if not geom.is_empty:
             if x.shape[1] == 2:
-                ring = lidar_ring(geom, x, p.n_rays, p.lidar_range)  # (N, R)
+                ring = obs.scan(lambda at: lidar_ring(geom, at, p.n_rays, p.lidar_range), x, self._dirs,
+                                p.lidar_range)  # (N, R)
             else:
-                ring = self._prepared.range_into(np.ascontiguousarray(x), self._dirs, min(p.lidar_range, p.d0),
-                                                 self._ranges)  # (N, R)
+                reach = min(p.lidar_range, p.d0)
+                ring = obs.scan(lambda at: self._prepared.range_into(np.ascontiguousarray(at), self._dirs, reach,
+                                                                     self._ranges), x, self._dirs, reach)  # (N, R)
             agent, ray = np.nonzero(ring < p.d0)  # only the few returns inside d0 matter
             if len(agent):
                 d = np.maximum(ring[agent, ray], p.d_floor)

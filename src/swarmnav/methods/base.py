@@ -38,13 +38,26 @@ class Observation:
     """What the agents know at step ``step``: each its own state (``positions[i]``,
     ``velocities[i]``), and the others' states as its network delivered them (``view``; None: the
     ideal network, every agent's true state at once). A method reads another agent's state only
-    through :meth:`others` (docs/network.md)."""
+    through :meth:`others` (docs/network.md). Under imperfect perception (``sensing``; docs/sensing.md)
+    ``positions`` and ``velocities`` are each agent's estimates of its own state, and a range
+    sensor is read through :meth:`scan`."""
 
     step: int
     time: float  # [s]
     positions: np.ndarray  # (N, d) [m], d = the world's dimension
     velocities: np.ndarray  # (N, d) [m/s]
     view: Any = None  # swarmnav.sim.network.View, or None (ideal network)
+    sensing: Any = None  # swarmnav.sensing.perception.Perception, or None (perfect perception)
+
+    def scan(self, cast, x: np.ndarray, directions: np.ndarray, max_range: float) -> np.ndarray:
+        """Every agent's range-sensor reading (N, R) [m]: ``cast(x)``, the method's exact kernel
+        (rays ``directions`` (R, d), range ``max_range`` [m]) from its positions ``x`` (N, d), row i
+        agent i. Under imperfect perception the rays leave from the true positions and come back
+        with the run's range noise, dropouts and field of view (docs/sensing.md); under perfect
+        perception this is ``cast(x)``."""
+        if self.sensing is None:
+            return cast(x)
+        return self.sensing.scan(cast, x, directions, max_range)
 
     def others(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Agent ``j[p]``'s position (P, d) [m] and velocity (P, d) [m/s] as agent ``i[p]`` last
@@ -91,6 +104,9 @@ class Method(Protocol):
     # (``net.*``) for any other method with one line
     # optional ``periodic: bool`` (absent: True): False for a method that cannot fly a periodic
     # box (the trajectory planners); the rollout refuses such a run with one line
+    # optional ``range_sensor: bool`` (absent: False): True for a method that reads a range sensor
+    # (LiDAR ring, 3-D scan) through ``Observation.scan``; the rollout refuses the range
+    # options of imperfect perception (``sense.range_noise``, ``dropout``, ``fov``) for any other
 
     def reset(self, scenario: Scenario, positions: np.ndarray, velocities: np.ndarray, rng: np.random.Generator) -> None: ...
 

@@ -18,6 +18,7 @@ from swarmnav.metrics.navigation import MetricParams, goal_reached, navigation_m
 from swarmnav.params import as_dict, coerce
 from swarmnav.portable import numerics
 from swarmnav.sensing import PreparedGeometry
+from swarmnav.sensing.perception import PREFIX as SENSE_PREFIX, Perception, record as sense_record, sense_params
 from swarmnav.sim.network import PREFIX as NET_PREFIX, Network, net_params, record as net_record
 from swarmnav.sim.referee import Referee
 from swarmnav.sim.result import Plans, RunResult
@@ -33,9 +34,9 @@ RUN_OPTIONS = ("z_fly", *SCENE_OPTIONS, "plans")
 
 
 def is_run_option(key: str) -> bool:
-    """A ``--set`` key of the run rather than of its method: :data:`RUN_OPTIONS` and the
-    network's ``net.*`` (docs/network.md)."""
-    return key in RUN_OPTIONS or key.startswith(NET_PREFIX)
+    """A ``--set`` key of the run rather than of its method: :data:`RUN_OPTIONS`, the
+    network's ``net.*`` (docs/network.md) and perception's ``sense.*`` (docs/sensing.md)."""
+    return key in RUN_OPTIONS or key.startswith(NET_PREFIX) or key.startswith(SENSE_PREFIX)
 
 
 def run(
@@ -81,7 +82,8 @@ def run(
             docs/methods/contract.md) in ``RunResult.plans``; False (or ``"false"``) keeps
             none. Either way the run flies the same.
         **params: method parameters (unknown names raise ConfigError), and the network's
-            ``net.*`` options (pass them as ``**{"net.latency": 0.15}``; docs/network.md).
+            ``net.*`` options (pass them as ``**{"net.latency": 0.15}``; docs/network.md) and
+            perception's ``sense.*`` (``**{"sense.pos_noise": 0.05}``; docs/sensing.md).
 
     The same (method, params, scene, seed, steps) always gives identical arrays.
     """
@@ -90,7 +92,12 @@ def run(
                      body_radius=body_radius)
     keep_plans = coerce(plans, bool, "plans")
     net = net_params({k: params.pop(k) for k in [k for k in params if k.startswith(NET_PREFIX)]})
+    sense = sense_params({k: params.pop(k) for k in [k for k in params if k.startswith(SENSE_PREFIX)]})
     m = registry.make(method, **params) if isinstance(method, str) else method
+    if sense.ranged and not getattr(m, "range_sensor", False):
+        raise ConfigError(f"{m.name} has no range sensor (it reads the obstacles from the world), so "
+                          f"{', '.join('sense.' + k for k in sense.ranged)} cannot apply; methods with one: "
+                          f"{', '.join(_ranged()) or 'none'}")
     if not net.ideal and not getattr(m, "networked", False):
         raise ConfigError(f"{m.name} does not read the other agents through the network yet, so it cannot fly "
                           f"a non-ideal one (net.*); methods that can: {', '.join(_networked()) or 'none'}")
@@ -115,6 +122,9 @@ def run(
     if not net.ideal:  # the agents send at net.rate, else at the method's own broadcast rate, else every step
         own_rate = float(getattr(m.params, "broadcast_hz", 0.0) or 0.0)
         network = Network(net, scn.n, pos.shape[1], dt, seed, rate=net.rate or own_rate)
+    perception = None  # perfect perception: the method reads the true state and exact ranges
+    if not sense.perfect:
+        perception = Perception(sense, pos, seed, world.goal_array if world.has_goal else None)
     N = scn.n
     d = scn.dim
     P = np.empty((steps + 1, N, d))
@@ -157,8 +167,13 @@ def run(
     # warnings on the way there (an overflow in a power, inf - inf): they only repeat it
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), _closing(m):
         for k in range(steps):
-            view = None if network is None else network.step(k * dt, pos, vel)
-            cmd, info = m.act(Observation(k, k * dt, pos, vel, view), rng)
+            if perception is None:
+                view = None if network is None else network.step(k * dt, pos, vel)
+                cmd, info = m.act(Observation(k, k * dt, pos, vel, view), rng)
+            else:  # each agent acts on, and sends, what it believes of itself
+                opos, ovel = perception.observe(k * dt, pos, vel)
+                view = None if network is None else network.step(k * dt, opos, ovel)
+                cmd, info = m.act(Observation(k, k * dt, opos, ovel, view, perception), rng)
             if network is not None and "publish" in info:  # what the agents send from now on
                 network.publish(info["publish"])
             pos, vel = m.dynamics.step(pos, vel, cmd, dt)
@@ -224,6 +239,7 @@ def run(
             **({"plane": {"z_fly": plane_z, "reason": f"{m.name} is planar: it flew the scene's "
                           f"horizontal slice at z = {plane_z:g} m"}} if plane_z is not None else {}),
             **({"net": net_record(net)} if network is not None else {}),
+            **({"sense": sense_record(sense)} if perception is not None else {}),
         },
         positions=P, velocities=V, clearance=C, labels=lab, roles=roles, events=events, wall_time=wall,
     )
@@ -245,6 +261,8 @@ def run(
     metrics.update(m.summary())
     if network is not None:
         metrics.update(network.summary())
+    if perception is not None:
+        metrics.update(perception.summary())
     result.metrics = metrics
     timings = getattr(m, "timings", None)  # optional hook: wall-clock figures, never metrics
     if callable(timings):
@@ -420,6 +438,11 @@ def _progress(progress, steps):
             bar.close()
 
     return update
+
+
+def _ranged() -> list[str]:
+    """Registered methods that read a range sensor through ``Observation.scan`` (a class attribute)."""
+    return [n for n in registry.names() if getattr(registry.spec(n).factory, "range_sensor", False)]
 
 
 def _networked() -> list[str]:

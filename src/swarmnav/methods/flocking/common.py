@@ -62,11 +62,13 @@ class RangeSensor:
             self._ranges = np.empty((len(x), self.n_rays))
         return self._prepared.range_into(np.ascontiguousarray(x), self.dirs, self.max_range, self._ranges)
 
-    def surface_points(self, x: np.ndarray, within: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def surface_points(self, x: np.ndarray, within: float,
+                       obs: Observation | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The surfaces robot ``agent[k]`` sees closer than ``within`` [m]: ``(agent, dist, normal)``
         with ``dist`` (K,) [m] and ``normal`` (K, d) the unit vector from the surface point to the
-        robot; the point itself is ``x[agent] - dist * normal``."""
-        ring = self.ranges(x)
+        robot; the point itself is ``x[agent] - dist * normal``. ``obs``: the step's observation,
+        whose perception the ranges pass through (docs/sensing.md); None: exact ranges."""
+        ring = self.ranges(x) if obs is None else obs.scan(self.ranges, x, self.dirs, self.max_range)
         agent, ray = local_minima(ring, min(within, self.max_range), self._nbrs)
         return agent, ring[agent, ray], -self.dirs[ray]
 

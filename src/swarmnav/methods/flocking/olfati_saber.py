@@ -173,6 +173,7 @@ class OlfatiSaber:
     name = "olfati-saber"
     dims = (2, 3)
     networked = True  # reads the others only through the network (Observation.known; docs/network.md)
+    range_sensor = True  # its range ring (sphere) is read through Observation.scan (docs/sensing.md)
 
     def __init__(self, **overrides: Any):
         p = build(OlfatiSaberParams, overrides, context="olfati-saber")
@@ -198,7 +199,7 @@ class OlfatiSaber:
         hx, hv, heard = self._board.update(obs)  # what the others last received
         diff = pair_differences(x, hx, self._period, heard)
         u = alpha_term(diff, velocity_differences(v, hv), p)
-        agent, dist, normal = self._sensor.surface_points(x, p.r_obs)
+        agent, dist, normal = self._sensor.surface_points(x, p.r_obs, obs)
         u += beta_term(v, agent, dist, normal, p)
         u += gamma_term(x, v, self.goal, np.zeros_like(self.goal), p)
         self._steps += 1

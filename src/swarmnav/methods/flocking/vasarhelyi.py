@@ -177,6 +177,7 @@ class Vasarhelyi:
     name = "vasarhelyi"
     dims = (2, 3)
     networked = True  # reads the others only through the network (Observation.known; docs/network.md)
+    range_sensor = True  # its range ring (sphere) is read through Observation.scan (docs/sensing.md)
 
     def __init__(self, **overrides: Any):
         p = build(VasarhelyiParams, overrides, context="vasarhelyi")
@@ -196,10 +197,11 @@ class Vasarhelyi:
         self._cut = 0
 
     def desired_velocity(self, x: np.ndarray, v: np.ndarray, hx: np.ndarray, hv: np.ndarray,
-                         heard: np.ndarray | None = None) -> np.ndarray:
+                         heard: np.ndarray | None = None, obs: Observation | None = None) -> np.ndarray:
         """``v_d`` (N, d) [m/s] before the cut at ``v_max``, from the robots' own states and the held
         broadcasts ``hx``, ``hv`` of the others ((N, d), or (N, N, d) each robot's picture on a
-        network, ``heard`` the pairs it has heard)."""
+        network, ``heard`` the pairs it has heard); ``obs`` the step's observation, whose
+        perception the range sensor reads through (docs/sensing.md)."""
         s, p = self.scaled, self.params
         diff = pair_differences(x, hx, self._period, heard)
         g = self.goal - x
@@ -207,7 +209,7 @@ class Vasarhelyi:
         vd = s.v_flock * g / np.maximum(gn, p.r_slow)[:, None]
         vd += repulsion(diff, s)
         vd += friction(diff, velocity_differences(v, hv), s)
-        agent, dist, normal = self._sensor.surface_points(x, np.inf)  # within shill_reach
+        agent, dist, normal = self._sensor.surface_points(x, np.inf, obs)  # within shill_reach
         vd += shill(v, agent, dist - p.shill_offset, normal, s)
         self._shill += len(agent)
         return vd
@@ -216,7 +218,7 @@ class Vasarhelyi:
         p = self.params
         x, v = obs.positions, obs.velocities
         hx, hv, heard = self._board.update(obs)
-        vd = self.desired_velocity(x, v, hx, hv, heard)
+        vd = self.desired_velocity(x, v, hx, hv, heard, obs)
         self._cut += int(np.count_nonzero(np.einsum("ij,ij->i", vd, vd) > p.v_max * p.v_max))
         vd = clip_norm(vd, p.v_max)
         self._steps += 1

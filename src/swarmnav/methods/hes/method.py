@@ -49,6 +49,7 @@ class Hes:
 
     name = "hes"
     dims = (2,)  # planar, as its paper: a 3-D scene is flown in its horizontal slice at z_fly
+    range_sensor = True  # its LiDAR ring is read through Observation.scan (docs/sensing.md)
 
     def __init__(self, **overrides: Any):
         self.params = build(HesParams, overrides, context="hes")
@@ -56,6 +57,7 @@ class Hes:
         self.dynamics = DampedDoubleIntegrator()  # eq. (5)-(7): m = 5 kg, c_d = 0.5, inverse model
         self.gains = F.gain_vector(self.params)
         self.cos, self.sin = ray_table(self.params.paper.n_rays)
+        self.dirs = np.column_stack([self.cos, self.sin])  # (R, 2) the ring's rays, for Observation.scan
         self.pair_radius = max(self.params.core.r_sep, self.params.core.d_ir)  # [m] reach of the pair terms (eq. 25, 31)
         p = self.params
         self.ring_angles = np.linspace(0.0, 2 * np.pi, p.core.enc_samples, endpoint=False)  # encircle slot candidates
@@ -152,7 +154,7 @@ class Hes:
         x = np.ascontiguousarray(obs.positions, dtype=np.float64)
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         # 1. perceive
-        step = Step(obs.step, x, v, sense(self, x))
+        step = Step(obs.step, x, v, obs.scan(lambda at: sense(self, at), x, self.dirs, self.params.paper.lidar_range))
         for q in self.at["observe"]:
             q.observe(step)
         reelect(self, step)
