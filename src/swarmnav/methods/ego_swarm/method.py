@@ -212,7 +212,7 @@ class EgoSwarm:
         k0, q = b.data
         return q[np.clip(js - k0, 0, len(q) - 1)]
 
-    def _gaps(self, r: int, js: np.ndarray, heard_r: np.ndarray, cache: dict) -> tuple[np.ndarray, np.ndarray]:
+    def _gaps(self, r: int, js: np.ndarray, heard_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Least distance [m] over steps ``js`` between robot ``r``'s plan and each plan it
         received (inf: none), and the start [s] of each (NaN: none)."""
         n = len(heard_r)
@@ -220,10 +220,7 @@ class EgoSwarm:
         mine = self._Q[r, np.clip(js - self._k0[r], 0, self._len[r] - 1)]
         for j, b in enumerate(heard_r):
             if b is not None:
-                key = id(b)
-                if key not in cache:
-                    cache[key] = self._samples(b, js)
-                gap[j] = np.linalg.norm(cache[key] - mine, axis=1).min()
+                gap[j] = np.linalg.norm(self._samples(b, js) - mine, axis=1).min()
                 start[j] = b.start
         return gap, start
 
@@ -252,13 +249,24 @@ class EgoSwarm:
             P = self._Q[np.arange(n)[:, None], idx]  # (N, J, D)
             gap = np.linalg.norm(P[:, None] - P[None, :], axis=3).min(axis=2)  # (N, N)
             newer = self._t0[None, :] > self._t0[:, None]
-        else:  # each robot against the plans it received
-            cache: dict = {}
-            gap, start = np.full((n, n), np.inf), np.full((n, n), np.nan)
+        else:  # each robot against the plans it received; a plan many hold is sampled once
+            rows, cols, which, plans, seen = [], [], [], [], {}
             for r in range(n):
-                gap[r], start[r] = self._gaps(r, js, heard[r], cache)
-            with np.errstate(invalid="ignore"):
-                newer = start > self._t0[:, None]
+                for j, b in enumerate(heard[r]):
+                    if b is not None:
+                        rows.append(r)
+                        cols.append(j)
+                        which.append(seen.setdefault(id(b), len(plans)))
+                        if which[-1] == len(plans):
+                            plans.append(b)
+            gap, newer = np.full((n, n), np.inf), np.zeros((n, n), dtype=bool)
+            if plans:
+                idx = np.clip(js[None, :] - self._k0[:, None], 0, (self._len - 1)[:, None])
+                mine = self._Q[np.arange(n)[:, None], idx]  # (N, J, D)
+                theirs = np.stack([self._samples(b, js) for b in plans])  # (U, J, D)
+                rows, cols, which = np.array(rows), np.array(cols), np.array(which)
+                gap[rows, cols] = np.linalg.norm(theirs[which] - mine[rows], axis=2).min(axis=1)
+                newer[rows, cols] = np.array([b.start for b in plans])[which] > self._t0[rows]
         conflict = np.any((gap < p.swarm_check_clearance) & newer, axis=1) & ~trig
         conflict &= k - self._last >= self._min_gap
         trig |= conflict
@@ -290,7 +298,7 @@ class EgoSwarm:
         n = len(self._k0)
         js = k + np.arange(0, int(horizon / self.dt) + 1, max(1, int(round(0.1 / self.dt))))
         if heard_r is not None:
-            gap, start = self._gaps(r, js, heard_r, {})
+            gap, start = self._gaps(r, js, heard_r)
             with np.errstate(invalid="ignore"):
                 close = (gap < self.params.swarm_clearance) & (start > self._t0[r])
             return 0 if np.any(close) else -1
