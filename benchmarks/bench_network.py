@@ -1,7 +1,7 @@
 """The network's cost (issue 37): the ideal network must cost under 5 % over the step of the code
 before the network existed, and fly the same arrays; a lossy, late network's own cost beside it.
 
-    PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b
+    PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b [--methods ego-swarm]
 
 Each trial runs in a fresh subprocess (one core, one at a time) after a 3-step warm-up that loads
 the compiled kernels; the CPU time (``time.process_time``) of ``--repeats`` runs is taken at its
@@ -26,6 +26,7 @@ TRIALS = [  # (method, scene, n, simulated seconds)
     ("vasarhelyi", "narrow_alternating_gates", None, 30.0),
     ("olfati-saber", "narrow_alternating_gates", None, 30.0),
     ("sph", "random_forest:density=0.35,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0", 15, 20.0),
+    ("ego-swarm", "random_forest:density=0.25,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0", 15, 20.0),
 ]
 
 
@@ -69,6 +70,7 @@ def main() -> None:
     ap.add_argument("--before", required=False, default="", help="git revision before the network")
     ap.add_argument("--net", default='{"net.latency": 0.15, "net.jitter": 0.05, "net.loss": 0.3}')
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--methods", default="", help="comma-separated: only these trials (default: every one)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--src", default=str(ROOT / "src"), help=argparse.SUPPRESS)
     ap.add_argument("--method", default="", help=argparse.SUPPRESS)
@@ -89,6 +91,8 @@ def main() -> None:
         print(f"# CPU s per simulated s, min of {a.repeats}; before = {a.before or '-'}; network = {net}")
         print(f"{'method':>13} {'before':>8} {'ideal':>8} {'ideal/before':>13} {'arrays':>9} {'network':>8} {'net/ideal':>10}")
         for method, scene, n, horizon in TRIALS:
+            if a.methods and method not in a.methods.split(","):
+                continue
             now = trial(a.src, method, scene, n, horizon, {}, a.repeats)
             line = f"{method:>13} "
             if old:
