@@ -254,7 +254,7 @@ def test_ego_swarm_fed_the_true_plans_replans_as_the_ideal_run_but_after_same_st
             twins[k] = (copy.deepcopy(m), x.copy(), v.copy())
 
     def keep(k, m, obs, info):
-        sent[k] = list(info["publish"]["trajectory"])  # the board's list: this step's rows
+        sent[k] = info["publish"]["trajectory"]  # this step's rows, as published
 
     _fly("ego-swarm", _X0, 101, before=before, keep=keep)
     n, compared, tau = len(_X0), 0, np.linspace(0.0, 3.0, 31)

@@ -149,8 +149,9 @@ class EgoSwarm:
                 self._replan(int(r), k, obs.time, x[r], v[r], heard=heard)
         self._steps += 1
         q_ref, v_ref, a_ref = self._reference(k)
+        command = track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v)
         # the plans as they stand after this step's commits: what every robot sends from now on
-        return track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v), {"publish": {"trajectory": self.board.records}}
+        return command, {"publish": {"trajectory": tuple(self.board.records)}}
 
     def summary(self) -> dict[str, float]:
         s = self._stats

@@ -153,7 +153,7 @@ class MaderMethod:
         idx = np.clip(k - self.ref_k0, 0, self.ref_len - 1)
         rr = np.arange(x.shape[0])
         a = track(x, v, self.ref_q[rr, idx], self.ref_v[rr, idx], self.ref_a[rr, idx], p.k_p, p.k_v)
-        return a, {"publish": {"trajectory": self.board.records}}
+        return a, {"publish": {"trajectory": tuple(self.board.records)}}
 
     def summary(self) -> dict[str, float]:
         s = self.stats
