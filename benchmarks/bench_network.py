@@ -2,7 +2,7 @@
 before the network existed, and fly the same arrays; a lossy, late network's own cost beside it.
 
     PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b
-    PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b --methods vem,ivem,hwvem
+    PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b --methods vem,ivem,hwvem,ego-swarm
 
 Each trial runs in a fresh subprocess (one core, one at a time) after a 3-step warm-up that loads
 the compiled kernels; the CPU time (``time.process_time``) of ``--repeats`` runs is taken at its
@@ -35,6 +35,7 @@ TRIALS = [  # (method, scene, n, simulated seconds)
     ("ivem-a", "hwvem_mission", 100, 700.0),
     ("wvem", "hwvem_mission", 100, 700.0),
     ("hwvem", "hwvem_mission", 100, 700.0),
+    ("ego-swarm", "random_forest:density=0.25,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0", 15, 20.0),
 ]
 
 

@@ -9,7 +9,7 @@ import pytest
 import swarmnav
 from swarmnav.methods import registry
 from swarmnav.planning.bspline import SplinePlan, boundary_points
-from swarmnav.planning.messages import POSITION_BYTES, CommLog, TrajectoryBoard, trajectory_bytes
+from swarmnav.planning.messages import POSITION_BYTES, CommLog, TrajectoryBoard, sample_broadcasts, trajectory_bytes
 from swarmnav.planning.schedule import ReplanSchedule
 from swarmnav.planning.tracker import References, track
 
@@ -82,6 +82,20 @@ def test_trajectory_board_counts_each_publication_and_samples_on_the_run_clock()
     got = board.sample(np.array([0, 1]), np.array([1.0, 2.5, 9.0]), 2)
     assert np.isnan(got[0]).all()  # robot 0 has published nothing
     np.testing.assert_allclose(got[1, :, 0], [0.0, 1.0, 2.0])  # clamped before the start and after the end
+
+
+def test_a_broadcast_record_is_the_board_s_plan_read_on_the_same_clock():
+    board = TrajectoryBoard(3, CommLog())
+    board.publish(1, _line, t_start=2.0, duration=1.0, n_points=10, data="extra")
+    rec = board.records[1]
+    assert board.records[0] is None and rec.data == "extra"
+    with pytest.raises(AttributeError):  # immutable: what travels is what was sent
+        rec.start = 0.0
+    times = np.array([1.0, 2.5, 9.0])
+    got = sample_broadcasts([None, rec], times, 2)
+    np.testing.assert_array_equal(got, board.sample(np.array([0, 1]), times, 2))
+    board.publish(1, _line, t_start=5.0, duration=1.0, n_points=10)  # a newer plan replaces the record...
+    np.testing.assert_array_equal(sample_broadcasts([rec], times, 2)[0], got[1])  # ...and leaves the old one as sent
 
 
 def test_sph_comm_mbps_is_counted_from_its_broadcasts():

@@ -1,6 +1,8 @@
 """The network between the agents (swarmnav/sim/network.py, docs/network.md): delay, loss in
 bursts, range; seeded; the ideal network changes nothing; a lost message leaves an agent alone."""
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -176,8 +178,100 @@ def test_impossible_network_is_one_line_and_exit_2(tmp_path, setting, words):
 
 
 def test_a_method_that_cannot_use_the_network_is_refused_in_one_line(tmp_path):
-    r = run_cli("run", "--method", "ego-swarm", "--scenario", "default_corridor", "--steps", "5",
+    r = run_cli("run", "--method", "hes", "--scenario", "default_corridor", "--steps", "5",
                 "--out", str(tmp_path / "r"), "--set", "net.loss=0.3")
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "ego-swarm does not read the other agents through the network" in r.stderr
-    assert all(m in r.stderr for m in ("apf", "olfati-saber", "sph", "vasarhelyi", "vem", "hwvem"))
+    assert "hes does not read the other agents through the network" in r.stderr
+    assert all(m in r.stderr for m in ("apf", "olfati-saber", "sph", "vasarhelyi", "vem", "hwvem",
+                                       "ego-swarm", "lsc", "nmpc", "mader"))
+
+
+# ---------------------------------------------------------------- the trajectory planners (Table II)
+
+PLANNERS = ["ego-swarm", "lsc", "nmpc", "mader"]
+_CROWD = {"name": "crowd", "world": {"bounds": [-4.0, -6.0, 14.0, 6.0]}, "goal": {"position": [10.0, 0.0]},
+          "obstacles": [{"type": "circle", "center": [5.0, 0.6], "radius": 0.8}]}
+# robot 0 behind the others, on the line through robot 1 to the goal: it must plan around them
+_X0 = np.array([[-1.3, 0.1], [0.0, 0.0], [-0.6, 0.5], [-0.6, -0.5], [-1.2, -1.0]])
+
+
+def _fly(method, x, steps, net=None, keep=None, before=None):
+    """Fly a planner by hand over ``steps`` steps (every goal the scene's point: goal_disc = 0, so a
+    robot's goal does not depend on how many fly), the network ``net`` (None: ideal) between the
+    robots; the positions (steps + 1, N, 2). ``before(k, method, x, v)`` is called before each act,
+    ``keep(k, method, obs, info)`` after it."""
+    scn = from_dict({**_CROWD, "swarm": {"n": len(x), "spawn": [-2.0, -2.0, 1.0, 1.0]}})
+    m = registry.make(method, goal_disc=0.0)
+    rng = np.random.default_rng(0)
+    v = np.zeros_like(x)
+    m.reset(scn, x.copy(), v.copy(), rng)
+    network = None if net is None else Network(net, len(x), 2, m.dt, seed=0)
+    out = [x.copy()]
+    for k in range(steps):
+        if before is not None:
+            before(k, m, x, v)
+        view = None if network is None else network.step(k * m.dt, x, v)
+        obs = Observation(k, k * m.dt, x, v, view)
+        a, info = m.act(obs, rng)
+        if keep is not None:
+            keep(k, m, obs, info)
+        if network is not None and "publish" in info:
+            network.publish(info["publish"])
+        x, v = m.dynamics.step(x, v, a, m.dt)
+        out.append(x.copy())
+    return np.array(out)
+
+
+@pytest.mark.parametrize("method", PLANNERS)
+def test_a_planner_that_hears_nothing_plans_alone(method):
+    # every message lost: robot 0 flies exactly as it does when it is the only robot in the world
+    steps = int(round(2.0 / registry.make(method).dt))  # 2 s
+    deaf = _fly(method, _X0, steps, NetParams(loss=1.0))
+    alone = _fly(method, _X0[:1], steps)
+    crowd = _fly(method, _X0, steps)
+    assert np.array_equal(deaf[:, 0], alone[:, 0])
+    assert not np.allclose(crowd[:, 0], alone[:, 0], atol=1e-6)  # the neighbours it hears change its flight
+
+
+@pytest.mark.parametrize("method", ["lsc", "nmpc", "mader"])
+def test_a_planner_that_hears_every_message_at_once_flies_the_ideal_run(method):
+    # LSC and NMPC plan synchronously from the plans of the previous round, which a network that
+    # delivers every message at once has delivered; MADER's robots start their replans at distinct
+    # steps (5 robots, 20 steps per replan), so every trajectory committed before a check has arrived
+    steps = 150
+    ideal = _fly(method, _X0, steps)
+    assert np.array_equal(_fly(method, _X0, steps, NetParams(range=1e6)), ideal)
+
+
+def test_ego_swarm_fed_the_true_plans_replans_as_the_ideal_run_but_after_same_step_commits():
+    # EGO-Swarm's robots replan one after another within a step, each seeing the plans committed
+    # before it in that step: no network delivers those in time (a plan published in a step travels
+    # from the next). Fed every plan committed before the step, a robot replans as in the ideal run
+    # unless a robot before it committed in the same step.
+    twins, sent = {}, {}
+
+    def before(k, m, x, v):
+        if k >= 10 and k % 2 == 0:  # EGO-Swarm's check steps (check_period 0.05 s of 0.02 s steps)
+            twins[k] = (copy.deepcopy(m), x.copy(), v.copy())
+
+    def keep(k, m, obs, info):
+        sent[k] = info["publish"]["trajectory"]  # this step's rows, as published
+
+    _fly("ego-swarm", _X0, 101, before=before, keep=keep)
+    n, compared, tau = len(_X0), 0, np.linspace(0.0, 3.0, 31)
+    for k, (twin, x, v) in twins.items():
+        truth = np.empty((n, n), dtype=object)
+        for i in range(n):
+            truth[i, :] = sent[k - 1]
+        view = View(np.broadcast_to(x, (n, n, 2)).copy(), np.broadcast_to(v, (n, n, 2)).copy(), np.zeros((n, n)),
+                    {"trajectory": truth})
+        _, info = twin.act(Observation(k, k * twin.dt, x, v, view), np.random.default_rng(0))
+        got, want = info["publish"]["trajectory"], sent[k]
+        committed = [r for r in range(n) if want[r] is not sent[k - 1][r]]
+        for r in range(n):
+            if any(c < r for c in committed):
+                continue  # the ideal robot r saw a plan of this step
+            assert got[r].start == want[r].start
+            assert np.array_equal(got[r].sampler(tau)[0], want[r].sampler(tau)[0])
+            compared += r in committed
+    assert compared >= 3  # new plans compared, not only the old ones

@@ -141,6 +141,16 @@ class OccupancyMaps:
         self._local = threading.local()
         self._lock = threading.Lock()
 
+    def __getstate__(self) -> dict:
+        """What a copy (``copy.deepcopy``, pickle) keeps: every member but the per-thread A* work
+        arrays and the lock, which the copy makes afresh (no search depends on them)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_local", "_lock")}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._local = threading.local()
+        self._lock = threading.Lock()
+
     @property
     def order_dependent(self) -> bool:
         """Whether a search's path may depend on the searches made before it: the 3-D field search

@@ -17,6 +17,9 @@ messages, bytes, and the swarm's aggregate load ``comm_mbps`` [Mbit/s] over the 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any, Callable
+
 import numpy as np
 
 HEADERS = 28  # [B] UDP (8) + IPv4 (20)
@@ -61,28 +64,64 @@ class CommLog:
         }
 
 
+@dataclass(frozen=True, slots=True)
+class Broadcast:
+    """One trajectory a robot broadcast, as every receiver holds it: immutable, so a copy that
+    arrives late is the trajectory as it was sent (docs/network.md).
+
+    ``sampler(tau)`` gives the plan at times ``tau`` [s] from its start as a tuple whose first
+    array is the positions (L, D) [m]; the plan starts at ``start`` [s] on the run's clock (the
+    clock every robot shares) and holds its last state after ``end`` [s]. ``data`` is what a
+    planner sends besides (its control points, the step it was committed at); the arrays in it
+    are never changed after the broadcast."""
+
+    sampler: Callable
+    start: float
+    end: float
+    data: Any = None
+
+
+def sample_broadcasts(plans, times: np.ndarray, dim: int) -> np.ndarray:
+    """Positions [m] of broadcast ``plans`` (a sequence of :class:`Broadcast`, None: nothing
+    received) at absolute ``times`` [s]: (len(plans), len(times), dim), NaN for None. Times
+    outside a plan are clamped to it (before its start: its first state; after its end: its
+    last): a plan that arrives late is read at the true present time."""
+    out = np.full((len(plans), len(times), dim), np.nan)
+    for k, b in enumerate(plans):
+        if b is not None:
+            tau = np.clip(np.asarray(times, dtype=float), b.start, b.end) - b.start
+            out[k] = b.sampler(tau)[0]
+    return out
+
+
 class TrajectoryBoard:
-    """The latest trajectory each robot has broadcast, as the others hold it.
+    """The latest trajectory each robot has broadcast, as the others hold it under the ideal
+    network (every broadcast heard at once).
 
     A planner that broadcasts its plan (EGO-Swarm, MADER) ``publish``-es it with its start
     time on the run's clock; the others read every robot's plan at absolute times with
     :meth:`sample`. Each publication is one trajectory message in the run's :class:`CommLog`.
+    ``records`` holds each robot's latest :class:`Broadcast` (None before its first), what a
+    planner publishes to a non-ideal network (``info["publish"]``).
     """
 
-    __slots__ = ("samplers", "start", "end", "log")
+    __slots__ = ("samplers", "start", "end", "log", "records")
 
     def __init__(self, n: int, log: CommLog):
         self.samplers: list = [None] * n  # per robot: times from its start (L,) -> (q, v, a), each (L, D)
         self.start = np.full(n, np.nan)  # [s] start of each robot's plan on the run's clock
         self.end = np.full(n, np.nan)  # [s] its end (the plan holds its last state after it)
         self.log = log
+        self.records: list[Broadcast | None] = [None] * n
 
-    def publish(self, robot: int, sampler, t_start: float, duration: float, n_points: int) -> None:
+    def publish(self, robot: int, sampler, t_start: float, duration: float, n_points: int, data: Any = None) -> None:
         """Robot ``robot`` broadcasts a plan of ``n_points`` control points starting at
-        ``t_start`` [s] and lasting ``duration`` [s]."""
+        ``t_start`` [s] and lasting ``duration`` [s]; ``data``: what it sends besides
+        (:class:`Broadcast`)."""
         self.samplers[robot] = sampler
         self.start[robot] = t_start
         self.end[robot] = t_start + duration
+        self.records[robot] = Broadcast(sampler, float(self.start[robot]), float(self.end[robot]), data)
         self.log.send(1, trajectory_bytes(n_points))
 
     def sample(self, robots: np.ndarray, times: np.ndarray, dim: int) -> np.ndarray:

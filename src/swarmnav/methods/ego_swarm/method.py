@@ -22,6 +22,13 @@ the released FSM), and follows it with a PD tracking law:
 Robots replan one after another in index order within a step, each seeing the plans published
 before it (the paper's asynchronous broadcast at zero latency). Every array is (N, d), d from the
 scene: 2-D and 3-D alike.
+
+On a network (docs/network.md) each committed plan travels as an immutable
+:class:`~swarmnav.planning.messages.Broadcast` (``info["publish"]["trajectory"]``) and every robot
+checks (1b, the brake's swarm check) and optimises (2) against the newest plan it received of each
+other robot, read at the true present time: a late plan is still a plan in absolute time (the
+paper's broadcast carries its start time on a clock the robots share). A robot never heard from is
+not there. A plan published in a step reaches the others from the next step on.
 """
 
 from __future__ import annotations
@@ -41,7 +48,7 @@ from swarmnav.planning.bspline import SplinePlan, boundary_points
 from swarmnav.planning.esdf_free import occupied
 from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
-from swarmnav.planning.messages import CommLog, TrajectoryBoard
+from swarmnav.planning.messages import CommLog, TrajectoryBoard, sample_broadcasts
 from swarmnav.planning.plan_log import PlanLog, sample_rows
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
@@ -73,6 +80,7 @@ class EgoSwarm:
 
     name = "ego-swarm"
     dims = (2, 3)
+    networked = True  # reads the others' plans only through what it received (module docstring)
     periodic = False  # its plans cross the world's edge, where a periodic box wraps: the rollout refuses one
 
     def __init__(self, **overrides: Any):
@@ -129,18 +137,21 @@ class EgoSwarm:
         x, v = obs.positions, obs.velocities
         k = obs.step
         n = x.shape[0]
+        heard = self._heard(obs)
         if self._steps == 0:
             for r in range(n):
                 self.maps.observe(r, x[r])
             for r in range(n):
-                self._replan(r, k, obs.time, x[r], v[r], first=True)
+                self._replan(r, k, obs.time, x[r], v[r], first=True, heard=heard)
         elif k % self._check_every == 0:
-            trig = self._triggers(k, obs.time, x)
+            trig = self._triggers(k, obs.time, x, heard)
             for r in np.flatnonzero(trig):
-                self._replan(int(r), k, obs.time, x[r], v[r])
+                self._replan(int(r), k, obs.time, x[r], v[r], heard=heard)
         self._steps += 1
         q_ref, v_ref, a_ref = self._reference(k)
-        return track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v), {}
+        command = track(x, v, q_ref, v_ref, a_ref, p.k_p, p.k_v)
+        # the plans as they stand after this step's commits: what every robot sends from now on
+        return command, {"publish": {"trajectory": tuple(self.board.records)}}
 
     def summary(self) -> dict[str, float]:
         s = self._stats
@@ -184,8 +195,39 @@ class EgoSwarm:
     def _view(self, r: int) -> MapView:
         return MapView(self.maps.grids[r].reshape(-1), self._counts, self.maps.origin, self.maps.resolution, 1)
 
-    def _triggers(self, k: int, t: float, x: np.ndarray) -> np.ndarray:
-        """Which robots replan at step ``k`` (module docstring, 1)."""
+    @staticmethod
+    def _heard(obs: Observation) -> np.ndarray | None:
+        """(N, N) object array: row r the newest plan robot r received of every other (None: none;
+        its own entry None, a robot reads its own plan itself); None under the ideal network."""
+        if obs.view is None:
+            return None
+        n = obs.positions.shape[0]
+        got = obs.received("trajectory")
+        heard = np.full((n, n), None, dtype=object) if got is None else got.copy()
+        np.fill_diagonal(heard, None)
+        return heard
+
+    def _samples(self, b, js: np.ndarray) -> np.ndarray:
+        """A received plan's positions at steps ``js`` (its reference at the control rate, as its
+        robot flies it; clamped to the plan: before it its first point, after it its last)."""
+        k0, q = b.data
+        return q[np.clip(js - k0, 0, len(q) - 1)]
+
+    def _gaps(self, r: int, js: np.ndarray, heard_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Least distance [m] over steps ``js`` between robot ``r``'s plan and each plan it
+        received (inf: none), and the start [s] of each (NaN: none)."""
+        n = len(heard_r)
+        gap, start = np.full(n, np.inf), np.full(n, np.nan)
+        mine = self._Q[r, np.clip(js - self._k0[r], 0, self._len[r] - 1)]
+        for j, b in enumerate(heard_r):
+            if b is not None:
+                gap[j] = np.linalg.norm(self._samples(b, js) - mine, axis=1).min()
+                start[j] = b.start
+        return gap, start
+
+    def _triggers(self, k: int, t: float, x: np.ndarray, heard: np.ndarray | None = None) -> np.ndarray:
+        """Which robots replan at step ``k`` (module docstring, 1); ``heard``: each robot's
+        received plans (:meth:`_heard`), None under the ideal network."""
         p = self.params
         n = x.shape[0]
         trig = np.zeros(n, dtype=bool)
@@ -203,10 +245,29 @@ class EgoSwarm:
         # (b) a newer broadcast plan passes too close
         step = max(1, int(round(0.2 / p.dt)))
         js = k + step * np.arange(int(p.swarm_check_horizon / (step * p.dt)) + 1)
-        idx = np.clip(js[None, :] - self._k0[:, None], 0, (self._len - 1)[:, None])  # (N, J)
-        P = self._Q[np.arange(n)[:, None], idx]  # (N, J, D)
-        gap = np.linalg.norm(P[:, None] - P[None, :], axis=3).min(axis=2)  # (N, N)
-        newer = self._t0[None, :] > self._t0[:, None]
+        if heard is None:
+            idx = np.clip(js[None, :] - self._k0[:, None], 0, (self._len - 1)[:, None])  # (N, J)
+            P = self._Q[np.arange(n)[:, None], idx]  # (N, J, D)
+            gap = np.linalg.norm(P[:, None] - P[None, :], axis=3).min(axis=2)  # (N, N)
+            newer = self._t0[None, :] > self._t0[:, None]
+        else:  # each robot against the plans it received; a plan many hold is sampled once
+            rows, cols, which, plans, seen = [], [], [], [], {}
+            for r in range(n):
+                for j, b in enumerate(heard[r]):
+                    if b is not None:
+                        rows.append(r)
+                        cols.append(j)
+                        which.append(seen.setdefault(id(b), len(plans)))
+                        if which[-1] == len(plans):
+                            plans.append(b)
+            gap, newer = np.full((n, n), np.inf), np.zeros((n, n), dtype=bool)
+            if plans:
+                idx = np.clip(js[None, :] - self._k0[:, None], 0, (self._len - 1)[:, None])
+                mine = self._Q[np.arange(n)[:, None], idx]  # (N, J, D)
+                theirs = np.stack([self._samples(b, js) for b in plans])  # (U, J, D)
+                rows, cols, which = np.array(rows), np.array(cols), np.array(which)
+                gap[rows, cols] = np.linalg.norm(theirs[which] - mine[rows], axis=2).min(axis=1)
+                newer[rows, cols] = np.array([b.start for b in plans])[which] > self._t0[rows]
         conflict = np.any((gap < p.swarm_check_clearance) & newer, axis=1) & ~trig
         conflict &= k - self._last >= self._min_gap
         trig |= conflict
@@ -231,11 +292,17 @@ class EgoSwarm:
         hit = curve_hits(pts, view.grid, view.counts, view.origin, view.res, view.blocked)
         return -1 if hit < 0 else hit * stride
 
-    def _swarm_conflict(self, r: int, k: int, horizon: float) -> int:
-        """0 if robot ``r``'s plan passes a newer plan of another robot closer than
-        ``swarm_clearance`` within ``horizon`` [s], else -1."""
+    def _swarm_conflict(self, r: int, k: int, horizon: float, heard_r: np.ndarray | None = None) -> int:
+        """0 if robot ``r``'s plan passes a newer plan of another robot (``heard_r``: the plans it
+        received; None: the ideal network's) closer than ``swarm_clearance`` within ``horizon``
+        [s], else -1."""
         n = len(self._k0)
         js = k + np.arange(0, int(horizon / self.dt) + 1, max(1, int(round(0.1 / self.dt))))
+        if heard_r is not None:
+            gap, start = self._gaps(r, js, heard_r)
+            with np.errstate(invalid="ignore"):
+                close = (gap < self.params.swarm_clearance) & (start > self._t0[r])
+            return 0 if np.any(close) else -1
         idx = np.clip(js[None, :] - self._k0[:, None], 0, (self._len - 1)[:, None])
         P = self._Q[np.arange(n)[:, None], idx]  # (N, J, D)
         gap = np.linalg.norm(P - P[r][None], axis=2).min(axis=1)
@@ -279,8 +346,10 @@ class EgoSwarm:
                     return cand, False
         return lg, final
 
-    def _replan(self, r: int, k: int, t: float, x: np.ndarray, v: np.ndarray, first: bool = False) -> None:
-        """One robot's replan (module docstring, 2-3)."""
+    def _replan(self, r: int, k: int, t: float, x: np.ndarray, v: np.ndarray, first: bool = False,
+                heard: np.ndarray | None = None) -> None:
+        """One robot's replan (module docstring, 2-3), against the plans of the ideal network's
+        board, or (``heard``) those robot ``r`` received."""
         p = self.params
         t_wall = time.perf_counter()
         dim = self._dim
@@ -320,13 +389,17 @@ class EgoSwarm:
         guide = pts[2:-2] if not final else pts[2:-1]
         ctrl = np.vstack([boundary_points(*start, dt), guide.reshape(-1, dim), boundary_points(*end, dt)])
         view = self._view(r)
-        others = np.array([j for j in range(len(self._plans)) if j != r and self._plans[j] is not None],
-                          dtype=np.int64)
+        if heard is None:
+            others = np.array([j for j in range(len(self._plans)) if j != r and self._plans[j] is not None],
+                              dtype=np.int64)
+            sample = lambda times: self.board.sample(others, times, dim)  # noqa: E731
+        else:
+            others = [b for b in heard[r] if b is not None]
+            sample = lambda times: sample_broadcasts(others, times, dim)  # noqa: E731
 
         def others_at(dt_knot: float, n_ctrl: int) -> np.ndarray:
             times = t + dt_knot * (np.arange(n_ctrl) - 1.0)
-            return np.ascontiguousarray(self.board.sample(others, times, dim)) if len(others) else \
-                np.zeros((0, n_ctrl, dim))
+            return np.ascontiguousarray(sample(times)) if len(others) else np.zeros((0, n_ctrl, dim))
 
         def search(a: np.ndarray, b: np.ndarray):
             return self.maps.search(r, a, b, p.max_expand)
@@ -351,7 +424,7 @@ class EgoSwarm:
             self._retry[r] = True
             hit = -1 if self._plans[r] is None else self._collides(r, k, p.emergency_time)
             if hit < 0 and self._plans[r] is not None and p.brake_on_swarm:
-                hit = self._swarm_conflict(r, k, p.emergency_time)
+                hit = self._swarm_conflict(r, k, p.emergency_time, None if heard is None else heard[r])
             if self._plans[r] is None or (hit >= 0 and not self._braking[r]):
                 s["brakes"] += 1
                 i = int(self._index(k)[r])
@@ -370,10 +443,11 @@ class EgoSwarm:
             self._V = pad(self._V, np.zeros_like(self._V[:, -1:]))
             self._A = pad(self._A, np.zeros_like(self._A[:, -1:]))
         q, vq, aq = plan.sample(self.dt * np.arange(length))
+        q.flags.writeable = False  # it travels with the broadcast: never changed after it
         self._Q[r, :length], self._V[r, :length], self._A[r, :length] = q, vq, aq
         rows = sample_rows(length, self.dt)  # the reference just sampled, every 0.1 s of it
         self._log_plans.add(k, r, t + self.dt * rows, q[rows])
         self._k0[r], self._len[r], self._t0[r] = k, length, t
         self._final[r] = final
         self._plans[r] = plan
-        self.board.publish(r, plan.sample, t, plan.duration, n_points)
+        self.board.publish(r, plan.sample, t, plan.duration, n_points, data=(k, q))

@@ -23,6 +23,16 @@ paper's synchronous replanning). A replan of robot i at time t:
 
 The command is the shared tracking law (SPH eq. 13 without the swarm force) on the committed
 plan, sampled at the control rate when it is committed.
+
+On a network (docs/network.md) each committed plan travels as an immutable
+:class:`~swarmnav.planning.messages.Broadcast` holding its control points and commit step
+(``info["publish"]["trajectory"]``). Robot i's initial trajectory of robot j is the newest plan of
+j it received, shifted to the present like its own (a late plan is still a plan in absolute time);
+a robot heard but whose plan has not arrived rests where it was heard (every robot's first plan);
+a robot never heard is not there. Each robot then draws its own LSC planes (step 4) against its
+own picture, with the same formula the ideal path applies to the pair, and plans its goal (step 2)
+among the robots it has heard. The paper assumes every plan arrives before the next replan; a late
+one leaves the two robots on planes drawn from different pictures, and the guarantee is lost.
 """
 
 from __future__ import annotations
@@ -64,6 +74,7 @@ class LscMethod:
 
     name = "lsc"
     dims = (2, 3)
+    networked = True  # reads the others' plans only through what it received (module docstring)
     periodic = False  # a periodic box has no obstacles to plan around nor a goal: refused in one line
 
     def __init__(self, **overrides: Any):
@@ -124,12 +135,12 @@ class LscMethod:
         k = obs.step
         x, v = obs.positions, obs.velocities
         if k % self.every == 0:
-            self._replan(k, x)
+            self._replan(k, x, obs)
         self._steps += 1
         idx = np.clip(k - self.ref_k0, 0, self.ref_q.shape[1] - 1)
         rr = np.arange(x.shape[0])
         a = track(x, v, self.ref_q[rr, idx], self.ref_v[rr, idx], self.ref_a[rr, idx], p.k_p, p.k_v)
-        return a, {}
+        return a, {"publish": {"trajectory": tuple(self.board.records)}}
 
     def summary(self) -> dict[str, float]:
         s = self.stats
@@ -160,7 +171,10 @@ class LscMethod:
         p = self.params
         self.ctrl[r], self.commit_step[r] = ctrl, step
         dur = self.M * self.h
-        self.board.publish(r, lambda tau, c=ctrl.copy(): self._sample(c, tau), step * p.dt, dur, ctrl.shape[0] * ctrl.shape[1])
+        sent = ctrl.copy()
+        sent.flags.writeable = False  # it travels with the broadcast: never changed after it
+        self.board.publish(r, lambda tau, c=sent: self._sample(c, tau), step * p.dt, dur, ctrl.shape[0] * ctrl.shape[1],
+                           data=(sent, step))
         tau = p.dt * np.arange(self.ref_q.shape[1])
         self.ref_q[r], self.ref_v[r], self.ref_a[r] = self._sample(ctrl, tau)
         self.ref_k0[r] = step
@@ -172,13 +186,39 @@ class LscMethod:
 
     # ------------------------------------------------------------------ planning
 
-    def _replan(self, k: int, x: np.ndarray) -> None:
+    def _pictures(self, k: int, prev: np.ndarray, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
+        """Each robot's initial trajectories of every robot, (N, N, M, n + 1, D), and which it
+        has heard, (N, N) bool (module docstring): row r's own entry is its own plan."""
+        N = prev.shape[0]
+        got = obs.received("trajectory")
+        kx, _, seen = obs.known()
+        pic = np.repeat(prev[None], N, axis=0)  # unheard entries keep a filler, masked out
+        present = seen.copy()
+        for r in range(N):
+            for j in range(N):
+                if j == r or not seen[r, j]:
+                    continue
+                b = None if got is None else got[r, j]
+                if b is None:  # heard, but no plan yet: at rest where it was heard
+                    pic[r, j] = kx[r, j]
+                else:
+                    ctrl, step = b.data
+                    pic[r, j] = shift(ctrl, (k - step) // self.every)
+        np.fill_diagonal(present, True)
+        return pic, present
+
+    def _replan(self, k: int, x: np.ndarray, obs: Observation | None = None) -> None:
         """One synchronous replan of every robot from the snapshot of step ``k``; the new plans
-        are committed together afterwards."""
+        are committed together afterwards. Under a network (``obs.view``) each robot plans against
+        its own picture of the others (:meth:`_pictures`)."""
         p = self.params
         N = x.shape[0]
         prev = np.stack([shift(self.ctrl[r], (k - self.commit_step[r]) // self.every) for r in range(N)])
-        planes = self._planes(prev)
+        if obs is None or obs.view is None:
+            pics, present = None, None
+            planes = self._planes(prev)
+        else:
+            pics, present = self._pictures(k, prev, obs)
         new: list[tuple[int, np.ndarray]] = []
         for r in range(N):
             if np.linalg.norm(prev[r] - self.goals[r], axis=-1).max() <= p.goal_threshold:
@@ -186,7 +226,11 @@ class LscMethod:
                 continue  # arrived: its whole plan lies within goal_threshold of its goal
             t0 = time.perf_counter()
             self.maps.observe(r, x[r])
-            ctrl = self._plan(r, prev, planes[r], (k - self.commit_step[r]) // self.every)
+            flown = (k - self.commit_step[r]) // self.every
+            if pics is None:
+                ctrl = self._plan(r, prev, planes[r], flown)
+            else:
+                ctrl = self._plan(r, pics[r], self._planes_of(r, pics[r], present[r]), flown, present[r])
             self.stats["plans"] += 1
             self._plan_ms.append(1e3 * (time.perf_counter() - t0))
             if ctrl is None:
@@ -227,15 +271,46 @@ class LscMethod:
                     out[j].append((m, -nrm, rhs_j))
         return out
 
-    def _plan(self, r: int, prev: np.ndarray, planes, flown: int) -> np.ndarray | None:
-        """One robot's replan: goal planning, SFC, the QP; the new control points or None."""
+    def _planes_of(self, r: int, prev: np.ndarray, present: np.ndarray) -> list[tuple[int, np.ndarray, np.ndarray]]:
+        """Robot ``r``'s LSC planes against the robots it has heard (``present``), from its own
+        picture ``prev`` (N, M, n + 1, D): :meth:`_planes`' row r, each pair computed in the same
+        order (lower index first) and by the same formula."""
+        p = self.params
+        N, M = prev.shape[0], prev.shape[1]
+        out: list = []
+        lo = prev.reshape(N, -1, self.dim).min(axis=1)
+        hi = prev.reshape(N, -1, self.dim).max(axis=1)
+        reach = 2.0 * p.v_max * M * self.h + 2.0 * self.radius
+        for o in np.flatnonzero(present):
+            if o == r:
+                continue
+            i, j = (r, int(o)) if r < o else (int(o), r)
+            gap = np.maximum(lo[j] - hi[i], lo[i] - hi[j]).max()
+            if gap > reach:
+                continue
+            fallback = prev[j, 0, 0] - prev[i, 0, 0]
+            if np.linalg.norm(fallback) < 1e-9:
+                fallback = np.eye(self.dim)[0]
+            for m in range(M):
+                nrm, rhs_i, _ = S.lsc_plane(prev[i, m], prev[j, m], self.radius, fallback)
+                if r == i:
+                    out.append((m, nrm, rhs_i))
+                else:
+                    mid = 0.5 * (prev[i, m] + prev[j, m]) @ nrm
+                    out.append((m, -nrm, -mid - (mid - rhs_i)))
+        return out
+
+    def _plan(self, r: int, prev: np.ndarray, planes, flown: int, present: np.ndarray | None = None) -> np.ndarray | None:
+        """One robot's replan: goal planning, SFC, the QP; the new control points or None.
+        ``prev``: the initial trajectories of every robot as robot ``r`` holds them; ``present``:
+        which it has heard (None: all)."""
         p = self.params
         init = prev[r]
         q0 = init[0, 0]
         tau0 = np.zeros(1)
         v0 = S.evaluate(init, self.h, tau0, 1)[0]
         a0 = S.evaluate(init, self.h, tau0, 2)[0]
-        goal = self._current_goal(r, prev)
+        goal = self._current_goal(r, prev, present)
         if p.sfc == "shifted":
             boxes = self._sfc_shifted(r, init, goal, flown)
             self._new_boxes[r] = boxes
@@ -260,8 +335,9 @@ class LscMethod:
             return None
         return res.ctrl + q0
 
-    def _current_goal(self, r: int, prev: np.ndarray) -> np.ndarray:
-        """The paper's priority-based goal planning (module docstring, step 2)."""
+    def _current_goal(self, r: int, prev: np.ndarray, present: np.ndarray | None = None) -> np.ndarray:
+        """The paper's priority-based goal planning (module docstring, step 2), among the robots
+        robot ``r`` has heard (``present``; None: all)."""
         p = self.params
         q = prev[:, 0, 0]
         goal = self.goals[r]
@@ -272,6 +348,8 @@ class LscMethod:
             away = np.einsum("ij,ij->i", motion, q - q[r]) > 0  # moving away from this robot
             high = (d_goal > p.goal_threshold) & ~away & ((d_me < p.goal_threshold) | (d_goal < d_me))
             high[r] = False
+            if present is not None:
+                high &= present
             idx = np.flatnonzero(high)
         else:
             idx = np.zeros(0, dtype=np.int64)

@@ -19,6 +19,16 @@ Each robot replans continuously and asynchronously. A replan started at step ``k
 
 The command is the shared tracking law (SPH eq. 13 without the swarm force) on the committed
 trajectory, which is sampled at the control rate when it is committed.
+
+On a network (docs/network.md) each committed trajectory travels as an immutable
+:class:`~swarmnav.planning.messages.Broadcast` (``info["publish"]["trajectory"]``: control points,
+knot span, start time, commit step). A robot plans (3) against the newest trajectory it received of
+each other robot, in absolute time (a late one is still the trajectory its robot flies); a robot
+heard but whose trajectory has not arrived rests where it was heard (the hover plan every robot
+starts from); a robot never heard is not there. The check (4) tests the new plan against every
+trajectory that *arrived* since the replan started, late ones included. MADER assumes none is
+late: a trajectory committed before the check but still in flight is not seen, and two robots can
+commit conflicting plans (the failure Robust MADER's delay check addresses; not part of MADER).
 """
 
 from __future__ import annotations
@@ -39,7 +49,7 @@ from swarmnav.planning import bspline, clamped
 from swarmnav.planning.hulls import hull_vertices, inflate_points, interval_points, obstacle_vertices, pad, seed_planes, segment_points
 from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells
-from swarmnav.planning.messages import CommLog, TrajectoryBoard
+from swarmnav.planning.messages import Broadcast, CommLog, TrajectoryBoard, sample_broadcasts
 from swarmnav.planning.plan_log import PlanLog, sample_rows
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
@@ -61,6 +71,7 @@ class MaderMethod:
 
     name = "mader"
     dims = (2, 3)
+    networked = True  # reads the others' trajectories only through what it received (module docstring)
     periodic = False  # a periodic box has no obstacles to plan around nor a goal: refused in one line
 
     def __init__(self, **overrides: Any):
@@ -133,15 +144,16 @@ class MaderMethod:
         k = obs.step
         x, v = obs.positions, obs.velocities
         for r in np.nonzero(self.next_event <= k)[0]:  # robot order: the recheck's serialisation
+            heard = None if obs.view is None else self._picture(int(r), obs)
             if self.pending[r] is not None:
-                self._check_commit(int(r), k)
-            self._start_replan(int(r), k, x[r])
+                self._check_commit(int(r), k, heard)
+            self._start_replan(int(r), k, x[r], heard)
             self.next_event[r] = k + self.L
         self._steps += 1
         idx = np.clip(k - self.ref_k0, 0, self.ref_len - 1)
         rr = np.arange(x.shape[0])
         a = track(x, v, self.ref_q[rr, idx], self.ref_v[rr, idx], self.ref_a[rr, idx], p.k_p, p.k_v)
-        return a, {}
+        return a, {"publish": {"trajectory": tuple(self.board.records)}}
 
     def summary(self) -> dict[str, float]:
         s = self.stats
@@ -171,9 +183,11 @@ class MaderMethod:
     def _commit(self, r: int, ctrl: np.ndarray, dtk: float, step: int) -> None:
         """Robot ``r`` commits ``ctrl`` starting at ``step``: broadcast it and sample its reference."""
         p = self.params
+        ctrl.flags.writeable = False  # it travels with the broadcast: never changed after it
         self.ctrl[r], self.dtk[r], self.t0[r], self.commit_step[r] = ctrl, dtk, step * p.dt, step
         dur = (ctrl.shape[0] - 3) * dtk
-        self.board.publish(r, lambda tau, c=ctrl, h=dtk: (self._pos(c, h, tau),), step * p.dt, dur, ctrl.shape[0])
+        self.board.publish(r, lambda tau, c=ctrl, h=dtk: (self._pos(c, h, tau),), step * p.dt, dur, ctrl.shape[0],
+                           data=(ctrl, float(dtk), step * p.dt, step))
         length = int(math.ceil(dur / p.dt)) + 1
         if length > self.ref_q.shape[1]:  # grow the buffers, holding each robot's last sample
             extra = length - self.ref_q.shape[1]
@@ -202,19 +216,46 @@ class MaderMethod:
         q, v, a = self._eval(self.ctrl[r], self.dtk[r], np.array([t - self.t0[r]]))
         return q[0], v[0], a[0]
 
-    def _check_commit(self, r: int, k: int) -> None:
-        """Check the pending plan against the trajectories committed since it started; commit it
-        if it is clear, else keep the committed one (a fallback)."""
+    def _picture(self, r: int, obs: Observation) -> list:
+        """Robot ``r``'s picture of every robot's committed trajectory (None: never heard; its own
+        entry None): the newest it received, or for a robot heard whose trajectory has not arrived
+        the hover plan at where it was heard (data commit step -1)."""
+        n = len(self.ctrl)
+        got = obs.received("trajectory")
+        kx, _, seen = obs.known()
+        out: list = [None] * n
+        for j in np.flatnonzero(seen[r]):
+            if j == r:
+                continue
+            b = None if got is None else got[r, j]
+            if b is None:  # at rest where it was heard, as the hover plan every robot starts from
+                c = np.repeat(kx[r, j][None], self.params.num_pol + 3, axis=0)
+                b = Broadcast(lambda tau, c=c: (self._pos(c, 1.0, tau),), 0.0, float(self.params.num_pol), (c, 1.0, 0.0, -1))
+            out[j] = b
+        return out
+
+    def _check_commit(self, r: int, k: int, heard: list | None = None) -> None:
+        """Check the pending plan against the trajectories committed since it started (``heard``:
+        robot ``r``'s picture now; then those that arrived since it started); commit it if it is
+        clear, else keep the committed one (a fallback)."""
         p = self.params
         pend = self.pending[r]
         self.pending[r] = None
-        others = [j for j in range(len(self.ctrl)) if j != r and self.commit_step[j] > pend["k_in"]]
+        if heard is None:
+            others = [j for j in range(len(self.ctrl)) if j != r and self.commit_step[j] > pend["k_in"]]
+        else:
+            was = pend["heard"]
+            others = [b for j, b in enumerate(heard) if b is not None and (
+                was[j] is None or (b.data[3] >= 0 and b is not was[j]))]
         if others:
             ctrl, dtk = pend["ctrl"], pend["dtk"]
             dur = (ctrl.shape[0] - 3) * dtk
             t = k * p.dt + np.arange(0.0, dur + p.check_step, p.check_step)
             mine = self._pos(ctrl, dtk, t - k * p.dt)
-            theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
+            if heard is None:
+                theirs = self.board.sample(np.array(others), t, self.dim)  # (J, T, D)
+            else:
+                theirs = sample_broadcasts(others, t, self.dim)
             if p.check_norm == "box":  # the optimisation's own measure: each pair's inflation
                 gaps = self._gap(theirs - mine[None])  # (J, T)
                 need = self._pair_inflation(gaps[:, 0])[:, None]
@@ -230,7 +271,7 @@ class MaderMethod:
 
     # ------------------------------------------------------------------ planning
 
-    def _start_replan(self, r: int, k: int, pos: np.ndarray) -> None:
+    def _start_replan(self, r: int, k: int, pos: np.ndarray, heard: list | None = None) -> None:
         p = self.params
         goal = self.goals[r]
         end = self.ctrl[r][-1]
@@ -241,16 +282,19 @@ class MaderMethod:
         k_c = k + self.L
         qa, va, aa = self._state(r, k_c * p.dt)
         self.maps.observe(r, pos)
-        result = self._plan(r, qa, va, aa, goal, k_c * p.dt)
+        result = self._plan(r, qa, va, aa, goal, k_c * p.dt, heard)
         self.stats["plans"] += 1
         self._plan_ms.append(1e3 * (time.perf_counter() - t0))
         if result is None:
             self.stats["fallbacks"] += 1
             return
-        self.pending[r] = {"ctrl": result[0], "dtk": result[1], "k_in": k}
+        self.pending[r] = {"ctrl": result[0], "dtk": result[1], "k_in": k, "heard": heard}
 
-    def _plan(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, goal: np.ndarray, t_a: float):
-        """One MADER optimisation from state (q, v, a) at time ``t_a`` [s]: (ctrl, dt_knot) or None."""
+    def _plan(self, r: int, q: np.ndarray, v: np.ndarray, a: np.ndarray, goal: np.ndarray, t_a: float,
+              heard: list | None = None):
+        """One MADER optimisation from state (q, v, a) at time ``t_a`` [s] against the others'
+        committed trajectories (``heard``: robot ``r``'s picture of them; None: the ideal network's):
+        (ctrl, dt_knot) or None."""
         p = self.params
         dim = self.dim
         path = self.maps.search(r, q, goal, p.max_expand)
@@ -292,7 +336,7 @@ class MaderMethod:
         C0 = np.vstack([start, free0[:-1], np.repeat(free0[-1:], 3, axis=0)])
         sp = segment_points(C0)
         segs, sets, rad = self._obstacles(r, q, sp.min(axis=1) - p.obstacle_margin, sp.max(axis=1) + p.obstacle_margin,
-                                     t_a, dtk)
+                                     t_a, dtk, heard)
         # the problem in coordinates centred at A: plane offsets d stay small (SLSQP's conditioning)
         pb = S.Problem(start - q, G - q, dtk, p.num_pol, segs, pad(sets, dim, 4) - q, p.weight, p.v_max, p.a_max, rad,
                        p.limits == "norm")
@@ -320,7 +364,7 @@ class MaderMethod:
             big_lo = np.minimum(lo, lo2 - p.obstacle_margin)
             big_hi = np.maximum(hi, hi2 + p.obstacle_margin)
             segs2, _, _ = self._obstacles(r, q, np.repeat(big_lo[None], p.num_pol, 0), np.repeat(big_hi[None], p.num_pol, 0),
-                                       t_a, dtk)
+                                       t_a, dtk, heard)
             if len(segs2) > len(segs):
                 return None
         return ctrl, dtk
@@ -349,10 +393,12 @@ class MaderMethod:
         keep = np.where(gap >= contact, np.maximum(p.crowd_shrink * gap, floor), p.crowd_shrink * gap)
         return np.minimum(p.agent_inflation, keep)
 
-    def _obstacles(self, r: int, me: np.ndarray, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float):
+    def _obstacles(self, r: int, me: np.ndarray, lo: np.ndarray, hi: np.ndarray, t_a: float, dtk: float,
+                   heard: list | None = None):
         """(segment of each plane, vertex set of each plane): for each segment s, the known obstacle
         polyhedra meeting its box [lo[s], hi[s]], and each other agent's committed trajectory hull
-        over the segment's interval, grown by ``agent_inflation``, where it meets the box."""
+        (``heard``: as robot ``r`` received it; None: every one) over the segment's interval, grown
+        by ``agent_inflation``, where it meets the box."""
         p = self.params
         ball = p.clearance == "ball"
         segs, sets, rad = [], [], []
@@ -362,15 +408,17 @@ class MaderMethod:
                 segs.append(s)
                 sets.append(self.polys[o])
                 rad.append(p.inflation)
-        for j in range(len(self.ctrl)):
-            if j == r:
-                continue
+        if heard is None:
+            plans = [(self.ctrl[j], self.dtk[j], self.t0[j]) for j in range(len(self.ctrl)) if j != r]
+        else:
+            plans = [b.data[:3] for b in heard if b is not None]
+        for ctrl_j, dtk_j, t0_j in plans:
             infl = p.agent_inflation
             if p.crowd_shrink > 0.0:  # the pair's gap at point A (me: this robot's start there)
-                there = self._pos(self.ctrl[j], self.dtk[j], np.array([t_a - self.t0[j]]))[0]
+                there = self._pos(ctrl_j, dtk_j, np.array([t_a - t0_j]))[0]
                 infl = float(self._pair_inflation(self._gap(there - me)))
             for s in range(p.num_pol):
-                pts = interval_points(self.ctrl[j], self.dtk[j], self.t0[j], t_a + s * dtk, t_a + (s + 1) * dtk)
+                pts = interval_points(ctrl_j, dtk_j, t0_j, t_a + s * dtk, t_a + (s + 1) * dtk)
                 if np.any(pts.min(axis=0) - infl > hi[s]) or np.any(pts.max(axis=0) + infl < lo[s]):
                     continue
                 segs.append(s)

@@ -14,6 +14,14 @@ The robot applies the first acceleration for one control step (zero-order hold) 
 its predicted positions (one trajectory message of H + 1 points, counted in the CommLog). A failed
 solve is a counted fallback (``nmpc_fallbacks``): the previous prediction's next acceleration, or a
 brake once that is used up.
+
+On a network (docs/network.md) the predictions travel as ``info["publish"]``: ``prediction`` (N, H,
+D) [m] and the control step each was made at, ``prediction_step``, in the messages that carry the
+states. Robot i picks its neighbours by the states it received (item 2), guards their reach from
+them, and reads each neighbour's newest prediction received at the present control steps: a
+prediction m control steps old is shifted by m (the paper's shift by one is m = 1), beyond its end
+extended at its last velocity; a neighbour heard before any prediction arrived moves at constant
+velocity from its received state, from when that state was sent. A robot never heard is not there.
 """
 
 from __future__ import annotations
@@ -158,6 +166,7 @@ class NmpcMethod:
 
     name = "nmpc"
     dims = (2, 3)
+    networked = True  # reads the others only through what it received (module docstring)
     periodic = False  # obstacles and a goal to migrate to: a periodic box is refused in one line
 
     def __init__(self, **overrides: Any):
@@ -202,9 +211,13 @@ class NmpcMethod:
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         if obs.step % self.every == 0:
-            self._control(obs.step, obs.positions, obs.velocities)
+            self._control(obs.step, obs.positions, obs.velocities, obs)
+            info = {"publish": {"prediction": self.pred,
+                                "prediction_step": np.full(len(self.pred), float(obs.step))}}
+        else:
+            info = {}
         self._steps += 1
-        return self.u_hold.copy(), {}
+        return self.u_hold.copy(), info
 
     def summary(self) -> dict[str, float]:
         s = self.stats
@@ -237,9 +250,36 @@ class NmpcMethod:
         prev = self.pred[:, -2] if H > 1 else x
         return np.concatenate([self.pred[:, 1:], (2 * last - prev)[:, None]], axis=1)
 
-    def problem(self, i: int, x: np.ndarray, v: np.ndarray, q_all: np.ndarray) -> S.Problem:
+    def received_predictions(self, step: int, obs: Observation) -> np.ndarray:
+        """(n, n, H, dim): robot i's picture of every robot's positions at control steps 1..H
+        from ``step`` (module docstring), from what it received; NaN for a robot it never heard."""
+        h, H = self.params.control_dt, self.H
+        kx, kv, heard = obs.known()
+        n, D = kx.shape[1], kx.shape[2]
+        out = np.full((n, n, H, D), np.nan)
+        pred, made = obs.received("prediction"), obs.received("prediction_step")
+        c = np.arange(1, H + 1)
+        for i in range(n):
+            for j in np.flatnonzero(heard[i]):
+                if made is None or not np.isfinite(made[i, j]):  # no prediction yet: constant velocity
+                    age = float(obs.view.age[i, j])
+                    out[i, j] = kx[i, j][None, :] + (age + h * c)[:, None] * kv[i, j][None, :]
+                    continue
+                P = pred[i, j]
+                m = int(round((step - made[i, j]) / self.every))  # control steps since it was made
+                # its points at control steps m + 1 .. m + H of its own; beyond H at its last velocity
+                last = P[-1]
+                prev = P[-2] if H > 1 else kx[i, j]
+                keep = P[m:]
+                e = np.arange(1, m + 1 - max(0, m - H))[:, None] + max(0, m - H)
+                out[i, j] = np.concatenate([keep, (e + 1) * last - e * prev], axis=0)[:H]
+        return out
+
+    def problem(self, i: int, x: np.ndarray, v: np.ndarray, q_all: np.ndarray,
+                heard: np.ndarray | None = None) -> S.Problem:
         """Robot ``i``'s MPC problem at the present state ``x``, ``v`` (n, dim) with the others'
-        predictions ``q_all`` (n, H, dim)."""
+        predictions ``q_all`` (n, H, dim); ``heard``: the robots it has heard (None: all), the
+        others are not there."""
         p = self.params
         n, D = x.shape
         K, M = p.col_neig, p.max_obs
@@ -251,6 +291,8 @@ class NmpcMethod:
         v_ref = p.v_ref * min(1.0, dist / p.slow_radius)
         d = np.linalg.norm(x - xi, axis=1)
         d[i] = np.inf
+        if heard is not None:
+            d[~heard] = np.inf
         order = np.argsort(d, kind="stable")
         order = order[d[order] <= p.sensing_range][:K]
         q = np.repeat(xi[None, None, :], K, axis=0) + np.zeros((K, H, D))
@@ -270,14 +312,22 @@ class NmpcMethod:
         return S.Problem(xi.copy(), v[i].copy(), p.control_dt, p.v_max, p.a_max, u_ref, v_ref, q, c_cost, rho,
                          oc, os_, on, orho, oal, rc, rr)
 
-    def _control(self, step: int, x: np.ndarray, v: np.ndarray) -> None:
+    def _control(self, step: int, x: np.ndarray, v: np.ndarray, obs: Observation | None = None) -> None:
         p = self.params
         n, D = x.shape
         H, h = self.H, p.control_dt
-        q_all = self.neighbour_predictions(x, v)
+        networked = obs is not None and obs.view is not None
+        if networked:
+            kx, kv, heard = obs.known()
+            q_pic = self.received_predictions(step, obs)
+        else:
+            q_all = self.neighbour_predictions(x, v)
         new_pred = np.empty((n, H, D))
         for i in range(n):
-            pb = self.problem(i, x, v, q_all)
+            if networked:
+                pb = self.problem(i, kx[i], kv[i], q_pic[i], heard[i])
+            else:
+                pb = self.problem(i, x, v, q_all)
             warm = np.concatenate([self.U[i, 1:], self.U[i, -1:]], axis=0)
             t0 = time.perf_counter()
             res = S.solve(pb, self.weights, warm, feas_tol=p.feas_tol, options=self.options,
