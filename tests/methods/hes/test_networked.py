@@ -1,0 +1,174 @@
+"""HES's control law on each agent's own picture of the others (methods/hes/networked.py).
+
+Oracles: fed the true states and one plan for all, the picture kernels give the ideal control
+stage's couplings and commands bit for bit; agent i's command from its picture is the ideal
+command of a swarm standing where agent i believes the others to be (the agents it has not heard
+left out); an agent that has heard nobody flies as a swarm of one."""
+
+import numpy as np
+import pytest
+
+from swarmnav.methods.hes import control as C
+from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes import networked as NW
+from swarmnav.methods.hes.neighbours import neighbour_rows
+from swarmnav.methods.hes.params import HesParams
+
+P = HesParams()
+G = F.gain_vector(P)
+R = 360
+TH = 2 * np.pi * np.arange(R) / R
+COS, SIN = np.cos(TH), np.sin(TH)
+REACH = max(P.core.r_sep, P.core.d_ir)
+
+
+def random_case(rng, n, spread=6.0):
+    """A random swarm of n agents in up to three sub-swarms (a subleader each), with rings that
+    see a few walls, a slot, a c_s and a mode each."""
+    x = rng.uniform(-spread, spread, (n, 2))
+    v = rng.normal(size=(n, 2))
+    labels = rng.integers(0, 3, n)
+    sl = np.array([np.flatnonzero(labels == g)[0] for g in labels])
+    ring = np.full((n, R), P.paper.lidar_range)
+    for i in range(n):
+        for _ in range(int(rng.integers(0, 4))):
+            r0 = int(rng.integers(0, R))
+            ring[i, r0:r0 + 40] = rng.uniform(0.3, 15.0) + rng.uniform(0, 1, len(ring[i, r0:r0 + 40]))
+    return dict(x=x, v=v, labels=labels, sl=sl, wp=x + rng.normal(size=(n, 2)), nav=rng.random(n) < 0.7,
+                slot=x + rng.normal(size=(n, 2)), speed=rng.uniform(0.5, 3.0, n),
+                sig=rng.choice([0.0, 0.2, 1.0], (n, 4), p=[0.1, 0.2, 0.7]), ring=ring,
+                dsafe=rng.uniform(0.5, P.paper.d_safe, n))
+
+
+def ideal(c):
+    """The ideal control stage's couplings (``control.couple``) and eq. (38) command."""
+    x, v, labels = c["x"], c["v"], c["labels"]
+    ids = np.unique(labels)
+    col = np.searchsorted(ids, labels)
+    sub_sl = np.array([c["sl"][np.flatnonzero(labels == s)[0]] for s in ids])
+    rows = neighbour_rows(x, REACH)
+    # c_s and the mode per sub-swarm: the test gives them per agent, so read them at the subleader
+    sub_wp, sub_nav = c["wp"][sub_sl], c["nav"][sub_sl]
+    sl_idx, wp, nav, follower, cent, nn = C.couple(x, labels, col, sub_sl, sub_wp, sub_nav, *rows)
+    a = C.eq38(x, v, labels, sl_idx, follower, cent, wp, nav, c["slot"], c["speed"], P.core.eps_v, nn, c["sig"],
+               c["ring"], COS, SIN, G, c["dsafe"], *rows)
+    return dict(sl_idx=sl_idx, wp=wp, nav=nav, follower=follower, cent=cent, nn=nn, a=a)
+
+
+def known(c, plan, kx, kv, heard, lab):
+    """The picture kernels' couplings and eq. (38) command; ``plan`` gives each agent's subleader,
+    c_s and mode (``sl_idx``, ``wp``, ``nav``)."""
+    x, v = c["x"], c["v"]
+    cent, nn, nn_pos, sl_pos, sl_vel, follower = NW.couple_known(x, v, kx, kv, heard, lab, plan["sl_idx"])
+    a = NW.eq38_known(x, v, kx, heard, lab, sl_pos, sl_vel, follower, cent, nn, nn_pos, plan["wp"], plan["nav"],
+                      c["slot"], c["speed"], P.core.eps_v, c["sig"], c["ring"], COS, SIN, G, c["dsafe"])
+    return dict(cent=cent, nn=nn, nn_pos=nn_pos, sl_pos=sl_pos, sl_vel=sl_vel, follower=follower, a=a)
+
+
+def true_pictures(x, v, labels):
+    """What ``Observation.known()`` gives under the ideal network, and one plan for all."""
+    n = len(x)
+    return (np.broadcast_to(x, (n, n, 2)), np.broadcast_to(v, (n, n, 2)), np.ones((n, n), dtype=bool),
+            np.ascontiguousarray(np.broadcast_to(labels, (n, n))))
+
+
+@pytest.mark.parametrize("n_max,spread", [(30, 6.0), (90, 25.0)])  # 90: the cell-list neighbour rows
+def test_true_pictures_give_the_ideal_couplings_and_commands_bit_for_bit(n_max, spread):
+    rng = np.random.default_rng(3)
+    for _ in range(60):
+        n = int(rng.integers(1, n_max))
+        c = random_case(rng, n, spread)
+        ref = ideal(c)
+        got = known(c, ref, *true_pictures(c["x"], c["v"], c["labels"]))
+        assert np.array_equal(got["nn"], ref["nn"])
+        assert np.array_equal(got["follower"], ref["follower"])
+        assert got["cent"].tobytes() == ref["cent"].tobytes()
+        assert got["a"].tobytes() == ref["a"].tobytes()  # the same bits, signed zeros included
+        # eq. (30)'s segments from the pictured partners are the ideal ones
+        P1, Q1, P2, Q2 = (np.empty((4 * n, 2)) for _ in range(4))
+        C.occlusion_segments(c["x"], c["slot"], ref["nn"], ref["sl_idx"], ref["cent"], P1, Q1)
+        NW.occlusion_segments_known(c["x"], c["slot"], got["nn_pos"], got["sl_pos"], got["cent"], P2, Q2)
+        assert np.array_equal(P1, P2) and np.array_equal(Q1, Q2)
+
+
+def test_each_agent_flies_the_ideal_command_of_the_swarm_it_pictures():
+    """Stale, partial pictures and a plan of its own per agent: agent i's command is the ideal
+    command of agent i in the swarm made of itself (true state) and the agents it has heard, at
+    the states it last received, grouped as its own plan says."""
+    rng = np.random.default_rng(8)
+    for _ in range(40):
+        n = int(rng.integers(2, 25))
+        c = random_case(rng, n)
+        x, v = c["x"], c["v"]
+        kx = x[None] + rng.normal(0, 0.8, (n, n, 2))  # stale pictures
+        kv = v[None] + rng.normal(0, 0.5, (n, n, 2))
+        heard = rng.random((n, n)) < 0.7
+        lab = np.where(rng.random((n, n)) < 0.2, rng.integers(0, 3, (n, n)), c["labels"][None])  # plans differ
+        for i in range(n):
+            kx[i, i], kv[i, i], heard[i, i] = x[i], v[i], True
+        sl_idx = np.array([np.flatnonzero(lab[i] == lab[i, i])[0] for i in range(n)])
+        # each agent's own plan: its subleader, c_s and mode
+        got = known(c, dict(sl_idx=sl_idx, wp=c["wp"], nav=c["nav"]), kx, kv, heard, lab)
+        for i in range(n):
+            keep = np.flatnonzero(heard[i])
+            me = int(np.flatnonzero(keep == i)[0])
+            sub = {k: c[k][keep] for k in ("wp", "nav", "slot", "speed", "sig", "ring", "dsafe")}
+            sub.update(x=kx[i, keep], v=kv[i, keep], labels=lab[i, keep])
+            # agent i's subleader as it knows it: itself when that agent is unheard (no coupling)
+            s = sl_idx[i]
+            sub_sl = np.array([np.flatnonzero(sub["labels"] == g)[0] for g in sub["labels"]])
+            if s != i and heard[i, s]:
+                sub_sl[sub["labels"] == lab[i, i]] = int(np.flatnonzero(keep == s)[0])
+            else:
+                sub_sl[sub["labels"] == lab[i, i]] = me
+            sub["sl"] = sub_sl
+            sub["wp"][sub_sl[me]], sub["nav"][sub_sl[me]] = c["wp"][i], c["nav"][i]  # read at the subleader
+            ref = ideal(sub)
+            assert got["follower"][i] == ref["follower"][me]
+            assert got["cent"][i].tobytes() == ref["cent"][me].tobytes()
+            assert (got["nn"][i] < 0) == (ref["nn"][me] < 0)
+            if got["nn"][i] >= 0:
+                assert keep[ref["nn"][me]] == got["nn"][i]
+            np.testing.assert_allclose(got["a"][i], ref["a"][me], rtol=1e-12, atol=1e-12)
+
+
+def test_an_agent_that_heard_nobody_flies_alone():
+    rng = np.random.default_rng(21)
+    for _ in range(30):
+        n = int(rng.integers(2, 20))
+        c = random_case(rng, n)
+        x, v = c["x"], c["v"]
+        kx = np.full((n, n, 2), np.nan)  # nothing received: NaN pictures, as the network gives
+        kv = np.full((n, n, 2), np.nan)
+        heard = np.eye(n, dtype=bool)
+        for i in range(n):
+            kx[i, i], kv[i, i] = x[i], v[i]
+        lab = np.ascontiguousarray(np.broadcast_to(c["labels"], (n, n)))
+        ref_all = ideal(c)
+        got = known(c, ref_all, kx, kv, heard, lab)
+        assert np.isfinite(got["a"]).all()
+        assert not got["follower"].any() and (got["nn"] < 0).all()
+        assert np.array_equal(got["cent"], x)
+        for i in range(n):  # the ideal command of a swarm of one
+            one = {k: c[k][i:i + 1] for k in ("x", "v", "slot", "speed", "sig", "ring", "dsafe")}
+            one.update(labels=np.zeros(1, dtype=np.int64), sl=np.zeros(1, dtype=np.int64),
+                       wp=ref_all["wp"][i:i + 1], nav=ref_all["nav"][i:i + 1])
+            assert got["a"][i].tobytes() == ideal(one)["a"][0].tobytes()
+
+
+def test_an_agent_reads_only_its_own_row_of_pictures():
+    rng = np.random.default_rng(4)
+    n = 12
+    c = random_case(rng, n)
+    x, v = c["x"], c["v"]
+    kx, kv, heard, lab = (np.array(a) for a in true_pictures(x, v, c["labels"]))
+    ref = ideal(c)
+    base = known(c, ref, kx, kv, heard, lab)["a"]
+    kx[5] += rng.normal(0, 1.0, (n, 2))  # agent 5's picture changes, its own entry too (ignored)
+    kv[5] += rng.normal(0, 1.0, (n, 2))
+    heard[5, :3] = False
+    lab[5, 7:] = 9
+    got = known(c, ref, kx, kv, heard, lab)["a"]
+    others = np.arange(n) != 5
+    assert got[others].tobytes() == base[others].tobytes()
+    assert not np.array_equal(got[5], base[5])
