@@ -34,22 +34,28 @@ import numpy as np
 from numba import njit
 
 from swarmnav.methods.hes import forces as F
+from swarmnav.methods.hes.control import _sub_rows
+from swarmnav.methods.hes.neighbours import neighbour_rows
+from swarmnav.methods.hes.step import Step
 
 
 @njit(cache=True)
-def couple_known(x, v, kx, kv, heard, lab, sl_idx):
+def couple_known(x, v, kx, kv, heard, lab, sl_idx, planned):
     """Each agent's couplings from its own picture: its cohesion centroid ``cent`` (N, 2) [m], its
     nearest group mate ``nn`` (N,) (-1: none heard) and that mate's pictured position ``nn_pos``
     (N, 2) (its own position if none), its subleader's pictured position ``sl_pos`` and velocity
-    ``sl_vel`` (N, 2), and ``follower`` (N,) bool: its plan's subleader is another agent and it
-    has heard that agent.
+    ``sl_vel`` (N, 2) (its own state if it is its own subleader or has never heard it), and
+    ``follower`` (N,) bool: its plan makes it a follower (``planned``), its subleader is another
+    agent and it has heard that agent.
 
     Args:
         x, v: (N, 2) own positions [m] and velocities [m/s].
         kx, kv: (N, N, 2) agent i's picture of agent j (``Observation.known``).
         heard: (N, N) bool, agent i has received a message of agent j.
-        lab: (N, N) int, the sub-swarm label of agent j in the plan agent i flies.
+        lab: (N, N) int, the cohesion group of agent j in the plan agent i flies (its sub-swarm;
+            see :func:`plan_rows` for agents routed on their own).
         sl_idx: (N,) int, agent i's subleader in that plan (i itself: not a follower).
+        planned: (N,) bool, the plan couples agent i to its subleader (eq. 27).
     """
     n = x.shape[0]
     cent = np.empty((n, 2))
@@ -91,8 +97,8 @@ def couple_known(x, v, kx, kv, heard, lab, sl_idx):
         else:
             nn_pos[i, 0], nn_pos[i, 1] = x[i, 0], x[i, 1]
         s = sl_idx[i]
-        follower[i] = s != i and heard[i, s]
-        if follower[i]:
+        follower[i] = planned[i] and s != i and heard[i, s]
+        if s != i and heard[i, s]:
             sl_pos[i, 0], sl_pos[i, 1] = kx[i, s, 0], kx[i, s, 1]
             sl_vel[i, 0], sl_vel[i, 1] = kv[i, s, 0], kv[i, s, 1]
         else:
@@ -180,6 +186,99 @@ def eq38_known(x, v, kx, heard, lab, sl_pos, sl_vel, follower, cent, nn, nn_pos,
             acc += obs[i, c]
             out[i, c] = acc
     return out
+
+
+@njit(cache=True)
+def eq38_terms_known(x, v, kx, heard, lab, sl_pos, sl_vel, follower, cent, nn, nn_pos, wp, nav, slot, speed, eps_v,
+                     sig, ring, cos_t, sin_t, g, dsafe):
+    """The eight terms of :func:`eq38_known`, an (8, N, 2) stack in the order of ``forces.TERMS``
+    (as ``forces.force_terms``, for the parts that edit the terms)."""
+    n = x.shape[0]
+    out = np.zeros((8, n, 2))
+    out[0] = F.attraction(x, v, slot, F.slot_velocity(x, slot, speed, eps_v), g[F.G_KP], g[F.G_KV])
+    out[1] = separation_known(x, kx, heard, lab, g[F.G_KSEP], g[F.G_RSEP], g[F.G_DFLOOR], False)
+    out[2] = F.centering(x, wp, g[F.G_KPATH])
+    out[3] = F.spring(x, nn_pos, g[F.G_KINTRA], g[F.G_DTHR], nn >= 0)
+    out[4] = separation_known(x, kx, heard, lab, g[F.G_KIR], g[F.G_DIR], g[F.G_DFLOOR], True)
+    out[5] = F.spring(x, sl_pos, g[F.G_KL], g[F.G_D0], follower) + F.velocity_match(v, sl_vel, g[F.G_KVL], follower)
+    out[6] = F.spring(x, cent, g[F.G_KCOH], g[F.G_DC], np.ones(n, dtype=np.bool_))
+    out[7] = F.lidar_repulsion_each(ring, cos_t, sin_t, g[F.G_KREP], g[F.G_RT], g[F.G_KB], g[F.G_GAMMA], g[F.G_KE],
+                                    dsafe, g[F.G_DFLOOR], g[F.G_KE_RATIO] > 0.5)
+    for i in range(n):
+        for c in range(2):
+            out[0, i, c] *= sig[i, F.SIG_SLOT]
+            out[3, i, c] *= sig[i, F.SIG_NN]
+            out[5, i, c] *= sig[i, F.SIG_SL]
+            out[6, i, c] *= sig[i, F.SIG_CENT]
+            if not nav[i]:  # eq. (38): path and intra-repulsion only in navigate mode
+                out[2, i, c] = 0.0
+                out[4, i, c] = 0.0
+    return out
+
+
+def plan_rows(h, step: Step) -> tuple:
+    """The planner's current plan as the control stage reads it, one row per agent: the sub-swarm
+    label of every agent (N,) int, its cohesion group (N,) int (its sub-swarm; with agents routed
+    on their own, the pair of its sub-swarm and its own group), each agent's subleader (N,) int, c_s (N, 2) [m] (an agent routed
+    on its own: its own point), navigate flag (N,) bool and whether the plan couples it to its
+    subleader (N,) bool (not the subleaders, not the agents routed on their own)."""
+    part, sub_sl, sub_wp, sub_nav = _sub_rows(h)
+    col = part.col
+    sl_idx, wp, nav = sub_sl[col], sub_wp[col], sub_nav[col]
+    planned = sl_idx != h.arange
+    group = h.labels
+    if step.n_own:
+        queued = step.own >= 0
+        group = col * (int(step.own.max()) + 2) + step.own + 1
+        wp[queued] = step.own_target[queued]
+        planned &= ~queued
+    return h.labels, group, sl_idx, wp, nav, planned
+
+
+def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned) -> np.ndarray:
+    """``control.control`` with every other agent read from the receiving agent's picture (``kx``,
+    ``kv``, ``heard`` as ``Observation.known``) and each agent flying the plan it holds (``lab``,
+    ``coh`` (N, N): row i the sub-swarms and cohesion groups of agent i's plan; ``sl_idx``, ``wp``, ``nav``, ``planned`` (N,) its
+    own rows, as :func:`plan_rows` gives them). The commanded acceleration (N, 2) [m/s^2].
+
+    The parts' hooks (``steer``, ``push_back``, ``brake``, ``guard``) are called as on the ideal
+    path and still read the true states they read there (``Step.x``, ``Step.rows``)."""
+    p = h.params
+    x, v, n = step.x, step.v, h.n
+    cent, nn, nn_pos, sl_pos, sl_vel, follower = couple_known(x, v, kx, kv, heard, coh, sl_idx, planned)
+    step.rows = neighbour_rows(x, h.pair_radius)
+    step.col = h.partition().col
+    step.sl_idx, step.wp, step.nav, step.follower, step.cent, step.nn = sl_idx, wp, nav, follower, cent, nn
+    if h.no_obstacles or (p.sigma == 1.0 and not h.needs_blocked):
+        step.blocked = np.zeros((n, 4), dtype=np.bool_)
+        step.sig = np.ones((n, 4))
+    else:
+        P, Q = np.empty((4 * n, 2)), np.empty((4 * n, 2))
+        occlusion_segments_known(x, step.slot, nn_pos, sl_pos, cent, P, Q)
+        step.blocked = h.obstacles.blocked_into(P, Q, np.empty(4 * n, dtype=np.bool_)).reshape(4, n).T
+        step.sig = np.where(step.blocked, p.sigma, 1.0)
+    step.dsafe = np.empty(n)
+    step.dsafe.fill(p.paper.d_safe)
+    step.exit_dir = np.zeros((n, 2))
+    step.exit_free = np.zeros(n, dtype=np.bool_)
+    for part in h.at["steer"]:
+        part.steer(step)
+    args = (x, v, kx, heard, lab, sl_pos, sl_vel, step.follower, step.cent, step.nn, nn_pos, step.wp, step.nav,
+            step.slot, step.speed, p.core.eps_v, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe)
+    edit = [part for part in h.at["push_back"] if part.push_back(step)]
+    if edit:
+        t = eq38_terms_known(*args)
+        for part in edit:
+            part.edit_terms(step, t)
+        a = t.sum(axis=0)
+    else:
+        a = eq38_known(*args)
+    for part in h.at["brake"]:
+        a = part.brake(step, a)
+    a = F.saturate(a, p.a_bound)
+    for part in h.at["guard"]:
+        a = part.guard(step, a)
+    return a
 
 
 @njit(cache=True, inline="always")
