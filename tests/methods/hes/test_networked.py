@@ -203,3 +203,85 @@ def test_a_run_flown_on_true_pictures_is_the_ideal_run_bit_for_bit(preset, monke
         assert any(seen)
     assert got.positions.tobytes() == ref.positions.tobytes()
     assert got.velocities.tobytes() == ref.velocities.tobytes()
+
+
+def synthetic_plan(k, n, rng):
+    labels = rng.integers(0, 2, n)
+    sl = np.array([np.flatnonzero(labels == g)[0] for g in labels])
+    return NW.Plan(k, labels, labels.copy(), sl, rng.normal(size=(n, 2)), rng.random(n) < 0.5, sl != np.arange(n),
+                   rng.normal(size=(n, 2)), rng.uniform(0.5, 2.0, n))
+
+
+def fly_plans(net_options, steps=60, n=8, leader=3):
+    """The leader publishes a new plan every step over a real network; every agent flies the plan
+    :func:`plans_flown` gives. Returns the published plans and each step's flown plans."""
+    from swarmnav.sim.network import Network, net_params
+
+    rng = np.random.default_rng(0)
+    dt = 0.05
+    net = Network(net_params(net_options), n, 2, dt, seed=1)
+    pos, vel = rng.uniform(-5, 5, (n, 2)), np.zeros((n, 2))
+    flown, published, history = [None] * n, [], []
+    for k in range(steps):
+        view = net.step(k * dt, pos, vel)
+        flown = NW.plans_flown(view.payload(NW.PLAN), leader, flown)
+        history.append(list(flown))
+        plan = synthetic_plan(k, n, rng)
+        published.append(plan)
+        net.publish({NW.PLAN: NW.publication(plan, leader, n)})
+    return published, history
+
+
+def test_with_every_message_delivered_at_once_every_agent_flies_the_plan_of_the_step_before():
+    published, history = fly_plans({"net.range": 1e6})
+    assert all(q is None for q in history[0])  # nothing published before the first step
+    for k in range(1, len(history)):
+        assert all(q is published[k - 1] for q in history[k])
+
+
+def test_no_agent_flies_a_plan_it_has_not_received_and_none_goes_back_in_time():
+    published, history = fly_plans({"net.latency": 0.15, "net.jitter": 0.1, "net.loss": 0.4})
+    ids = {id(q) for q in published}
+    n = len(history[0])
+    for i in range(n):
+        ks = [q.k if q is not None else -1 for q in (h[i] for h in history)]
+        assert ks == sorted(ks)  # out-of-order arrivals never replace a newer plan
+        assert all(q is None or (id(q) in ids and q.k < k) for k, q in enumerate(h[i] for h in history))
+    late = [k - h[i].k for k, h in enumerate(history) for i in range(n) if h[i] is not None]
+    assert min(late) >= 1 and max(late) > 3  # 0.15-0.25 s late and lost: several steps behind at times
+
+
+def test_with_every_message_lost_only_the_leader_has_a_plan():
+    published, history = fly_plans({"net.loss": 1.0})
+    for k, h in enumerate(history[1:], start=1):
+        assert h[3] is published[k - 1]  # its own publication, at once
+        assert all(q is None for i, q in enumerate(h) if i != 3)
+
+
+def test_an_agent_without_a_plan_flies_alone_and_the_others_their_own_rows():
+    rng = np.random.default_rng(6)
+    n = 9
+    c = random_case(rng, n)
+    x, v = c["x"], c["v"]
+    plan = synthetic_plan(5, n, rng)
+    plans = [plan] * n
+    plans[4] = None
+    lab, coh, sl_idx, wp, nav, planned, slot, speed = NW.flown_rows(plans, x)
+    has = np.arange(n) != 4
+    assert np.array_equal(lab[has], np.broadcast_to(plan.labels, (n - 1, n)))
+    for a, b in ((sl_idx, plan.sl_idx), (wp, plan.wp), (nav, plan.nav), (planned, plan.planned), (slot, plan.slot),
+                 (speed, plan.speed)):
+        assert np.array_equal(a[has], b[has])
+    assert sl_idx[4] == 4 and not planned[4] and not nav[4] and speed[4] == 0.0
+    assert np.array_equal(slot[4], x[4]) and np.array_equal(wp[4], x[4])
+    # on true pictures of everyone: agent 4 is a group of its own and brakes (eq. 24 with v* = 0)
+    kx, kv, heard, _ = true_pictures(x, v, plan.labels)
+    cent, nn, nn_pos, sl_pos, sl_vel, follower = NW.couple_known(x, v, kx, kv, heard, coh, sl_idx, planned)
+    assert nn[4] == -1 and not follower[4] and np.array_equal(cent[4], x[4])
+    a = NW.eq38_known(x, v, kx, heard, lab, sl_pos, sl_vel, follower, cent, nn, nn_pos, wp, nav, slot, speed,
+                      P.core.eps_v, c["sig"], c["ring"], COS, SIN, G, c["dsafe"])
+    one = {k: c[k][4:5] for k in ("x", "v", "sig", "ring", "dsafe")}
+    one.update(labels=np.zeros(1, dtype=np.int64), sl=np.zeros(1, dtype=np.int64), wp=x[4:5], nav=np.zeros(1, bool),
+               slot=x[4:5], speed=np.zeros(1))
+    sep = NW.separation_known(x, kx, heard, lab, G[F.G_KSEP], P.core.r_sep, P.core.d_floor, False)[4]
+    np.testing.assert_allclose(a[4], ideal(one)["a"][0] + sep, rtol=1e-12, atol=1e-12)  # it still keeps apart

@@ -29,6 +29,7 @@ HES flies the ideal network only.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -293,3 +294,76 @@ def _spring(x, i, qx, qy, k, d0, on):
         s = k * (d - d0) / d
         return s * ex, s * ey
     return 0.0, 0.0
+
+
+#: The name the leader publishes its plan under (``info["publish"]``, ``Observation.received``).
+PLAN = "hes_plan"
+
+
+@dataclass(frozen=True, slots=True)
+class Plan:
+    """The leader's plan of step ``k`` as the control stage flies it, one row per agent (N agents):
+    sub-swarm ``labels`` and cohesion ``group`` (int), ``sl_idx`` the subleader (int), ``wp`` c_s
+    (N, 2) [m], ``nav`` navigate flag (bool), ``planned`` coupled to its subleader (bool),
+    ``slot`` p*_i (N, 2) [m] and ``speed`` v_s (N,) [m/s] of eq. (23)."""
+
+    k: int
+    labels: np.ndarray
+    group: np.ndarray
+    sl_idx: np.ndarray
+    wp: np.ndarray
+    nav: np.ndarray
+    planned: np.ndarray
+    slot: np.ndarray
+    speed: np.ndarray
+
+
+def plan_of(h, step: Step) -> Plan:
+    """The planner's plan of this step (after the references of eq. 23), copied: what the leader
+    sends."""
+    labels, group, sl_idx, wp, nav, planned = plan_rows(h, step)
+    return Plan(step.k, labels.copy(), np.array(group, copy=True), sl_idx.copy(), wp.copy(), nav.copy(),
+                planned.copy(), step.slot.copy(), step.speed.copy())
+
+
+def publication(plan: Plan, leader: int, n: int) -> list:
+    """The ``info["publish"][PLAN]`` rows: the leader's row its plan, every other agent's None."""
+    rows = [None] * n
+    rows[leader] = plan
+    return rows
+
+
+def plans_flown(received: np.ndarray | None, leader: int, last: list) -> list:
+    """Each agent's plan this step: the newer (by its step ``k``) of the leader's last plan it has
+    received (``received[i, leader]``, ``Observation.received(PLAN)``; None: nothing received) and
+    the plan it flew before (``last[i]``, None: none). An agent never flies a plan it has not
+    received."""
+    if received is None:
+        return list(last)
+    got = received[:, leader]
+    return [g if g is not None and (p is None or g.k > p.k) else p for g, p in zip(got, last)]
+
+
+def flown_rows(plans: list, x: np.ndarray) -> tuple:
+    """:func:`control_known`'s plan arguments and the references from each agent's own plan:
+    ``lab``, ``coh`` (N, N) (row i agent i's plan's sub-swarms and cohesion groups), ``sl_idx``,
+    ``wp``, ``nav``, ``planned``, ``slot``, ``speed`` (agent i's own rows of its plan). An agent
+    with no plan flies alone: a group of its own, no subleader, no corridor centering, its slot
+    its own position at speed 0 (it brakes and keeps off obstacles by its own ring)."""
+    n = len(x)
+    lab = np.broadcast_to(np.arange(n), (n, n)).copy()
+    coh = lab.copy()
+    sl_idx = np.arange(n)
+    wp, slot = x.copy(), x.copy()
+    nav, planned = np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_)
+    speed = np.zeros(n)
+    distinct: dict[int, tuple] = {}
+    for i, q in enumerate(plans):  # a few distinct plans among the N agents: fill their rows at once
+        if q is not None:
+            distinct.setdefault(id(q), (q, []))[1].append(i)
+    for q, rows in distinct.values():
+        r = np.array(rows)
+        lab[r], coh[r] = q.labels, q.group
+        sl_idx[r], wp[r], nav[r], planned[r] = q.sl_idx[r], q.wp[r], q.nav[r], q.planned[r]
+        slot[r], speed[r] = q.slot[r], q.speed[r]
+    return lab, coh, sl_idx, wp, nav, planned, slot, speed
