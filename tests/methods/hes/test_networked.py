@@ -285,3 +285,55 @@ def test_an_agent_without_a_plan_flies_alone_and_the_others_their_own_rows():
                slot=x[4:5], speed=np.zeros(1))
     sep = NW.separation_known(x, kx, heard, lab, G[F.G_KSEP], P.core.r_sep, P.core.d_floor, False)[4]
     np.testing.assert_allclose(a[4], ideal(one)["a"][0] + sep, rtol=1e-12, atol=1e-12)  # it still keeps apart
+
+
+def braking_case(rng, n):
+    """Agents packed close (0.3-3 m apart), moving fast toward each other, with random commands."""
+    x = rng.uniform(-2.0, 2.0, (n, 2))
+    v = rng.normal(0, 2.0, (n, 2))
+    a = rng.normal(0, 4.0, (n, 2))
+    a *= np.minimum(1.0, P.a_bound / np.linalg.norm(a, axis=1))[:, None]
+    return x, v, a
+
+
+def test_the_braking_barriers_on_true_pictures_are_the_ideal_ones_bit_for_bit():
+    from swarmnav.methods.hes.parts import barriers as B
+
+    rng = np.random.default_rng(12)
+    dt, brake, margin = P.paper.dt, 3.0, 0.5
+    moved = 0
+    for _ in range(200):
+        n = int(rng.integers(1, 20))
+        x, v, a = braking_case(rng, n)
+        kx, kv, heard, _ = true_pictures(x, v, np.zeros(n, dtype=np.int64))
+        active = rng.random(n) < 0.6
+        ref = B.agent_barrier(a, x, v, active, dt, brake, margin, 2.0)
+        assert NW.agent_barrier_known(a, x, v, kx, kv, heard, active, dt, brake, margin, 2.0).tobytes() == ref.tobytes()
+        ref = B.agent_guard(a, x, v, dt, brake, margin, P.a_bound)
+        assert NW.agent_guard_known(a, x, v, kx, kv, heard, dt, brake, margin, P.a_bound).tobytes() == ref.tobytes()
+        moved += not np.array_equal(ref, a)
+    assert moved > 100  # the guard binds in most cases
+
+
+def test_each_agent_brakes_for_the_swarm_it_pictures():
+    from swarmnav.methods.hes.parts import barriers as B
+
+    rng = np.random.default_rng(13)
+    dt, brake, margin = P.paper.dt, 3.0, 0.5
+    for _ in range(60):
+        n = int(rng.integers(2, 15))
+        x, v, a = braking_case(rng, n)
+        kx = x[None] + rng.normal(0, 0.4, (n, n, 2))
+        kv = v[None] + rng.normal(0, 0.5, (n, n, 2))
+        heard = rng.random((n, n)) < 0.7
+        for i in range(n):
+            kx[i, i], kv[i, i], heard[i, i] = x[i], v[i], True
+        guard = NW.agent_guard_known(a, x, v, kx, kv, heard, dt, brake, margin, P.a_bound)
+        barrier = NW.agent_barrier_known(a, x, v, kx, kv, heard, np.ones(n, dtype=bool), dt, brake, margin, 2.0)
+        for i in range(n):
+            keep = np.flatnonzero(heard[i])
+            me = int(np.flatnonzero(keep == i)[0])
+            xs, vs, as_ = kx[i, keep], kv[i, keep], a[keep]
+            assert guard[i].tobytes() == B.agent_guard(as_, xs, vs, dt, brake, margin, P.a_bound)[me].tobytes()
+            only = keep == i
+            assert barrier[i].tobytes() == B.agent_barrier(as_, xs, vs, only, dt, brake, margin, 2.0)[me].tobytes()

@@ -37,6 +37,7 @@ from numba import njit
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import _sub_rows
 from swarmnav.methods.hes.neighbours import neighbour_rows
+from swarmnav.methods.hes.parts.barriers import _reach2
 from swarmnav.methods.hes.step import Step
 
 
@@ -367,3 +368,94 @@ def flown_rows(plans: list, x: np.ndarray) -> tuple:
         sl_idx[r], wp[r], nav[r], planned[r] = q.sl_idx[r], q.wp[r], q.nav[r], q.planned[r]
         slot[r], speed[r] = q.slot[r], q.speed[r]
     return lab, coh, sl_idx, wp, nav, planned, slot, speed
+
+
+# --------------------------------------------------------------------------- our braking barriers on pictures
+
+@njit(cache=True)
+def _brake_toward_pictured(w, x, kx, kv, heard, i, a_brake, margin, a_lead, tol, reach2):
+    """``barriers._brake_toward_neighbours`` for agent i with its neighbours read from its picture:
+    every heard agent j, in ascending index, at its pictured position ``kx[i, j]`` and velocity
+    ``kv[i, j]``. In place on ``w[i]``; returns whether it changed."""
+    moved = False
+    for j in range(x.shape[0]):
+        if j == i or not heard[i, j]:
+            continue
+        ux = kx[i, j, 0] - x[i, 0]
+        uy = kx[i, j, 1] - x[i, 1]
+        if ux * ux + uy * uy > reach2:
+            continue
+        d = math.sqrt(ux * ux + uy * uy)
+        if d <= 0.0:
+            continue
+        ux /= d
+        uy /= d
+        c = w[i, 0] * ux + w[i, 1] * uy
+        if c <= 0.0:
+            continue
+        sj = kv[i, j, 0] * ux + kv[i, j, 1] * uy
+        if a_lead > 0.0:
+            vj = max(sj, 0.0)
+            c_max = math.sqrt(2.0 * a_brake * (max(d - margin, 0.0) + vj * vj / (2.0 * a_lead)))
+        else:
+            c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
+        if c > c_max + tol:
+            w[i, 0] -= (c - c_max) * ux
+            w[i, 1] -= (c - c_max) * uy
+            moved = True
+    return moved
+
+
+@njit(cache=True)
+def agent_barrier_known(a, x, v, kx, kv, heard, active, dt, a_brake, margin, a_lead):
+    """``barriers.agent_barrier`` (passage mode's queue barrier) with each active agent braking for
+    the agents it has heard, at their pictured states. Returns the acceleration (N, 2) [m/s^2]."""
+    w = v + dt * a
+    for i in range(x.shape[0]):
+        if active[i]:
+            _brake_toward_pictured(w, x, kx, kv, heard, i, a_brake, margin, a_lead, 0.0, np.inf)
+    return (w - v) / dt
+
+
+@njit(cache=True)
+def agent_guard_known(a, x, v, kx, kv, heard, dt, a_brake, margin, a_max, passes=4):
+    """``barriers.agent_guard`` (the contact guard) with each agent braking for the agents it has
+    heard, at their pictured states; its reach from the fastest speed it knows (its own and its
+    pictures'). Returns the new (N, 2) command [m/s^2]."""
+    n = x.shape[0]
+    w = v + dt * a
+    out = np.empty((n, 2))
+    for i in range(n):
+        v2 = 0.0
+        for j in range(n):
+            if j == i:
+                v2 = max(v2, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+            elif heard[i, j]:
+                v2 = max(v2, kv[i, j, 0] * kv[i, j, 0] + kv[i, j, 1] * kv[i, j, 1])
+        reach2 = _reach2(w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1], v2, a_brake, margin)
+        for _ in range(passes):
+            if not _brake_toward_pictured(w, x, kx, kv, heard, i, a_brake, margin, 0.0, 1e-12, reach2):
+                break
+    for i in range(n):  # the braking kept whole, the rest of the command scaled (barriers.agent_guard)
+        bx = (w[i, 0] - v[i, 0]) / dt - a[i, 0]
+        by = (w[i, 1] - v[i, 1]) / dt - a[i, 1]
+        if bx == 0.0 and by == 0.0:
+            out[i, 0] = a[i, 0]
+            out[i, 1] = a[i, 1]
+            continue
+        ax, ay = a[i, 0], a[i, 1]
+        tx, ty = ax + bx, ay + by
+        if tx * tx + ty * ty <= a_max * a_max:
+            out[i, 0], out[i, 1] = tx, ty
+            continue
+        bb = bx * bx + by * by
+        if bb >= a_max * a_max:
+            s = a_max / math.sqrt(bb)
+            out[i, 0], out[i, 1] = s * bx, s * by
+            continue
+        aa = ax * ax + ay * ay
+        ab = ax * bx + ay * by
+        lam = (-ab + math.sqrt(max(ab * ab - aa * (bb - a_max * a_max), 0.0))) / aa
+        lam = min(max(lam, 0.0), 1.0)
+        out[i, 0], out[i, 1] = bx + lam * ax, by + lam * ay
+    return out
