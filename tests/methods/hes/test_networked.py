@@ -337,3 +337,61 @@ def test_each_agent_brakes_for_the_swarm_it_pictures():
             assert guard[i].tobytes() == B.agent_guard(as_, xs, vs, dt, brake, margin, P.a_bound)[me].tobytes()
             only = keep == i
             assert barrier[i].tobytes() == B.agent_barrier(as_, xs, vs, only, dt, brake, margin, 2.0)[me].tobytes()
+
+
+def same_report(a, b):
+    pa, pb = a.pack, b.pack
+    assert (pa.sid, pa.subleader) == (pb.sid, pb.subleader)
+    for f in ("members", "positions", "velocities", "centroid", "subleader_position"):
+        assert np.asarray(getattr(pa, f)).tobytes() == np.asarray(getattr(pb, f)).tobytes(), f
+    assert a.clearance == b.clearance and len(a.corridors) == len(b.corridors)
+    for c, d in zip(a.corridors, b.corridors):
+        assert c.mid.tobytes() == d.mid.tobytes() and c.width == d.width and c.cost == d.cost
+
+
+@pytest.mark.parametrize("preset", [None, "paper"])
+def test_a_subleaders_report_from_true_pictures_is_the_ideal_report(preset, monkeypatch):
+    """Every report of a run, made again by its subleader from true pictures and every member's
+    published nearest return: the same Pack, corridors and clearance."""
+    from swarmnav.methods.hes import method as M
+    from swarmnav.methods.hes.method import Hes
+    from swarmnav.sim.rollout import run
+
+    calls = []
+
+    def checked(h, step, s):
+        ref = original(h, step, s)
+        n = step.n
+        kx, kv, heard, _ = true_pictures(step.x, step.v, np.zeros(n, dtype=np.int64))
+        same_report(NW.report_known(h, step, s, kx, kv, heard, np.broadcast_to(step.ring_min, (n, n))), ref)
+        calls.append(s)
+        return ref
+
+    original = M.report
+    monkeypatch.setattr(M, "report", checked)
+    r = run(Hes(**({} if preset is None else {"preset": preset})), "dense_cross_blocks", seed=2, steps=250)
+    assert len(calls) >= 250 and len(set(calls)) > 1  # a split happened: more than one sub-swarm reported
+    assert r.events
+
+
+def test_a_subleader_reports_only_the_members_it_heard():
+    from swarmnav.methods.hes.method import Hes
+    from swarmnav.sim.rollout import run
+
+    h = Hes()
+    run(h, "narrow_alternating_gates", seed=2, steps=5)
+    step = h.last_step
+    n, s = step.n, 0
+    a = h.subs[s].subleader
+    kx, kv, heard, _ = (np.array(q) for q in true_pictures(step.x, step.v, np.zeros(n, dtype=np.int64)))
+    lost = [j for j in range(n) if j != a][:3]
+    heard[a, lost] = False
+    kx[a, lost] = np.nan  # never heard: NaN, as the network gives
+    rm = np.array(np.broadcast_to(step.ring_min, (n, n)))
+    rm[a, lost] = np.nan
+    rep = NW.report_known(h, step, s, kx, kv, heard, rm)
+    assert a in rep.pack.members and not set(lost) & set(rep.pack.members.tolist())
+    assert len(rep.pack.members) == n - 3 and np.isfinite(rep.pack.positions).all()
+    keep = np.setdiff1d(np.arange(n), lost)
+    np.testing.assert_allclose(rep.pack.centroid, step.x[keep].mean(axis=0), rtol=1e-12)
+    assert rep.clearance == step.ring_min[keep].min()

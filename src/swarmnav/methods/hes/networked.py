@@ -38,6 +38,7 @@ from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import _sub_rows
 from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.parts.barriers import _reach2
+from swarmnav.methods.hes.report import report
 from swarmnav.methods.hes.step import Step
 
 
@@ -459,3 +460,26 @@ def agent_guard_known(a, x, v, kx, kv, heard, dt, a_brake, margin, a_max, passes
         lam = min(max(lam, 0.0), 1.0)
         out[i, 0], out[i, 1] = bx + lam * ax, by + lam * ay
     return out
+
+
+# --------------------------------------------------------------------------- a subleader's report from its picture
+
+#: The name each agent publishes its ring's nearest return under (a report's ``clear``).
+RING_MIN = "hes_ring_min"
+
+
+def report_known(h, step: Step, s: int, kx, kv, heard, ring_min_seen):
+    """Sub-swarm s's report (``report.report``) as its subleader a makes it from what it received:
+    the Pack of the members it has heard (itself always), at their pictured states ``kx[a]``,
+    ``kv[a]`` (N, N, 2 as ``Observation.known``), the corridors of its own ring, and the nearest
+    return over the members' published ``ring_min_seen[a]`` ((N, N) [m], NaN: none received; its
+    own from its ring at once; a member whose return has not arrived does not lower it)."""
+    a = h.subs[s].subleader
+    part = h.partition()
+    members = part.members[part.index[s]]
+    members = members[heard[a, members] | (members == a)]
+    rm = np.array(ring_min_seen[a], dtype=np.float64)
+    rm[a] = step.ring_min[a]
+    rm[np.isnan(rm)] = np.inf
+    pic = Step(step.k, np.ascontiguousarray(kx[a]), np.ascontiguousarray(kv[a]), step.ring, ring_min=rm)
+    return report(h, pic, s, members)

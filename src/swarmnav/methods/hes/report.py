@@ -87,14 +87,16 @@ def handed_over(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, ci
     return k
 
 
-def report(h, step: Step, s: int) -> Report:
+def report(h, step: Step, s: int, members: np.ndarray | None = None) -> Report:
     """Subleader s's report: its Pack and the corridors toward the goal its ring shows (those
-    whose throat is reachable straight from the centroid), and its members' nearest return."""
+    whose throat is reachable straight from the centroid), and its members' nearest return.
+    ``members``: the members it reports (ascending; default: every member of the partition)."""
     p = h.params
     x = step.x
     sub = h.subs[s]
-    part = h.partition()
-    members = part.members[part.index[s]]
+    if members is None:
+        part = h.partition()
+        members = part.members[part.index[s]]
     a = sub.subleader
     if h.at["gaps"]:  # a part edits the openings: the stages one by one
         pack = make_pack(s, a, members, x, step.v)
