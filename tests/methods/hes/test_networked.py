@@ -1,9 +1,11 @@
-"""HES's control law on each agent's own picture of the others (methods/hes/networked.py).
+"""HES's stages on each agent's own picture of the others (methods/hes/networked.py).
 
 Oracles: fed the true states and one plan for all, the picture kernels give the ideal control
-stage's couplings and commands bit for bit; agent i's command from its picture is the ideal
-command of a swarm standing where agent i believes the others to be (the agents it has not heard
-left out); an agent that has heard nobody flies as a swarm of one."""
+stage's couplings and commands, the ideal braking barriers and every report of a run bit for bit;
+agent i's command from its picture is the ideal command of a swarm standing where agent i
+believes the others to be (the agents it has not heard left out); an agent that has heard nobody
+flies as a swarm of one. The plan travels over the real network: a step late when every message
+arrives at once, never one an agent did not receive, only the leader's own when all are lost."""
 
 import numpy as np
 import pytest

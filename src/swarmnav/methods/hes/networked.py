@@ -1,29 +1,33 @@
-"""HES's control law (eq. 26-31, 38) on each agent's own picture of the others (docs/network.md).
+"""HES's stages on each agent's own picture of the others (docs/network.md): the pieces so far.
 
-Under the ideal network the control stage reads every agent's true position and velocity: the
-centroid of a sub-swarm, an agent's nearest group mate, its subleader's state and the pairs of the
-separation terms. On a network agent i knows agent j only as its last message carried it
-(``Observation.known``: positions ``kx`` (N, N, 2) [m], velocities ``kv`` (N, N, 2) [m/s], row i
-agent i's picture, column i its own true state, and ``heard`` (N, N) bool), and its sub-swarm only
-as the plan it flies says: ``lab`` (N, N) int, row i the sub-swarm label agent i's plan gives each
-agent, and ``sl_idx`` (N,) the subleader that plan gives agent i.
+Under the ideal network every stage reads every agent's true position and velocity. On a network
+agent i knows agent j only as its last message carried it (``Observation.known``: positions ``kx``
+(N, N, 2) [m], velocities ``kv`` (N, N, 2) [m/s], row i agent i's picture, column i its own true
+state, and ``heard`` (N, N) bool), and its sub-swarm only as the plan it flies says: ``lab`` (N, N)
+int, row i the sub-swarm labels of agent i's plan, ``coh`` its cohesion groups, and its own rows
+of that plan (subleader, c_s, mode, slot, speed).
 
-The kernels here compute agent i's couplings and terms from row i alone:
+- **Control (eq. 26-31, 38)**: agent i's cohesion centroid (eq. 29) is the mean of its own
+  position and its pictures of the heard agents its plan puts in its group; its nearest
+  neighbour (eq. 26) the nearest of those; its subleader's state (eq. 27) its picture of it (a
+  follower that has never heard its subleader is not coupled to it); the separation terms (eq.
+  25, 31) are summed over its own *directed* pairs (:func:`couple_known`, :func:`eq38_known`,
+  :func:`control_known`).
+- **Our braking barriers**: the contact guard and passage mode's queue barrier brake each agent
+  for the agents it has heard, at their pictured states (:func:`agent_guard_known`,
+  :func:`agent_barrier_known`).
+- **The plan as a message**: the leader publishes its :class:`Plan` (``PLAN``); each agent flies
+  the newest plan it has received, never one it has not, and alone without one
+  (:func:`plans_flown`, :func:`flown_rows`).
+- **A subleader's report**: its Pack from its picture of the members it has heard, its own ring's
+  corridors, the members' published nearest returns (:func:`report_known`, ``RING_MIN``).
 
-- its cohesion centroid (eq. 29) is the mean of its own position and its pictures of the heard
-  agents its plan puts in its sub-swarm;
-- its nearest neighbour (eq. 26) is the nearest of those by its pictures;
-- its subleader's position and velocity (eq. 27) are its picture of the subleader; a follower that
-  has never heard its subleader is not coupled to it;
-- the separation terms (eq. 25, 31) are summed over its own *directed* pairs: agent i pushed away
-  from its picture of each heard agent, whatever j's picture of i is.
-
-Fed every agent's true state (``obs.known()`` under the ideal network) and one plan for all,
-they give the ideal path's couplings and commands bit for bit: each sum runs over the partners in
-ascending index, as the ideal kernels' (tests/methods/hes/test_networked.py). They are not yet
-wired into :class:`~swarmnav.methods.hes.method.Hes`: the hierarchy's stages (re-election,
-reports, the planner, the slot references and the parts of ours) still read the true states, so
-HES flies the ideal network only.
+Fed every agent's true state and one plan for all, each gives the ideal path's values bit for
+bit (tests/methods/hes/test_networked.py). Not yet wired into
+:class:`~swarmnav.methods.hes.method.Hes`, which flies the ideal network only: the leader's
+decision on the reports it received, re-election, split / merge, navigation and the slot
+references on the leader's picture, and the parts' hooks that read other agents (passage mode's
+queues and throats, the stall planner, trail following, route hold) remain.
 """
 
 from __future__ import annotations
