@@ -249,7 +249,10 @@ def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, plann
     own rows, as :func:`plan_rows` gives them). The commanded acceleration (N, 2) [m/s^2].
 
     The parts' hooks (``steer``, ``push_back``, ``brake``, ``guard``) are called as on the ideal
-    path and still read the true states they read there (``Step.x``, ``Step.rows``)."""
+    path; the contact guard brakes for each agent's pictures (:func:`agent_guard_known`). The
+    others read only each agent's own state and ring, except passage mode's and the stall
+    planner's, which read the true states (``Step.x``, ``Step.rows``): a build with those on does
+    not fly a network (``TRUE_STATE_PARTS``)."""
     p = h.params
     x, v, n = step.x, step.v, h.n
     cent, nn, nn_pos, sl_pos, sl_vel, follower = couple_known(x, v, kx, kv, heard, coh, sl_idx, planned)
@@ -284,7 +287,11 @@ def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, plann
         a = part.brake(step, a)
     a = F.saturate(a, p.a_bound)
     for part in h.at["guard"]:
-        a = part.guard(step, a)
+        if part.name == "guard":  # the contact guard: each agent brakes for its pictures of the others
+            a = agent_guard_known(np.ascontiguousarray(a), x, v, kx, kv, heard, p.paper.dt, p.guard.brake,
+                                  p.guard.margin, p.a_bound)
+        else:
+            a = part.guard(step, a)
     return a
 
 
@@ -487,3 +494,68 @@ def report_known(h, step: Step, s: int, kx, kv, heard, ring_min_seen):
     rm[np.isnan(rm)] = np.inf
     pic = Step(step.k, np.ascontiguousarray(kx[a]), np.ascontiguousarray(kv[a]), step.ring, ring_min=rm)
     return report(h, pic, s, members)
+
+
+# --------------------------------------------------------------------------- one step on a network
+
+#: The name a subleader publishes its report under (a :class:`Sent`).
+REPORT = "hes_report"
+
+#: The parts whose hooks read other agents' true states (passage mode's queues and throats, the
+#: stall planner's progress and plans, trail following's trails): a build with any of them on
+#: does not fly a network (``Hes.network_refusal``).
+TRUE_STATE_PARTS = ("passage", "stall", "trail")
+
+
+@dataclass(frozen=True, slots=True)
+class Sent:
+    """A subleader's report as it travels: sent at step ``k`` by agent ``subleader`` for sub-swarm
+    ``sid`` of the plan it flies (made by the leader at step ``plan_k``), with its LiDAR ``ring``
+    (R,) [m] (the leader's split test and corridor choice read the reporting subleader's ring,
+    eq. 13 and Section 3.2)."""
+
+    k: int
+    plan_k: int
+    sid: int
+    subleader: int
+    report: object
+    ring: np.ndarray
+
+
+def reports_sent(h, step: Step, plans: list, kx, kv, heard, ring_min_seen) -> list:
+    """The ``REPORT`` rows of this step: agent a sends a :class:`Sent` when the plan it flies makes
+    it its sub-swarm's subleader (``sl_idx[a] == a``), reporting the members of that plan's
+    sub-swarm it has heard (itself always) at its pictures of them, its own ring's corridors and the
+    members' published nearest returns (:func:`report_known`'s reading); every other row None."""
+    n = h.n
+    rows = [None] * n
+    rm_all = np.full((n, n), np.nan) if ring_min_seen is None else np.asarray(ring_min_seen, dtype=np.float64)
+    for a, q in enumerate(plans):
+        if q is None or q.sl_idx[a] != a:
+            continue
+        s = int(q.labels[a])
+        members = np.flatnonzero(q.labels == s)
+        members = members[heard[a, members] | (members == a)]
+        rm = rm_all[a].copy()
+        rm[a] = step.ring_min[a]
+        rm[np.isnan(rm)] = np.inf
+        pic = Step(step.k, np.ascontiguousarray(kx[a]), np.ascontiguousarray(kv[a]), step.ring, ring_min=rm)
+        rows[a] = Sent(step.k, q.k, s, a, report(h, pic, s, members, subleader=a), step.ring[a].copy())
+    return rows
+
+
+def reports_received(h, got, own: list, k: int, kept: dict) -> dict:
+    """The leader's newest report of each current sub-swarm: of what it received (``got``: its row
+    of ``Observation.received(REPORT)``, None: nothing), its own rows sent this step (``own``) and
+    what it kept (``kept`` {sid: Sent}, updated in place; sub-swarms that no longer exist dropped).
+    A report made on a plan older than the planner's last change of that sub-swarm (a split or a
+    merge at step ``h.subs_since[sid]``) describes other members and is not kept."""
+    for sid in [s for s in kept if s not in h.subs]:
+        del kept[sid]
+    for m in [*(got if got is not None else ()), *own]:
+        if m is None or m.sid not in h.subs or m.plan_k < h.subs_since.get(m.sid, -1):
+            continue
+        prev = kept.get(m.sid)
+        if prev is None or m.k > prev.k or (m.k == prev.k and m.subleader == h.subs[m.sid].subleader):
+            kept[m.sid] = m
+    return kept
