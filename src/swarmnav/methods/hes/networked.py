@@ -1,4 +1,4 @@
-"""HES's stages on each agent's own picture of the others (docs/network.md): the pieces so far.
+"""HES's stages on each agent's own picture of the others (docs/network.md, docs/methods/hes-network.md).
 
 Under the ideal network every stage reads every agent's true position and velocity. On a network
 agent i knows agent j only as its last message carried it (``Observation.known``: positions ``kx``
@@ -20,14 +20,14 @@ of that plan (subleader, c_s, mode, slot, speed).
   the newest plan it has received, never one it has not, and alone without one
   (:func:`plans_flown`, :func:`flown_rows`).
 - **A subleader's report**: its Pack from its picture of the members it has heard, its own ring's
-  corridors, the members' published nearest returns (:func:`report_known`, ``RING_MIN``).
+  corridors, the members' published nearest returns (:func:`report_known`, ``RING_MIN``); as it
+  travels (``REPORT``, :class:`Sent`, :func:`reports_sent`) and as the leader keeps it
+  (:func:`reports_received`).
 
-Fed every agent's true state and one plan for all, each gives the ideal path's values bit for
-bit (tests/methods/hes/test_networked.py). Not yet wired into
-:class:`~swarmnav.methods.hes.method.Hes`, which flies the ideal network only: the leader's
-decision on the reports it received, re-election, split / merge, navigation and the slot
-references on the leader's picture, and the parts' hooks that read other agents (passage mode's
-queues and throats, the stall planner, trail following, route hold) remain.
+Fed every agent's true state and one plan for all, the control stage and the report give the
+ideal path's values bit for bit (tests/methods/hes/test_networked.py). ``Hes._act_networked``
+wires them into one step; passage mode, the stall planner and trail following read other agents'
+true states in their hooks and are refused on a network (``TRUE_STATE_PARTS``).
 """
 
 from __future__ import annotations
