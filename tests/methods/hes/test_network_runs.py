@@ -75,6 +75,8 @@ def test_late_and_lost_messages_never_give_an_agent_a_plan_it_has_not_received()
     check_plans(h)
     late = [k - q.k for k, flown, _, _, _ in h.log for i, q in enumerate(flown) if q is not None and i != h.leader]
     assert late and min(late) >= 1 and max(late) > 2
+    _, again = fly(latency=0.15, jitter=0.05, loss=0.3)  # the same seed loses the same messages
+    assert again.positions.tobytes() == r.positions.tobytes()
 
 
 def test_with_every_message_lost_each_agent_flies_alone():
@@ -93,6 +95,10 @@ def test_a_build_whose_parts_read_true_states_is_refused_in_one_line():
     with pytest.raises(ConfigError, match="passage.on=false stall.on=false trail.on=false"):
         run(Hes(), SCENE, seed=1, steps=5, **{"net.loss": 0.3})
     run(Hes(), SCENE, seed=1, steps=5)  # the ideal network flies every build
+    off = {"passage.on": False, "stall.on": False, "trail.on": False}  # the contact guard stays on
+    h = Hes(**off)
+    r = run(h, SCENE, seed=1, steps=100, **{"net.loss": 0.3, "net.latency": 0.1})
+    assert np.isfinite(r.positions).all() and h.part("guard") is not None
 
 
 def test_the_cli_flies_hes_on_a_lossy_late_network(tmp_path):
