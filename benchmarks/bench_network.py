@@ -3,6 +3,7 @@ before the network existed, and fly the same arrays; a lossy, late network's own
 
     PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b
     PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b --methods vem,ivem,hwvem,ego-swarm
+    PYTHONPATH=src python benchmarks/bench_network.py --before 77b163b --methods hes
 
 Each trial runs in a fresh subprocess (one core, one at a time) after a 3-step warm-up that loads
 the compiled kernels; the CPU time (``time.process_time``) of ``--repeats`` runs is taken at its
@@ -36,7 +37,12 @@ TRIALS = [  # (method, scene, n, simulated seconds)
     ("wvem", "hwvem_mission", 100, 700.0),
     ("hwvem", "hwvem_mission", 100, 700.0),
     ("ego-swarm", "random_forest:density=0.25,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0", 15, 20.0),
+    ("hes", "narrow_alternating_gates", None, 30.0),
 ]
+#: method parameters of a trial (every run of it, before and now): HES's paper build, the build
+#: that flies a network (the default build's passage mode, stall planner and trail following read
+#: other agents' true states and refuse one; docs/methods/hes-network.md)
+PARAMS = {"hes": {"preset": "paper"}}
 
 
 def worker(a) -> None:
@@ -66,6 +72,7 @@ def worker(a) -> None:
 
 
 def trial(src, method, scene, n, horizon, net, repeats) -> dict:
+    net = {**PARAMS.get(method, {}), **net}
     cmd = [sys.executable, __file__, "--worker", "--src", src, "--method", method, "--scene", scene,
            "--n", str(n or 0), "--horizon", str(horizon), "--net", json.dumps(net), "--repeats", str(repeats)]
     p = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "PYTHONPATH": src})

@@ -3,10 +3,13 @@ bursts, range; seeded; the ideal network changes nothing; a lost message leaves 
 
 import copy
 
+from dataclasses import dataclass
+
 import numpy as np
 import pytest
 
 import swarmnav
+from swarmnav.errors import ConfigError
 from _helpers.cli import run_cli
 from swarmnav.methods import registry
 from swarmnav.methods.base import Observation
@@ -177,13 +180,47 @@ def test_impossible_network_is_one_line_and_exit_2(tmp_path, setting, words):
     assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
-def test_a_method_that_cannot_use_the_network_is_refused_in_one_line(tmp_path):
+@dataclass(frozen=True)
+class _NoParams:
+    pass
+
+
+class _Hover:
+    """A method of a user's own (a Method instance) that never says it reads the others through the
+    network: every agent hovers where it is."""
+
+    name, params, dt, dims = "hover", _NoParams(), 0.1, (2,)
+
+    class dynamics:  # noqa: N801
+        @staticmethod
+        def step(p, v, command, dt):
+            return p + v * dt, v + command * dt
+
+    def reset(self, scenario, positions, velocities, rng):
+        pass
+
+    def act(self, obs, rng):
+        return -obs.velocities, {}
+
+    def summary(self):
+        return {}
+
+
+def test_a_method_that_cannot_use_the_network_is_refused_in_one_line():
+    assert swarmnav.run(_Hover(), "default_corridor", seed=1, steps=5).positions.shape[0] == 6
+    with pytest.raises(ConfigError) as e:
+        swarmnav.run(_Hover(), "default_corridor", seed=1, steps=5, **{"net.loss": 0.3})
+    msg = str(e.value)
+    assert "hover does not read the other agents through the network" in msg and "\n" not in msg
+    assert all(m in msg for m in ("apf", "olfati-saber", "sph", "vasarhelyi", "vem", "hwvem",
+                                  "ego-swarm", "lsc", "nmpc", "mader", "hes"))
+
+
+def test_a_build_that_reads_true_states_is_refused_in_one_line_on_the_cli(tmp_path):
     r = run_cli("run", "--method", "hes", "--scenario", "default_corridor", "--steps", "5",
                 "--out", str(tmp_path / "r"), "--set", "net.loss=0.3")
-    assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "hes does not read the other agents through the network" in r.stderr
-    assert all(m in r.stderr for m in ("apf", "olfati-saber", "sph", "vasarhelyi", "vem", "hwvem",
-                                       "ego-swarm", "lsc", "nmpc", "mader"))
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert "passage.on=false" in r.stderr and "preset=paper" in r.stderr
 
 
 # ---------------------------------------------------------------- the trajectory planners (Table II)

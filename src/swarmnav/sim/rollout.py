@@ -101,6 +101,8 @@ def run(
     if not net.ideal and not getattr(m, "networked", False):
         raise ConfigError(f"{m.name} does not read the other agents through the network yet, so it cannot fly "
                           f"a non-ideal one (net.*); methods that can: {', '.join(_networked()) or 'none'}")
+    if not net.ideal and getattr(m, "network_refusal", None):  # a build whose switched-on parts read true states
+        raise ConfigError(m.network_refusal)
     if (steps is None) == (horizon is None):
         raise ConfigError("give exactly one of steps or horizon")
     if steps is None:

@@ -32,6 +32,8 @@ from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePolicy, project
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.navigate import navigate
+from swarmnav.methods.hes.networked import (PLAN, REPORT, RING_MIN, TRUE_STATE_PARTS, control_known, flown_rows,
+                                            plan_of, plans_flown, publication, reports_received, reports_sent)
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.parts import build_parts
 from swarmnav.methods.hes.hooks import Part, hook_table
@@ -48,6 +50,7 @@ class Hes:
     """The HES method (see module docstring); parameters: :class:`HesParams`."""
 
     name = "hes"
+    networked = True  # on a network each agent reads the others only as received (networked.py, docs/methods/hes-network.md)
     dims = (2,)  # planar, as its paper: a 3-D scene is flown in its horizontal slice at z_fly
     range_sensor = True  # its LiDAR ring is read through Observation.scan (docs/sensing.md)
 
@@ -66,6 +69,11 @@ class Hes:
         self.at: dict[str, list[Part]] = hook_table([])  # hook name -> the parts that override it
         self._part_key: tuple | None = None  # the labels and ids the cached Partition was built for
         self._part: Partition | None = None
+        on = [name for name in TRUE_STATE_PARTS if getattr(self.params, name).on]
+        #: why this build cannot fly a non-ideal network (None: it can); the rollout refuses with it
+        self.network_refusal = None if not on else (
+            f"hes flies a non-ideal network (net.*) only without the parts that read other agents' true states: "
+            f"set {' '.join(f'{name}.on=false' for name in on)} (or preset=paper)")
 
     def use_source(self, source: DecisionSource) -> Hes:
         """Decide structure with ``source`` instead of the rule policy (from the next reset)."""
@@ -117,6 +125,12 @@ class Hes:
         self.report_gaps, self.report_consts = report_constants(self)
         self.report_c = np.array(self.report_gaps + self.report_consts, dtype=float)  # report_rows' scalars
         self.couple_ws = couple_workspace(n)  # the control stage's coupling arrays, rewritten every step
+        # on a network (networked.py): the start positions every agent knows before take-off, each
+        # agent's plan flown last step, the leader's kept reports and the step of each sub-swarm's last change
+        self.start_x, self.start_v = np.array(positions, dtype=float), np.array(velocities, dtype=float)
+        self.flown: list = [None] * n
+        self.kept: dict = {}
+        self.subs_since: dict[int, int] = {}
 
     def summary(self) -> dict[str, float]:
         out = {"llm_calls": 0.0, "llm_fallback_used": 0.0}
@@ -150,7 +164,10 @@ class Hes:
     # ------------------------------------------------------------------ one step
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         """One step of Section 4.4; returns the commanded accelerations (N, 2) [m/s^2] and
-        ``{"labels", "events", "roles"}`` (roles: see :meth:`roles`)."""
+        ``{"labels", "events", "roles"}`` (roles: see :meth:`roles`). On a non-ideal network
+        (``obs.view``) :meth:`_act_networked`."""
+        if obs.view is not None:
+            return self._act_networked(obs)
         x = np.ascontiguousarray(obs.positions, dtype=np.float64)
         v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
         # 1. perceive
@@ -171,6 +188,78 @@ class Hes:
         a = control(self, step)
         self.last_step = step
         return a, {"labels": self.labels.copy(), "events": events, "roles": self.roles()}
+
+    def _act_networked(self, obs: Observation) -> tuple[np.ndarray, dict]:
+        """One step on a network (docs/methods/hes-network.md): every agent senses its own ring and
+        publishes its nearest return (``RING_MIN``); each agent flies the newest plan it has received
+        (``PLAN``); an agent whose plan makes it a subleader reports from its own picture
+        (``REPORT``); the leader plans on its own picture of the agents and on the reports it holds,
+        and publishes its plan, which it flies at once; every agent's control law reads the others
+        only as it received them (``obs.known()``)."""
+        x = np.ascontiguousarray(obs.positions, dtype=np.float64)  # each agent's own state
+        v = np.ascontiguousarray(obs.velocities, dtype=np.float64)
+        kx, kv, heard = obs.known()
+        n, lead, k = self.n, self.leader, obs.step
+        step = Step(k, x, v, sense(self, x))
+        plans = plans_flown(obs.received(PLAN), lead, self.flown)
+        sent = reports_sent(self, step, plans, kx, kv, heard, obs.received(RING_MIN))
+        got = obs.received(REPORT)
+        kept = reports_received(self, None if got is None else got[lead], sent, k, self.kept)
+        # the leader's picture: agents it has never heard where they started (the mission plan)
+        hx = np.where(heard[lead][:, None], kx[lead], self.start_x)
+        hv = np.where(heard[lead][:, None], kv[lead], self.start_v)
+        hx[lead], hv[lead] = x[lead], v[lead]
+        ring = np.full_like(step.ring, self.params.paper.lidar_range)  # rings it has not received: nothing seen
+        ring[lead] = step.ring[lead]
+        for m in kept.values():
+            ring[m.subleader] = m.ring
+        ps = Step(k, hx, hv, ring)
+        reelect(self, ps)
+        events = self._decide_networked(ps, kept)
+        self._route_agents(ps, final=False)
+        for s, sub in self.subs.items():
+            if s in ps.reports:  # a sub-swarm with no report since its last change keeps its last waypoint and mode
+                navigate(self, ps, sub, ps.reports[s])
+        reassign_followers(self, hx, k)
+        self._route_agents(ps, final=True)
+        references(self, ps)
+        plan = plan_of(self, ps)
+        plans[lead] = plan
+        self.flown = plans
+        lab, coh, sl_idx, wp, nav, planned, step.slot, step.speed = flown_rows(plans, x)
+        step.own = np.full(n, -1, dtype=np.int64)
+        step.own_target, step.routed = np.zeros((n, 2)), np.zeros(n, dtype=np.bool_)
+        a = control_known(self, step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned)
+        self.last_step = step
+        publish = {PLAN: publication(plan, lead, n), REPORT: sent, RING_MIN: step.ring_min.copy()}
+        return a, {"labels": self.labels.copy(), "events": events, "roles": self.roles(),
+                   "publish": publish}
+
+    def _decide_networked(self, ps: Step, kept: dict) -> list[dict]:
+        """Stages 2-3 on the leader's reports: z(k) and the source's proposal through Pi_feas only
+        when it holds a report of every sub-swarm (else it keeps the structure); after a split or a
+        merge it drops every report and waits for reports made on the new plan."""
+        ps.reports = {s: kept[s].report for s in sorted(self.subs) if s in kept}
+        if len(ps.reports) < len(self.subs):
+            return []
+        k, events = ps.k, []
+        z = ps.z = decision_state(self, ps)
+        prop = self.source.propose(z, k)
+        action = project(prop.action, z)
+        if action != prop.action:
+            self.stats["projected_to_keep"] += 1
+        if action == "split":
+            events.append(split(self, ps, prop))
+        elif action == "merge":
+            events.append(merge(self, ps, prop))
+        if action != "keep":
+            self.k_last = k
+            for s in self.subs:
+                self.subs_since[s] = k
+            kept.clear()
+            ps.reports = {}
+        self.last_z, self.last_reports = z, ps.reports
+        return events
 
     def roles(self) -> np.ndarray:
         """(N,) uint8 role of each agent in the hierarchy of eq. (1): 2 the leader, 1 a

@@ -87,15 +87,19 @@ def handed_over(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, ci
     return k
 
 
-def report(h, step: Step, s: int) -> Report:
+def report(h, step: Step, s: int, members: np.ndarray | None = None, subleader: int | None = None) -> Report:
     """Subleader s's report: its Pack and the corridors toward the goal its ring shows (those
-    whose throat is reachable straight from the centroid), and its members' nearest return."""
+    whose throat is reachable straight from the centroid), and its members' nearest return.
+    ``members``: the members it reports (ascending; default: every member of the partition);
+    ``subleader``: the agent reporting (default: the planner's subleader of s; on a network the
+    agent whose plan makes it s's subleader, which the planner may have relieved since)."""
     p = h.params
     x = step.x
-    sub = h.subs[s]
-    part = h.partition()
-    members = part.members[part.index[s]]
-    a = sub.subleader
+    sub = h.subs.get(s)
+    if members is None:
+        part = h.partition()
+        members = part.members[part.index[s]]
+    a = sub.subleader if subleader is None else subleader
     if h.at["gaps"]:  # a part edits the openings: the stages one by one
         pack = make_pack(s, a, members, x, step.v)
         gaps = detect_gaps(step.ring[a], x[a, 0], x[a, 1], h.cos, h.sin, p.paper.lidar_range, p.core.h_open)
