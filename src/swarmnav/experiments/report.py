@@ -38,7 +38,7 @@ REFEREE_METRICS = ("collisions", "crashes")
 UNITS = {"E_mean": "m", "E_90": "m", "sigma_E": "m", "d_clr_min": "m", "L_mean": "m",
          "min_inter_agent_distance": "m", "flight_distance": "m", "flight_time": "s", "avg_velocity": "m/s",
          "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%", "min_inter_robot_distance": "m",
-         "min_robot_obstacle_distance": "m", "jerk_energy": "m^2/s^5", "comm_mbps": "Mbit/s", "coordination_time": "s"}
+         "min_robot_obstacle_distance": "m", "osc_hf_speed": "m/s", "jerk_energy": "m^2/s^5", "comm_mbps": "Mbit/s", "coordination_time": "s"}
 #: Tables of the report in reading order; a metric not named here goes to OTHER_GROUP.
 METRIC_GROUPS = (
     ("Outcome", ("Y", "R_goal", "sph_success", "sph_arrived_fraction", "P_s", "converged", "S_scene",
@@ -219,6 +219,8 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
 
     rows = job_rows(store, meta)
     spec = meta.get("report") or {}
+    if spec.get("trajectory_metrics"):
+        rows = with_trajectory_metrics(store, rows, spec["trajectory_metrics"])
     metric_names = report_metrics(meta, rows)
     line_spec = spec.get("lines") or None
     wanted = list(dict.fromkeys(metric_names + list((line_spec or {}).get("metrics") or [])))
@@ -256,6 +258,32 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
             "differences": spec.get("differences"), "lines": line_spec,
             "planned": len(meta["jobs"]), "seed_list": list(meta.get("seeds") or []),
             "overrides": meta.get("overrides")}
+
+
+def with_trajectory_metrics(store: Store, rows: list[dict], names: list[str]) -> list[dict]:
+    """``rows`` with the metrics ``names`` (:data:`swarmnav.metrics.oscillation.FROM_TRAJECTORY`)
+    computed from each finished run's stored trajectory and its method's step; a run without a
+    trajectory file gets none. A metric the run already has is kept as stored."""
+    from swarmnav.methods import registry
+    from swarmnav.metrics.oscillation import FROM_TRAJECTORY
+    from swarmnav.sim.rollout import is_run_option
+
+    steps: dict[tuple, float] = {}
+    out = []
+    for r in rows:
+        path = store.root / r["trajectory"] if r.get("status") == "done" and r.get("trajectory") else None
+        if path is None or not path.is_file() or all(m in r["metrics"] for m in names):
+            out.append(r)
+            continue
+        params = {k: v for k, v in (r.get("params") or {}).items() if not is_run_option(k)}
+        key = (r["method"], tuple(sorted((k, str(v)) for k, v in params.items())))
+        if key not in steps:
+            steps[key] = float(registry.make(r["method"], **params).dt)
+        with np.load(path) as z:
+            positions = z["positions"]
+        extra = {m: FROM_TRAJECTORY[m](positions, steps[key]) for m in names if m not in r["metrics"]}
+        out.append({**r, "metrics": {**r["metrics"], **extra}})
+    return out
 
 
 def variant_variables(v: dict, overrides: dict[str, str]) -> dict[str, Any]:

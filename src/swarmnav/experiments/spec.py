@@ -59,7 +59,7 @@ _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "
               "matrix",
               "report", "scenario_vars"}
 _REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "metric_map", "figures", "compare",
-                "differences", "lines"}
+                "differences", "lines", "trajectory_metrics", "robustness"}
 _DIFFERENCES_KEYS = {"success", "metrics", "pairs"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "horizon", "n", "params"}
@@ -178,6 +178,13 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
             isinstance(x, (int, float, str)) and not isinstance(x, bool) for x in svars.values()):
         raise ConfigError(f"{source}: scenario_vars must map new names (not {sorted(_RUN_KEYS | {'seed'})}) "
                           f"to numbers or strings")
+    if "trajectory_metrics" in report:
+        from swarmnav.metrics.oscillation import FROM_TRAJECTORY
+
+        tm = report["trajectory_metrics"]
+        if not isinstance(tm, list) or not all(isinstance(m, str) and m in FROM_TRAJECTORY for m in tm):
+            raise ConfigError(f"{source}: [report] trajectory_metrics must list metrics computed from a stored "
+                              f"trajectory ({sorted(FROM_TRAJECTORY)}), got {tm!r}")
     if "compare" in report:
         if not isinstance(report["compare"], list) or not all(isinstance(x, str) for x in report["compare"]):
             raise ConfigError(f"{source}: [report] compare must be a list of two variant names")
