@@ -27,7 +27,8 @@ method = ["apf", "vasarhelyi"]
 [one_at_a_time]
 "net.loss" = [0.0, 1.0]
 [report]
-metrics = ["Y", "R_goal"]
+metrics = ["Y", "R_goal", "osc_hf_speed"]
+trajectory_metrics = ["osc_hf_speed"]
 [report.robustness]
 success = "Y"
 threshold = 0.4
@@ -146,6 +147,21 @@ def test_first_below_on_a_continuous_outcome_and_never(tiny):
     vals = cells[(METHODS[0], 0.0)]
     half = 12.706 * np.std(vals, ddof=1) / math.sqrt(2)  # t(0.975, 1 dof) x standard error
     assert line.high[0] - line.mean[0] == pytest.approx(half, rel=1e-3)
+
+
+def test_trajectory_metric_is_computed_from_each_stored_trajectory(tiny):
+    from swarmnav.methods import registry
+    from swarmnav.metrics.oscillation import hf_speed
+
+    t = build_tables(Store(tiny), "tiny-robust")
+    rows = list(csv.DictReader(open(tiny / "runs.csv", newline="")))
+    for v in t["variants"]:
+        mine = sorted((r for r in rows if r["variant"] == v["name"]), key=lambda r: int(r["seed"]))
+        dt = registry.make(v["method"]).dt
+        expected = [hf_speed(np.load(tiny / r["trajectory"])["positions"], dt) for r in mine]
+        assert len(expected) == 2 and all(x > 0 for x in expected)
+        assert v["values"]["osc_hf_speed"] == pytest.approx(expected, rel=1e-12)
+    assert "osc_hf_speed [m/s]" in (tiny / "report.md").read_text()
 
 
 @pytest.mark.parametrize("table, match", [

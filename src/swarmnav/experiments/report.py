@@ -651,6 +651,8 @@ def paired_changes(directory: str | Path, a: str, b: str, *, experiment: str | N
 
     a, b = paired.check_variants((a, b), [v["name"] for v in meta["variants"]])
     rows = job_rows(store, meta)
+    if (meta.get("report") or {}).get("trajectory_metrics"):
+        rows = with_trajectory_metrics(store, rows, meta["report"]["trajectory_metrics"])
     return paired.pair_rows(rows, experiment, a, b, list(metrics) if metrics else report_metrics(meta, rows))
 
 
