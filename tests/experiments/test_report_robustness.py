@@ -164,6 +164,23 @@ def test_trajectory_metric_is_computed_from_each_stored_trajectory(tiny):
     assert "osc_hf_speed [m/s]" in (tiny / "report.md").read_text()
 
 
+@pytest.mark.parametrize("means, runs, text", [
+    ([0.9, 0.7, 0.2], [10, 10, 10], "0.1 (0.70 of 10)"),  # the first level below, not the lowest rate
+    ([0.5, 0.9, 0.9], [10, 10, 10], "0 (0.50 of 10)"),  # below already at the baseline
+    ([0.9, 0.8, 0.85], [10, 10, 10], "never"),  # 0.8 itself is not below 0.8
+    ([0.9, 0.85, math.nan], [10, 10, 0], "not below up to 0.1"),  # the last level not flown yet
+    ([math.nan, 0.5, math.nan], [0, 4, 0], "0.1 (0.50 of 4)"),  # a level without runs is skipped
+    ([math.nan] * 3, [0, 0, 0], "not run"),
+])
+def test_first_below_reads_levels_in_order(means, runs, text):
+    from swarmnav.experiments.lines import Line
+    from swarmnav.experiments.robustness import first_below
+
+    x = np.array([0.0, 0.1, 0.3])
+    line = Line(x, np.array(means), np.array(means), np.array(means), np.array(runs), np.zeros(3, dtype=int))
+    assert first_below(line, 0.8, [0.0, 0.1, 0.3]).text() == text
+
+
 @pytest.mark.parametrize("table, match", [
     ({"net.loss": [0.0]}, "two or more levels"),
     ({"net.loss": [0.0, 0.0]}, "a level twice"),

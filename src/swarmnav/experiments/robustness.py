@@ -20,7 +20,7 @@ interval, Wilson's for a 0/1 outcome, Student-t otherwise (:func:`swarmnav.exper
 
 The table gives, per group and curve, the lowest level of each factor at which the mean success is
 below ``threshold``: "never" if no level is, and where some levels have no finished run yet, "not
-below up to L" (L the highest level run).
+below up to L" (L the highest level run); "not run" if no level has a finished run.
 """
 
 from __future__ import annotations
@@ -91,6 +91,8 @@ class Threshold:
     def text(self) -> str:
         if self.level is not None:
             return f"{_tick(self.level)} ({self.rate:.2f} of {self.runs})"
+        if math.isnan(self.highest):
+            return "not run"
         return "never" if self.complete else f"not below up to {_tick(self.highest)}"
 
 
@@ -171,7 +173,8 @@ def table(panels: list[Panel], thresholds: dict[tuple[str, str, str], Threshold]
     th = float(cfg.get("threshold", 0.8))
     note = (f"The lowest level of each factor (the others at their baseline) at which the mean `{cfg['success']}` "
             f"over the group's runs is below {th:g}, with that mean and its runs in brackets; \"never\": not at "
-            f"any level of the sweep; \"not below up to L\": levels above L have no finished run yet.")
+            f"any level of the sweep; \"not below up to L\": levels above L have no finished run yet; "
+            f"\"not run\": no level has one.")
     return {"title": f"Success below {th:g}: first level of each factor", "columns": columns, "rows": rows,
             "note": note}
 
@@ -193,7 +196,8 @@ def to_csv(panels: list[Panel]) -> str:
 def figure(panel: Panel, title: str, labels: dict[str, str], threshold: float, success: str):
     """A panel per metric (success first, the threshold dashed), a curve per method
     (:func:`swarmnav.experiments.lines.figure`)."""
-    shown = {m: c for m, c in panel.curves.items() if any(ln.runs.sum() for ln in c.values())}
+    shown = {m: {name: ln for name, ln in c.items() if ln.runs.sum()} for m, c in panel.curves.items()}
+    shown = {m: c for m, c in shown.items() if c}  # a curve or a panel without a finished run is not drawn
     fig = lines.figure(shown, panel.binary, panel.factor, f"{title}: {panel.factor}, {panel.group}", labels)
     if success in shown:
         fig.axes[list(shown).index(success)].axhline(threshold, ls="--", lw=1.0, color="0.4")
