@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from swarmnav.errors import SwarmnavError
-from swarmnav.experiments import differences, lines, paired
+from swarmnav.experiments import differences, lines, paired, robustness
 from swarmnav.experiments import stats
 from swarmnav.experiments.store import DB_NAME, Store
 
@@ -38,7 +38,7 @@ REFEREE_METRICS = ("collisions", "crashes")
 UNITS = {"E_mean": "m", "E_90": "m", "sigma_E": "m", "d_clr_min": "m", "L_mean": "m",
          "min_inter_agent_distance": "m", "flight_distance": "m", "flight_time": "s", "avg_velocity": "m/s",
          "D_obs": "m", "D_ind": "m", "k_con": "steps", "P_s": "%", "min_inter_robot_distance": "m",
-         "min_robot_obstacle_distance": "m", "jerk_energy": "m^2/s^5", "comm_mbps": "Mbit/s", "coordination_time": "s"}
+         "min_robot_obstacle_distance": "m", "osc_hf_speed": "m/s", "net.latency": "s", "net.jitter": "s", "jerk_energy": "m^2/s^5", "comm_mbps": "Mbit/s", "coordination_time": "s"}
 #: Tables of the report in reading order; a metric not named here goes to OTHER_GROUP.
 METRIC_GROUPS = (
     ("Outcome", ("Y", "R_goal", "sph_success", "sph_arrived_fraction", "P_s", "converged", "S_scene",
@@ -219,9 +219,13 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
 
     rows = job_rows(store, meta)
     spec = meta.get("report") or {}
+    if spec.get("trajectory_metrics"):
+        rows = with_trajectory_metrics(store, rows, spec["trajectory_metrics"])
     metric_names = report_metrics(meta, rows)
     line_spec = spec.get("lines") or None
-    wanted = list(dict.fromkeys(metric_names + list((line_spec or {}).get("metrics") or [])))
+    robust = spec.get("robustness") or {}
+    wanted = list(dict.fromkeys(metric_names + list((line_spec or {}).get("metrics") or [])
+                                + ([robust["success"], *robust.get("metrics", [])] if robust else [])))
     ref_root = _lookup(paper_results(), spec["reference"]) if spec.get("reference") else None
     vmap = spec.get("variant_map") or {}
     planned: dict[str, int] = {}  # runs the stored spec plans per variant: its (variant, seed) jobs
@@ -242,7 +246,9 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
             key, index = key
         ref = _lookup(ref_root, key) if isinstance(ref_root, dict) else None
         row_name = key.strip('"') + (f" [{index}]" if index is not None else "")
-        variants.append({"name": v["name"], "runs": len(mine), "done": len(done), "values": per_metric,
+        cols = v.get("columns") or {}
+        variants.append({"name": v["name"], "method": cols.get("method"), "scenario": cols.get("scenario"),
+                         "runs": len(mine), "done": len(done), "values": per_metric,
                          "variables": variant_variables(v, meta.get("overrides") or {}),
                          "planned": planned.get(v["name"], 0), "failed": len(mine) - len(done),
                          "seeds": [r["seed"] for r in done], "build": build_label(mine[0] if mine else None),
@@ -253,9 +259,35 @@ def build_tables(store: Store, experiment: str) -> dict[str, Any]:
     return {"experiment": experiment, "description": meta.get("description", ""), "metrics": metric_names,
             "variants": variants, "reference": spec.get("reference"), "reference_index": None,
             "title": spec.get("title") or experiment, "n_runs": len(rows), "compare": spec.get("compare"),
-            "differences": spec.get("differences"), "lines": line_spec,
+            "differences": spec.get("differences"), "lines": line_spec, "robustness": robust or None,
             "planned": len(meta["jobs"]), "seed_list": list(meta.get("seeds") or []),
             "overrides": meta.get("overrides")}
+
+
+def with_trajectory_metrics(store: Store, rows: list[dict], names: list[str]) -> list[dict]:
+    """``rows`` with the metrics ``names`` (:data:`swarmnav.metrics.oscillation.FROM_TRAJECTORY`)
+    computed from each finished run's stored trajectory and its method's step; a run without a
+    trajectory file gets none. A metric the run already has is kept as stored."""
+    from swarmnav.methods import registry
+    from swarmnav.metrics.oscillation import FROM_TRAJECTORY
+    from swarmnav.sim.rollout import is_run_option
+
+    steps: dict[tuple, float] = {}
+    out = []
+    for r in rows:
+        path = store.root / r["trajectory"] if r.get("status") == "done" and r.get("trajectory") else None
+        if path is None or not path.is_file() or all(m in r["metrics"] for m in names):
+            out.append(r)
+            continue
+        params = {k: v for k, v in (r.get("params") or {}).items() if not is_run_option(k)}
+        key = (r["method"], tuple(sorted((k, str(v)) for k, v in params.items())))
+        if key not in steps:
+            steps[key] = float(registry.make(r["method"], **params).dt)
+        with np.load(path) as z:
+            positions = z["positions"]
+        extra = {m: FROM_TRAJECTORY[m](positions, steps[key]) for m in names if m not in r["metrics"]}
+        out.append({**r, "metrics": {**r["metrics"], **extra}})
+    return out
 
 
 def variant_variables(v: dict, overrides: dict[str, str]) -> dict[str, Any]:
@@ -619,6 +651,8 @@ def paired_changes(directory: str | Path, a: str, b: str, *, experiment: str | N
 
     a, b = paired.check_variants((a, b), [v["name"] for v in meta["variants"]])
     rows = job_rows(store, meta)
+    if (meta.get("report") or {}).get("trajectory_metrics"):
+        rows = with_trajectory_metrics(store, rows, meta["report"]["trajectory_metrics"])
     return paired.pair_rows(rows, experiment, a, b, list(metrics) if metrics else report_metrics(meta, rows))
 
 
@@ -700,6 +734,20 @@ def write_report(directory: str | Path, experiment: str | None = None,
     if not any(stem == "lines" for stem, _ in charts):
         for ext in ("png", "svg"):
             (files / f"lines.{ext}").unlink(missing_ok=True)
+    stale = set(files.glob("robustness-*.png")) | set(files.glob("robustness-*.svg"))
+    if t["robustness"]:
+        cfg = t["robustness"]
+        panels, firsts = robustness.series(t["variants"], cfg)
+        tabs.append(robustness.table(panels, firsts, cfg, UNITS))
+        labels = {m: _header(m) for m in {cfg["success"], *cfg.get("metrics", []), *(p.factor for p in panels)}}
+        for p in panels:
+            charts.append((robustness.stem(p), robustness.figure(p, cfg.get("title") or t["title"], labels,
+                                                                 float(cfg.get("threshold", 0.8)), cfg["success"])))
+        (files / "robustness.csv").write_text(robustness.to_csv(panels), encoding="utf-8")
+    else:
+        (files / "robustness.csv").unlink(missing_ok=True)
+    for old in stale - {files / f"{stem}.{ext}" for stem, _ in charts for ext in ("png", "svg")}:
+        old.unlink(missing_ok=True)
     diff_spec = t["differences"]
     if diff_spec:
         diff_metrics = list(diff_spec.get("metrics") or [])

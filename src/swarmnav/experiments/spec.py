@@ -31,6 +31,12 @@ intervals: ``success = "sph_success"`` (a 0/1 metric), ``metrics = ["flight_dist
 A ``[report.lines]`` table draws metrics against a variable, one line per value of another
 (:mod:`swarmnav.experiments.lines`): ``x = "n"``, ``series = "density"``, ``metrics = [...]``.
 
+``[one_at_a_time]`` sweeps factors one at a time: ``"net.latency" = [0.0, 0.05]``, ``"net.loss" =
+[0.0, 0.3]`` gives every variant at the baseline (each factor's first level; ``NAME/baseline``) and
+at each other level of one factor with the rest at baseline (``NAME/net.loss=0.3``): the union of
+one sweep per factor, not their product. A ``[report.robustness]`` table draws success and distances
+against each factor (:mod:`swarmnav.experiments.robustness`).
+
 ``--set key=value`` overrides apply to every variant: ``method``, ``scenario``, ``steps``,
 ``n`` (swarm size), a declared scenario variable, or a method parameter. ``key=a|b|c`` sweeps:
 every variant is repeated for each value, and the value is appended to the variant name.
@@ -51,15 +57,15 @@ from pathlib import Path
 from typing import Any
 
 from swarmnav.errors import ConfigError
-from swarmnav.experiments import lines
+from swarmnav.experiments import lines, robustness
 from swarmnav.experiments.paired import check_variants
 from swarmnav.params import coerce, flatten
 
 _SPEC_KEYS = {"name", "description", "method", "scenario", "steps", "horizon", "seeds", "n", "params", "variants",
               "matrix",
-              "report", "scenario_vars"}
+              "report", "scenario_vars", "one_at_a_time"}
 _REPORT_KEYS = {"reference", "reference_index", "metrics", "title", "variant_map", "metric_map", "figures", "compare",
-                "differences", "lines"}
+                "differences", "lines", "trajectory_metrics", "robustness"}
 _DIFFERENCES_KEYS = {"success", "metrics", "pairs"}
 _MATRIX_KEYS = {"method", "scenario", "n", "steps"}
 _VARIANT_KEYS = {"name", "method", "scenario", "steps", "horizon", "n", "params"}
@@ -150,6 +156,10 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
             raw_variants.append({"name": "/".join(str(c) for c in combo), **dict(zip(axes, combo))})
             placed.append(dict(zip(axes, combo)))
     raw_variants, placed = (raw_variants, placed) if raw_variants else ([{"name": "default"}], [{}])
+    factors = _factors(data.get("one_at_a_time"), overrides, source)
+    if factors:  # every variant at the baseline and at each other level of one factor at a time
+        overrides = {k: v for k, v in overrides.items() if k not in factors}
+        raw_variants, placed = _one_at_a_time(raw_variants, placed, factors)
     report = data.get("report", {})
     if not isinstance(report, dict) or set(report) - _REPORT_KEYS:
         raise ConfigError(f"{source}: [report] unknown key(s) {sorted(set(report) - _REPORT_KEYS)} "
@@ -178,6 +188,13 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
             isinstance(x, (int, float, str)) and not isinstance(x, bool) for x in svars.values()):
         raise ConfigError(f"{source}: scenario_vars must map new names (not {sorted(_RUN_KEYS | {'seed'})}) "
                           f"to numbers or strings")
+    if "trajectory_metrics" in report:
+        from swarmnav.metrics.oscillation import FROM_TRAJECTORY
+
+        tm = report["trajectory_metrics"]
+        if not isinstance(tm, list) or not all(isinstance(m, str) and m in FROM_TRAJECTORY for m in tm):
+            raise ConfigError(f"{source}: [report] trajectory_metrics must list metrics computed from a stored "
+                              f"trajectory ({sorted(FROM_TRAJECTORY)}), got {tm!r}")
     if "compare" in report:
         if not isinstance(report["compare"], list) or not all(isinstance(x, str) for x in report["compare"]):
             raise ConfigError(f"{source}: [report] compare must be a list of two variant names")
@@ -188,6 +205,10 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
     if "lines" in report:
         lines.check(report["lines"], [(v.name, v.variables) for v in variants], set(matrix) | set(svars) | set(overrides),
                     f"{source}: [report.lines]")
+    if "robustness" in report:
+        robustness.check(report["robustness"], f"{source}: [report.robustness]")
+        robustness.check_variants(report["robustness"], [(v.name, v.scenario, v.variables) for v in variants],
+                                  f"{source}: [report.robustness]")
     _check_params(variants, source)
     seed_list = parse_seeds(seeds if seeds is not None else str(data.get("seeds", "1-10")))
     names = [v.name for v in variants]
@@ -195,6 +216,48 @@ def from_dict(data: dict, source: str, overrides: dict[str, str], seeds: str | N
         raise ConfigError(f"{source}: variant names must be unique, got {names}")
     return Experiment(name=name, description=str(data.get("description", "")), variants=tuple(variants),
                       seeds=seed_list, report=dict(report), overrides=given)
+
+
+def _factors(table: Any, overrides: dict[str, str], source: str) -> dict[str, list[Any]]:
+    """A spec's ``[one_at_a_time]`` table: parameter or run-option name -> its levels, the first the
+    baseline (a ``--set`` of the name replaces its levels, as on a [matrix] axis); {} if absent."""
+    if table is None:
+        return {}
+    where = f"{source}: [one_at_a_time]"
+    if not isinstance(table, dict) or not table:
+        raise ConfigError(f"{where} must map parameter names to lists of levels, got {table!r}")
+    out: dict[str, list[Any]] = {}
+    for k, levels in flatten(table).items():
+        if k in _RUN_KEYS or k in ("seed", "preset"):
+            raise ConfigError(f"{where} '{k}' cannot be a factor (factors are method parameters or run "
+                              f"options such as net.latency)")
+        if k in overrides:
+            levels = str(overrides[k]).split("|")
+        if not isinstance(levels, list) or len(levels) < 2 or not all(
+                isinstance(x, (int, float, str)) and not isinstance(x, bool) for x in levels):
+            raise ConfigError(f"{where} '{k}' must list two or more levels (the first is the baseline), got {levels!r}")
+        if len({str(x) for x in levels}) != len(levels):
+            raise ConfigError(f"{where} '{k}' lists a level twice: {levels!r}")
+        out[k] = levels
+    return out
+
+
+def _one_at_a_time(raw: list[dict], placed: list[dict], factors: dict[str, list[Any]]) -> tuple[list[dict], list[dict]]:
+    """Each variant once with every factor at its baseline (``NAME/baseline``) and once per other
+    level of each factor, the rest at baseline (``NAME/net.latency=0.15``): the union of one sweep
+    per factor, not their product. Every variant's parameters name every factor, and its variables
+    record them and ``varied``, the factor it moves ("" at the baseline). Adding a factor adds
+    variants and leaves the names of the others as they were."""
+    base = {k: levels[0] for k, levels in factors.items()}
+    settings = [("", "baseline", base)] + [(k, f"{k}={x}", {**base, k: x})
+                                           for k, levels in factors.items() for x in levels[1:]]
+    out, where = [], []
+    for v, p in zip(raw, placed):
+        for varied, tag, values in settings:
+            params = {**dict(v.get("params", {})), **values}
+            out.append({**v, "name": f"{v.get('name', 'default')}/{tag}", "params": params})
+            where.append({**p, **values, "varied": varied})
+    return out, where
 
 
 def _check_differences(table: Any, known: list[str], where: str) -> None:
