@@ -215,6 +215,18 @@ def eq38(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, 
     ir = F.separation(x, labels, g[F.G_KIR], g[F.G_DIR], g[F.G_DFLOOR], True, ptr, idx)
     obs = F.lidar_repulsion_each(ring, cos_t, sin_t, g[F.G_KREP], g[F.G_RT], g[F.G_KB], g[F.G_GAMMA], g[F.G_KE],
                                  dsafe, g[F.G_DFLOOR], g[F.G_KE_RATIO] > 0.5)
+    j = np.where(nn >= 0, nn, np.arange(n))
+    return eq38_sum(x, v, x[j], x[sl_idx], v[sl_idx], nn >= 0, follower, cent, wp, nav, slot, speed, eps_v, sig,
+                    sep, ir, obs, g)
+
+
+@njit(cache=True)
+def eq38_sum(x, v, nn_pos, sl_pos, sl_vel, has_nn, follower, cent, wp, nav, slot, speed, eps_v, sig, sep, ir, obs, g):
+    """Eq. (38)'s six per-agent terms and the sum, every term computed and added in the stack's
+    order (0 + att + sep + ... + obs), given each agent's nearest group mate ``nn_pos``, subleader
+    ``sl_pos`` / ``sl_vel`` (N, 2) as it knows them and the pair and LiDAR terms ``sep``, ``ir``,
+    ``obs`` (N, 2): shared by the ideal path (:func:`eq38`) and the network's (``eq38_known``)."""
+    n = x.shape[0]
     k_p, k_v, k_path, k_vl = g[F.G_KP], g[F.G_KV], g[F.G_KPATH], g[F.G_KVL]
     out = np.empty((n, 2))
     for i in range(n):
@@ -222,15 +234,13 @@ def eq38(x, v, labels, sl_idx, follower, cent, wp, nav, slot, speed, eps_v, nn, 
         ey = slot[i, 1] - x[i, 1]
         s = speed[i] / (math.sqrt(ex * ex + ey * ey) + eps_v)
         vs = (s * ex, s * ey)
-        j = nn[i] if nn[i] >= 0 else i
-        a = sl_idx[i]
-        intra = _spring(x, i, x[j, 0], x[j, 1], g[F.G_KINTRA], g[F.G_DTHR], nn[i] >= 0)
-        fol = _spring(x, i, x[a, 0], x[a, 1], g[F.G_KL], g[F.G_D0], follower[i])
+        intra = _spring(x, i, nn_pos[i, 0], nn_pos[i, 1], g[F.G_KINTRA], g[F.G_DTHR], has_nn[i])
+        fol = _spring(x, i, sl_pos[i, 0], sl_pos[i, 1], g[F.G_KL], g[F.G_D0], follower[i])
         coh = _spring(x, i, cent[i, 0], cent[i, 1], g[F.G_KCOH], g[F.G_DC], True)
         for c in range(2):
             att = (k_p * (slot[i, c] - x[i, c]) + k_v * (vs[c] - v[i, c])) * sig[i, F.SIG_SLOT]
             path = k_path * (wp[i, c] - x[i, c]) if nav[i] else 0.0
-            vm = k_vl * (v[a, c] - v[i, c]) if follower[i] else 0.0
+            vm = k_vl * (sl_vel[i, c] - v[i, c]) if follower[i] else 0.0
             acc = 0.0 + att
             acc += sep[i, c]
             acc += path

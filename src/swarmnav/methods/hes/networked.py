@@ -39,7 +39,7 @@ import numpy as np
 from numba import njit
 
 from swarmnav.methods.hes import forces as F
-from swarmnav.methods.hes.control import _sub_rows
+from swarmnav.methods.hes.control import _sub_rows, eq38_sum
 from swarmnav.methods.hes.neighbours import neighbour_rows
 from swarmnav.methods.hes.parts.barriers import _reach2
 from swarmnav.methods.hes.report import report
@@ -169,30 +169,8 @@ def eq38_known(x, v, kx, heard, lab, sl_pos, sl_vel, follower, cent, nn, nn_pos,
     ir = separation_known(x, kx, heard, lab, g[F.G_KIR], g[F.G_DIR], g[F.G_DFLOOR], True)
     obs = F.lidar_repulsion_each(ring, cos_t, sin_t, g[F.G_KREP], g[F.G_RT], g[F.G_KB], g[F.G_GAMMA], g[F.G_KE],
                                  dsafe, g[F.G_DFLOOR], g[F.G_KE_RATIO] > 0.5)
-    k_p, k_v, k_path, k_vl = g[F.G_KP], g[F.G_KV], g[F.G_KPATH], g[F.G_KVL]
-    out = np.empty((n, 2))
-    for i in range(n):
-        ex = slot[i, 0] - x[i, 0]  # eq. (23)'s v*
-        ey = slot[i, 1] - x[i, 1]
-        s = speed[i] / (math.sqrt(ex * ex + ey * ey) + eps_v)
-        vs = (s * ex, s * ey)
-        intra = _spring(x, i, nn_pos[i, 0], nn_pos[i, 1], g[F.G_KINTRA], g[F.G_DTHR], nn[i] >= 0)
-        fol = _spring(x, i, sl_pos[i, 0], sl_pos[i, 1], g[F.G_KL], g[F.G_D0], follower[i])
-        coh = _spring(x, i, cent[i, 0], cent[i, 1], g[F.G_KCOH], g[F.G_DC], True)
-        for c in range(2):
-            att = (k_p * (slot[i, c] - x[i, c]) + k_v * (vs[c] - v[i, c])) * sig[i, F.SIG_SLOT]
-            path = k_path * (wp[i, c] - x[i, c]) if nav[i] else 0.0
-            vm = k_vl * (sl_vel[i, c] - v[i, c]) if follower[i] else 0.0
-            acc = 0.0 + att
-            acc += sep[i, c]
-            acc += path
-            acc += intra[c] * sig[i, F.SIG_NN]
-            acc += ir[i, c] if nav[i] else 0.0
-            acc += (fol[c] + vm) * sig[i, F.SIG_SL]
-            acc += coh[c] * sig[i, F.SIG_CENT]
-            acc += obs[i, c]
-            out[i, c] = acc
-    return out
+    return eq38_sum(x, v, nn_pos, sl_pos, sl_vel, nn >= 0, follower, cent, wp, nav, slot, speed, eps_v, sig,
+                    sep, ir, obs, g)
 
 
 @njit(cache=True)
@@ -293,20 +271,6 @@ def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, plann
         else:
             a = part.guard(step, a)
     return a
-
-
-@njit(cache=True, inline="always")
-def _spring(x, i, qx, qy, k, d0, on):
-    """Agent i's row of ``forces.spring`` toward ``(qx, qy)`` (zero unless ``on``)."""
-    if not on:
-        return 0.0, 0.0
-    ex = qx - x[i, 0]
-    ey = qy - x[i, 1]
-    d = math.sqrt(ex * ex + ey * ey)
-    if d > d0 and d > 0.0:
-        s = k * (d - d0) / d
-        return s * ex, s * ey
-    return 0.0, 0.0
 
 
 #: The name the leader publishes its plan under (``info["publish"]``, ``Observation.received``).
