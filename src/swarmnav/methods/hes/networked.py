@@ -41,7 +41,7 @@ from numba import njit
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import _sub_rows, eq38_sum
 from swarmnav.methods.hes.neighbours import neighbour_rows
-from swarmnav.methods.hes.parts.barriers import _reach2
+from swarmnav.methods.hes.parts.barriers import _reach2, keep_braking
 from swarmnav.methods.hes.report import report
 from swarmnav.methods.hes.step import Step
 
@@ -400,7 +400,6 @@ def agent_guard_known(a, x, v, kx, kv, heard, dt, a_brake, margin, a_max, passes
     pictures'). Returns the new (N, 2) command [m/s^2]."""
     n = x.shape[0]
     w = v + dt * a
-    out = np.empty((n, 2))
     for i in range(n):
         v2 = 0.0
         for j in range(n):
@@ -412,29 +411,7 @@ def agent_guard_known(a, x, v, kx, kv, heard, dt, a_brake, margin, a_max, passes
         for _ in range(passes):
             if not _brake_toward_pictured(w, x, kx, kv, heard, i, a_brake, margin, 0.0, 1e-12, reach2):
                 break
-    for i in range(n):  # the braking kept whole, the rest of the command scaled (barriers.agent_guard)
-        bx = (w[i, 0] - v[i, 0]) / dt - a[i, 0]
-        by = (w[i, 1] - v[i, 1]) / dt - a[i, 1]
-        if bx == 0.0 and by == 0.0:
-            out[i, 0] = a[i, 0]
-            out[i, 1] = a[i, 1]
-            continue
-        ax, ay = a[i, 0], a[i, 1]
-        tx, ty = ax + bx, ay + by
-        if tx * tx + ty * ty <= a_max * a_max:
-            out[i, 0], out[i, 1] = tx, ty
-            continue
-        bb = bx * bx + by * by
-        if bb >= a_max * a_max:
-            s = a_max / math.sqrt(bb)
-            out[i, 0], out[i, 1] = s * bx, s * by
-            continue
-        aa = ax * ax + ay * ay
-        ab = ax * bx + ay * by
-        lam = (-ab + math.sqrt(max(ab * ab - aa * (bb - a_max * a_max), 0.0))) / aa
-        lam = min(max(lam, 0.0), 1.0)
-        out[i, 0], out[i, 1] = bx + lam * ax, by + lam * ay
-    return out
+    return keep_braking(a, v, w, dt, a_max)  # the braking kept whole, the rest scaled
 
 
 # --------------------------------------------------------------------------- a subleader's report from its picture

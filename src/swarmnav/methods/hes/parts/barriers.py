@@ -227,6 +227,15 @@ def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4, ptr=None, idx=Non
         for _ in range(passes):
             if not _brake_toward_neighbours(w, x, v, i, a_brake, margin, 0.0, 1e-12, ptr, idx, reach2):
                 break
+    return keep_braking(a, v, w, dt, a_max)
+
+
+@njit(cache=True)
+def keep_braking(a, v, w, dt, a_max):
+    """The contact guard's last stage: each agent's braking correction ``b = (w - v) / dt - a`` kept
+    whole (up to ``a_max``) and the rest of the command scaled, ``b + lam a`` with the largest
+    ``lam`` in [0, 1] that keeps the norm <= ``a_max`` (:func:`agent_guard`). (N, 2) [m/s^2]."""
+    n = a.shape[0]
     out = np.empty((n, 2))
     for i in range(n):
         bx = (w[i, 0] - v[i, 0]) / dt - a[i, 0]
