@@ -249,55 +249,53 @@ class LscMethod:
         whose plan could come near: a pair whose initial trajectories' boxes are apart on some
         axis by more than both can travel over the horizon (v_max per axis) plus both radii cannot
         meet, and gets none."""
-        p = self.params
-        N, M = prev.shape[0], prev.shape[1]
+        N = prev.shape[0]
         out: list[list] = [[] for _ in range(N)]
-        lo = prev.reshape(N, -1, self.dim).min(axis=1)
-        hi = prev.reshape(N, -1, self.dim).max(axis=1)
-        reach = 2.0 * p.v_max * M * self.h + 2.0 * self.radius
+        box = self._boxes(prev)
         for i in range(N):
             for j in range(i + 1, N):
-                gap = np.maximum(lo[j] - hi[i], lo[i] - hi[j]).max()
-                if gap > reach:
-                    continue
-                fallback = prev[j, 0, 0] - prev[i, 0, 0]
-                if np.linalg.norm(fallback) < 1e-9:
-                    fallback = np.eye(self.dim)[0]
-                for m in range(M):
-                    nrm, rhs_i, _ = S.lsc_plane(prev[i, m], prev[j, m], self.radius, fallback)
-                    mid = 0.5 * (prev[i, m] + prev[j, m]) @ nrm  # (n + 1,) the plane through the midpoints
-                    rhs_j = -mid - (mid - rhs_i)  # j: -nrm . c <= -nrm . mid - d, with d = mid - rhs_i
+                for m, nrm, rhs_i, rhs_j in self._pair_planes(prev, i, j, box):
                     out[i].append((m, nrm, rhs_i))
                     out[j].append((m, -nrm, rhs_j))
+        return out
+
+    def _boxes(self, prev: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Each robot's bounding box of its initial trajectory (lower, upper: (N, D) [m]) and the
+        farthest two boxes can be apart and their robots still meet over the horizon [m]."""
+        N, M = prev.shape[0], prev.shape[1]
+        lo = prev.reshape(N, -1, self.dim).min(axis=1)
+        hi = prev.reshape(N, -1, self.dim).max(axis=1)
+        return lo, hi, 2.0 * self.params.v_max * M * self.h + 2.0 * self.radius
+
+    def _pair_planes(self, prev: np.ndarray, i: int, j: int, box) -> list[tuple[int, np.ndarray, np.ndarray, np.ndarray]]:
+        """The LSC planes of pair i < j per segment m: ``(m, nrm, rhs_i, rhs_j)``, robot i keeping
+        ``nrm . c <= rhs_i`` and robot j ``-nrm . c <= rhs_j``; none for a pair out of reach."""
+        lo, hi, reach = box
+        gap = np.maximum(lo[j] - hi[i], lo[i] - hi[j]).max()
+        if gap > reach:
+            return []
+        fallback = prev[j, 0, 0] - prev[i, 0, 0]
+        if np.linalg.norm(fallback) < 1e-9:
+            fallback = np.eye(self.dim)[0]
+        out = []
+        for m in range(prev.shape[1]):
+            nrm, rhs_i, _ = S.lsc_plane(prev[i, m], prev[j, m], self.radius, fallback)
+            mid = 0.5 * (prev[i, m] + prev[j, m]) @ nrm  # (n + 1,) the plane through the midpoints
+            out.append((m, nrm, rhs_i, -mid - (mid - rhs_i)))  # j: -nrm . c <= -nrm . mid - d, d = mid - rhs_i
         return out
 
     def _planes_of(self, r: int, prev: np.ndarray, present: np.ndarray) -> list[tuple[int, np.ndarray, np.ndarray]]:
         """Robot ``r``'s LSC planes against the robots it has heard (``present``), from its own
         picture ``prev`` (N, M, n + 1, D): :meth:`_planes`' row r, each pair computed in the same
         order (lower index first) and by the same formula."""
-        p = self.params
-        N, M = prev.shape[0], prev.shape[1]
         out: list = []
-        lo = prev.reshape(N, -1, self.dim).min(axis=1)
-        hi = prev.reshape(N, -1, self.dim).max(axis=1)
-        reach = 2.0 * p.v_max * M * self.h + 2.0 * self.radius
+        box = self._boxes(prev)
         for o in np.flatnonzero(present):
             if o == r:
                 continue
             i, j = (r, int(o)) if r < o else (int(o), r)
-            gap = np.maximum(lo[j] - hi[i], lo[i] - hi[j]).max()
-            if gap > reach:
-                continue
-            fallback = prev[j, 0, 0] - prev[i, 0, 0]
-            if np.linalg.norm(fallback) < 1e-9:
-                fallback = np.eye(self.dim)[0]
-            for m in range(M):
-                nrm, rhs_i, _ = S.lsc_plane(prev[i, m], prev[j, m], self.radius, fallback)
-                if r == i:
-                    out.append((m, nrm, rhs_i))
-                else:
-                    mid = 0.5 * (prev[i, m] + prev[j, m]) @ nrm
-                    out.append((m, -nrm, -mid - (mid - rhs_i)))
+            for m, nrm, rhs_i, rhs_j in self._pair_planes(prev, i, j, box):
+                out.append((m, nrm, rhs_i) if r == i else (m, -nrm, rhs_j))
         return out
 
     def _plan(self, r: int, prev: np.ndarray, planes, flown: int, present: np.ndarray | None = None) -> np.ndarray | None:
