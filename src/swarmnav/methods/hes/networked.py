@@ -41,7 +41,7 @@ from numba import njit
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import _sub_rows, eq38_sum
 from swarmnav.methods.hes.neighbours import neighbour_rows
-from swarmnav.methods.hes.parts.barriers import _reach2, keep_braking
+from swarmnav.methods.hes.parts.barriers import brake_reach2, keep_braking
 from swarmnav.methods.hes.report import report
 from swarmnav.methods.hes.step import Step
 
@@ -407,7 +407,7 @@ def agent_guard_known(a, x, v, kx, kv, heard, dt, a_brake, margin, a_max, passes
                 v2 = max(v2, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
             elif heard[i, j]:
                 v2 = max(v2, kv[i, j, 0] * kv[i, j, 0] + kv[i, j, 1] * kv[i, j, 1])
-        reach2 = _reach2(w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1], v2, a_brake, margin)
+        reach2 = brake_reach2(w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1], v2, a_brake, margin)
         for _ in range(passes):
             if not _brake_toward_pictured(w, x, kx, kv, heard, i, a_brake, margin, 0.0, 1e-12, reach2):
                 break

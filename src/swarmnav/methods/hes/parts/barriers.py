@@ -105,7 +105,7 @@ def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol, ptr, idx,
     ``c_max = sqrt(2 a_brake (max(d - margin, 0) + max(s_j, 0)^2 / (2 a_lead)))``;
     ``a_lead <= 0``: the two-sided bound of :func:`agent_guard`,
     ``c_max = sqrt(max(2 a_brake (d - margin) + s_j |s_j|, 0))``. Neighbours farther than
-    ``sqrt(reach2)`` [m] are skipped (a radius beyond which no bound can bind, :func:`_reach2`).
+    ``sqrt(reach2)`` [m] are skipped (a radius beyond which no bound can bind, :func:`brake_reach2`).
     """
     moved = False
     for t in range(ptr[i], ptr[i + 1]):
@@ -180,7 +180,7 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead, ptr=None, idx=No
 
 
 @njit(cache=True)
-def _reach2(w2, v2, a_brake, margin):
+def brake_reach2(w2, v2, a_brake, margin):
     """Squared distance [m^2] beyond which the two-sided bound of :func:`agent_guard` cannot bind
     an agent whose next velocity has squared norm ``w2`` (its projections never lengthen it) among
     neighbours of squared speed at most ``v2``: there ``c_max >= sqrt(2 a_brake (d - margin) - v2)``
@@ -223,7 +223,7 @@ def agent_guard(a, x, v, dt, a_brake, margin, a_max, passes=4, ptr=None, idx=Non
     for j in range(n):
         v2 = max(v2, v[j, 0] * v[j, 0] + v[j, 1] * v[j, 1])
     for i in range(n):
-        reach2 = _reach2(w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1], v2, a_brake, margin)
+        reach2 = brake_reach2(w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1], v2, a_brake, margin)
         for _ in range(passes):
             if not _brake_toward_neighbours(w, x, v, i, a_brake, margin, 0.0, 1e-12, ptr, idx, reach2):
                 break
