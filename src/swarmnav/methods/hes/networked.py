@@ -32,7 +32,6 @@ true states in their hooks and are refused on a network (``TRUE_STATE_PARTS``).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +40,7 @@ from numba import njit
 from swarmnav.methods.hes import forces as F
 from swarmnav.methods.hes.control import _sub_rows, eq38_sum
 from swarmnav.methods.hes.neighbours import neighbour_rows
-from swarmnav.methods.hes.parts.barriers import brake_reach2, keep_braking
+from swarmnav.methods.hes.parts.barriers import brake_pair, brake_reach2, keep_braking
 from swarmnav.methods.hes.report import report
 from swarmnav.methods.hes.step import Step
 
@@ -357,27 +356,8 @@ def _brake_toward_pictured(w, x, kx, kv, heard, i, a_brake, margin, a_lead, tol,
     for j in range(x.shape[0]):
         if j == i or not heard[i, j]:
             continue
-        ux = kx[i, j, 0] - x[i, 0]
-        uy = kx[i, j, 1] - x[i, 1]
-        if ux * ux + uy * uy > reach2:
-            continue
-        d = math.sqrt(ux * ux + uy * uy)
-        if d <= 0.0:
-            continue
-        ux /= d
-        uy /= d
-        c = w[i, 0] * ux + w[i, 1] * uy
-        if c <= 0.0:
-            continue
-        sj = kv[i, j, 0] * ux + kv[i, j, 1] * uy
-        if a_lead > 0.0:
-            vj = max(sj, 0.0)
-            c_max = math.sqrt(2.0 * a_brake * (max(d - margin, 0.0) + vj * vj / (2.0 * a_lead)))
-        else:
-            c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
-        if c > c_max + tol:
-            w[i, 0] -= (c - c_max) * ux
-            w[i, 1] -= (c - c_max) * uy
+        if brake_pair(w, i, x[i, 0], x[i, 1], kx[i, j, 0], kx[i, j, 1], kv[i, j, 0], kv[i, j, 1], a_brake, margin,
+                      a_lead, tol, reach2):
             moved = True
     return moved
 

@@ -112,27 +112,8 @@ def _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, tol, ptr, idx,
         j = idx[t]
         if j == i:
             continue
-        ux = x[j, 0] - x[i, 0]
-        uy = x[j, 1] - x[i, 1]
-        if ux * ux + uy * uy > reach2:
-            continue
-        d = math.sqrt(ux * ux + uy * uy)
-        if d <= 0.0:
-            continue
-        ux /= d
-        uy /= d
-        c = w[i, 0] * ux + w[i, 1] * uy
-        if c <= 0.0:
-            continue
-        sj = v[j, 0] * ux + v[j, 1] * uy
-        if a_lead > 0.0:
-            vj = max(sj, 0.0)
-            c_max = math.sqrt(2.0 * a_brake * (max(d - margin, 0.0) + vj * vj / (2.0 * a_lead)))
-        else:
-            c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
-        if c > c_max + tol:
-            w[i, 0] -= (c - c_max) * ux
-            w[i, 1] -= (c - c_max) * uy
+        if brake_pair(w, i, x[i, 0], x[i, 1], x[j, 0], x[j, 1], v[j, 0], v[j, 1], a_brake, margin, a_lead, tol,
+                      reach2):
             moved = True
     return moved
 
@@ -177,6 +158,36 @@ def agent_barrier(a, x, v, active, dt, a_brake, margin, a_lead, ptr=None, idx=No
         if active[i]:
             _brake_toward_neighbours(w, x, v, i, a_brake, margin, a_lead, 0.0, ptr, idx)
     return (w - v) / dt
+
+
+@njit(cache=True, inline="always")
+def brake_pair(w, i, xi, yi, xj, yj, vxj, vyj, a_brake, margin, a_lead, tol, reach2):
+    """One neighbour's bound of :func:`_brake_toward_neighbours` on agent i's next velocity ``w[i]``
+    (in place), the neighbour at ``(xj, yj)`` moving at ``(vxj, vyj)``; whether it braked. Shared by
+    the ideal guard and the network's (each agent's picture of the others)."""
+    ux = xj - xi
+    uy = yj - yi
+    if ux * ux + uy * uy > reach2:
+        return False
+    d = math.sqrt(ux * ux + uy * uy)
+    if d <= 0.0:
+        return False
+    ux /= d
+    uy /= d
+    c = w[i, 0] * ux + w[i, 1] * uy
+    if c <= 0.0:
+        return False
+    sj = vxj * ux + vyj * uy
+    if a_lead > 0.0:
+        vj = max(sj, 0.0)
+        c_max = math.sqrt(2.0 * a_brake * (max(d - margin, 0.0) + vj * vj / (2.0 * a_lead)))
+    else:
+        c_max = math.sqrt(max(2.0 * a_brake * (d - margin) + sj * abs(sj), 0.0))
+    if c > c_max + tol:
+        w[i, 0] -= (c - c_max) * ux
+        w[i, 1] -= (c - c_max) * uy
+        return True
+    return False
 
 
 @njit(cache=True)
