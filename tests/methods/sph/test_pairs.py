@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize
 
 import swarmnav
-from swarmnav.methods.sph.parts.pairs import obstacle_constraints, pair_constraints, pair_guard
+from swarmnav.methods.sph.parts.pairs import bound_rows, obstacle_constraints, pair_constraints, pair_guard
 from swarmnav.world import from_dict
 
 D_SAFE, DECEL, GAMMA, V_MAX, DT = 0.42, 0.75, 2.0, 1.0, 0.01
@@ -60,6 +60,60 @@ def test_guard_gives_each_robot_the_nearest_command_meeting_its_constraints(crow
             assert np.allclose(out[r], ref, atol=1e-6), (r, out[r], ref)
             assert all(g @ out[r] <= c + 1e-8 for g, c in rows[r])
     assert changed == moved
+
+
+@settings(max_examples=60, deadline=None)
+@given(crowds)
+def test_bound_keeps_each_moved_command_within_a_max_and_nearest_there(crowd):
+    x, v, a0 = (3.0 * np.array(c, dtype=float) if k == 2 else np.array(c, dtype=float) for k, c in enumerate(crowd))
+    d = np.linalg.norm(x[:, None] - x[None], axis=2) + 10 * np.eye(len(x))
+    if d.min() < D_SAFE + 0.01:
+        return
+    a_max = 1.5
+    g_box, c_box = bound_rows(2, a_max)
+    out, changed, infeasible = pair_guard(a0, x, v, D_SAFE, DECEL, GAMMA, a_max, V_MAX, DT, bound=(g_box, c_box))
+    free, _, _ = pair_guard(a0, x, v, D_SAFE, DECEL, GAMMA, a_max, V_MAX, DT)
+    rows = _rows(a0, x, v, a_max)
+    for r in range(len(x)):
+        if np.linalg.norm(free[r]) <= a_max * np.cos(np.pi / 16) or np.array_equal(free[r], a0[r]):
+            assert np.array_equal(out[r], free[r])  # inside the polygon (or untouched): the bound changes nothing
+            continue
+        cut = a0[r] * min(1.0, a_max / max(np.linalg.norm(a0[r]), 1e-300))
+        both = rows[r] + list(zip(g_box, c_box))
+        ref, success = _nearest(cut, both)
+        if success and all(g @ ref <= c + 1e-7 for g, c in both):  # feasible within the bound
+            assert np.linalg.norm(out[r]) <= a_max + 1e-9  # what the dynamics fly unchanged
+            assert np.allclose(out[r], ref, atol=1e-6), (r, out[r], ref)
+
+
+def test_bound_rows_lie_inside_the_dynamics_bound():
+    for dim in (2, 3):
+        g, c = bound_rows(dim, 1.5)
+        assert np.allclose(np.linalg.norm(g, axis=1), 1.0)
+        # the polytope's extreme point in any direction u lies within the ball: c / max_k g_k . u <= a_max
+        u = np.random.default_rng(0).normal(size=(5000, dim))
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        assert np.max(c[0] / np.max(u @ g.T, axis=1)) <= 1.5 + 1e-12
+        assert c[0] > 0.9 * 1.5  # and does not give much of it away
+    g, c = bound_rows(2, 1.5, "axis")
+    assert np.array_equal(c, np.full(4, 1.5))
+
+
+def test_bound_stops_a_pressed_robot_the_dynamics_would_have_cut_into_its_neighbour():
+    """Robot 0 closes on robot 1 (0.64 m away, closing at 1.09 m/s along their line); the nearest
+    command meeting the pair's constraint lies beyond a_max, and the dynamics' cut toward 0 breaks
+    it; with the bound the command meets it within a_max. (Found by a random search.)"""
+    x = np.array([[-0.1, 0.3], [-0.5, -0.2], [-0.8, -0.7]])
+    v = np.array([[-0.6, -0.2], [-0.1, 0.8], [-0.4, -1.0]])
+    a0 = np.array([[1.0, -1.3], [-1.2, 1.4], [0.8, -0.5]])
+    rows = _rows(a0, x, v, 1.5)
+    free, _, _ = pair_guard(a0, x, v, D_SAFE, DECEL, GAMMA, 1.5, V_MAX, DT)
+    assert np.linalg.norm(free[0]) > 1.5  # beyond what the dynamics fly
+    cut = free[0] * 1.5 / np.linalg.norm(free[0])
+    assert any(g @ cut > c + 1e-9 for g, c in rows[0])  # and the cut breaks the constraint
+    out, _, infeasible = pair_guard(a0, x, v, D_SAFE, DECEL, GAMMA, 1.5, V_MAX, DT, bound=bound_rows(2, 1.5))
+    assert infeasible == 0 and np.linalg.norm(out[0]) <= 1.5
+    assert all(g @ out[0] <= c + 1e-9 for g, c in rows[0])
 
 
 def _close_in(guard: bool, n: int = 40, seconds: float = 12.0, dt: float = 0.01) -> float:

@@ -37,7 +37,7 @@ from swarmnav.methods.sph.params import SphParams, for_dim
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.parts.guard import band_guard
 from swarmnav.methods.sph.networked import directed_forces, directed_yield_rates, heard_pairs
-from swarmnav.methods.sph.parts.pairs import pair_guard, pair_guard_known
+from swarmnav.methods.sph.parts.pairs import bound_rows, pair_guard, pair_guard_known
 from swarmnav.methods.sph.parts.retime import retimed
 from swarmnav.methods.sph.parts.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
@@ -268,12 +268,13 @@ class Sph:
             body = self.scenario.rules.body_radius
             safe = 2.0 * body + p.pair_margin
             walls = (d, grad, body + p.pair_margin) if p.pair_obstacles else None
+            bound = bound_rows(x.shape[1], p.a_max, p.clip) if p.pair_bound else None
             if view is None:
                 a, changed, infeasible = pair_guard(a, x, v, safe, p.pair_decel, p.pair_gamma, p.a_max, p.v_max, p.dt,
-                                                    walls)
+                                                    walls, bound)
             else:
                 a, changed, infeasible = pair_guard_known(a, x, v, kx, kv, heard, safe, p.pair_decel, p.pair_gamma,
-                                                          p.a_max, p.v_max, p.dt, walls)
+                                                          p.a_max, p.v_max, p.dt, walls, bound)
             self._pair_guarded += changed
             self._pair_infeasible += infeasible
         return a, {"labels": labels, "events": events}

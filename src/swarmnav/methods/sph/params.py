@@ -139,6 +139,10 @@ class SphParams:
         "pair_guard: each robot's QP also keeps the barrier against its nearest obstacle (ESDF value and "
         "gradient; stop body radius + pair_margin from its surface, the robot keeping the whole bound), "
         "so that the command the guard moves never drives a robot into a trunk")
+    pair_bound: bool = param(False, "", None, "ours",
+        "pair_guard: each robot's QP also keeps its command within the dynamics' a_max (the box of "
+        "clip=axis exactly, the disc of clip=norm as an inscribed 16-gon, 2 % short of it), so the "
+        "dynamics' cut never undoes what the guard asked")
     crowd_size: int = param(30, "", "[1, inf)", "ours",
         "with by_dim (the default build), rep_cutoff, crowd_guard and pair_guard act on 2-D swarms of this many "
         "robots or more; smaller swarms fly the paper's repulsion and no crowd guard (Table II's 15 and "

@@ -26,9 +26,17 @@ rest is safe for every pair (every bound >= 0), the dynamics' cut of the result 
 it safe (the feasible set is convex and holds 0). Pairs whose constraint no command within
 ``a_max`` can break are left out. A robot whose constraints no command meets (a pair already too
 close, pressed from both sides) gets the command that breaks them least, and is counted.
+
+The dynamics cut every command to ``a_max``; a command the guard moved beyond it would be cut
+toward 0, which can break a constraint the moved command met. With ``bound`` rows (:func:`bound_rows`:
+the box of a per-axis clamp exactly, the disc of a norm clamp as an inscribed polygon / polytope),
+a robot whose nearest point lies beyond ``a_max`` is solved again with the bound's rows added, so
+its command meets every constraint within what the dynamics will fly, when any command does.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 from numba import njit
@@ -98,21 +106,54 @@ def obstacle_constraints(v: np.ndarray, clearance: np.ndarray, away: np.ndarray,
     return near[keep], n[keep], b[keep]
 
 
+@functools.lru_cache(maxsize=16)
+def bound_rows(dim: int, a_max: float, clip: str = "norm", sides: int = 16) -> tuple[np.ndarray, np.ndarray]:
+    """Half-spaces ``g . a <= c`` (normals (K, D), bounds (K,)) whose intersection lies inside
+    the dynamics' command bound: for ``clip="axis"`` the box ``|a_k| <= a_max`` exactly; for
+    ``"norm"`` in 2-D the regular ``sides``-gon inscribed in the disc of radius ``a_max`` (its
+    faces at ``a_max cos(pi / sides)``), in 3-D the polytope of ``4 sides`` Fibonacci-sphere normals
+    whose faces stand at ``a_max`` times the cosine of their covering angle (every vertex within
+    the ball; the covering angle bounded from 20,000 directions plus the sampling's spacing).
+    Cached: the arrays are shared, not to be written."""
+    if clip == "axis":
+        eye = np.eye(dim)
+        return np.vstack([eye, -eye]), np.full(2 * dim, float(a_max))
+    if dim == 2:
+        t = 2.0 * np.pi * np.arange(sides) / sides
+        return np.column_stack([np.cos(t), np.sin(t)]), np.full(sides, a_max * np.cos(np.pi / sides))
+    g = _fibonacci(4 * sides)
+    probe = _fibonacci(20000)
+    cover = np.arccos(np.clip(np.min(np.max(probe @ g.T, axis=1)), -1.0, 1.0))
+    spacing = np.sqrt(4.0 * np.pi / 20000)  # [rad] the probes' own spacing, added as a margin
+    return g, np.full(len(g), a_max * np.cos(min(cover + spacing, np.pi / 2)))
+
+
+def _fibonacci(k: int) -> np.ndarray:
+    """``k`` unit vectors spread evenly over the sphere (the Fibonacci lattice)."""
+    i = np.arange(k) + 0.5
+    z = 1.0 - 2.0 * i / k
+    r = np.sqrt(1.0 - z * z)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * i
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
 def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, gamma: float,
                a_max: float, v_max: float, dt: float,
-               obstacles: tuple[np.ndarray, np.ndarray, float] | None = None) -> tuple[np.ndarray, int, int]:
+               obstacles: tuple[np.ndarray, np.ndarray, float] | None = None,
+               bound: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, int, int]:
     """Commands ``a`` (N, D) [m/s^2] changed as little as possible so that no pair closes faster
     than both robots can brake before ``d_safe`` [m] (module docstring); how many robots'
     commands changed, and for how many no command met every constraint. ``obstacles`` =
     ``(clearance, away, d_safe_obstacle)`` adds a row per robot for its nearest obstacle
-    (:func:`obstacle_constraints`), so that no command the guard moves drives a robot into one."""
+    (:func:`obstacle_constraints`), so that no command the guard moves drives a robot into one.
+    ``bound``: :func:`bound_rows`, so that a moved command lies within what the dynamics fly."""
     pairs, n, b = pair_constraints(x, v, d_safe, decel, gamma, a_max, v_max, dt)
     # robot i: (-n) . a_i <= b / 2; robot j: n . a_j <= b / 2
     rows, normals, bounds = [pairs[:, 0], pairs[:, 1]], [-n, n], [0.5 * b, 0.5 * b]
-    return _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt)
+    return _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt, bound)
 
 
-def _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt):
+def _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt, bound=None):
     """The guard's QPs over the given rows, plus the obstacle rows when ``obstacles`` is given."""
     if obstacles is not None:
         r, n, b = obstacle_constraints(v, obstacles[0], obstacles[1], obstacles[2], decel, gamma, a_max, dt)
@@ -125,14 +166,18 @@ def _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt)
     rows, normals, bounds = rows[order], normals[order], bounds[order]
     starts = np.searchsorted(rows, np.arange(a.shape[0] + 1))
     out = np.ascontiguousarray(a, dtype=np.float64).copy()
-    changed, infeasible = _guard(out, normals, bounds, starts, a_max)
+    if bound is None:
+        box_n, box_c = np.zeros((0, a.shape[1])), np.zeros(0)
+    else:
+        box_n, box_c = np.ascontiguousarray(bound[0], dtype=np.float64), np.ascontiguousarray(bound[1], dtype=np.float64)
+    changed, infeasible = _guard(out, normals, bounds, starts, a_max, box_n, box_c)
     return out, changed, infeasible
 
 
 def pair_guard_known(a: np.ndarray, x: np.ndarray, v: np.ndarray, kx: np.ndarray, kv: np.ndarray,
                      heard: np.ndarray, d_safe: float, decel: float, gamma: float, a_max: float, v_max: float,
-                     dt: float, obstacles: tuple[np.ndarray, np.ndarray, float] | None = None
-                     ) -> tuple[np.ndarray, int, int]:
+                     dt: float, obstacles: tuple[np.ndarray, np.ndarray, float] | None = None,
+                     bound: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, int, int]:
     """:func:`pair_guard` on a network (docs/network.md): robot i keeps its half of the bound of
     every pair (i, j) it has heard, from its own state and its picture ``kx[i, j]``, ``kv[i, j]``
     of robot j (N, N, D), trusting j to keep the other half. Obstacles are its own sensing, as in
@@ -145,13 +190,15 @@ def pair_guard_known(a: np.ndarray, x: np.ndarray, v: np.ndarray, kx: np.ndarray
     i, j, dp = i[near], j[near], dp[near]
     n, b = _barrier(dp, v[i] - kv[i, j], d_safe, decel, gamma, dt)
     keep = b < 2.0 * a_max
-    return _solve_rows(a, [i[keep]], [-n[keep]], [0.5 * b[keep]], v, obstacles, decel, gamma, a_max, dt)
+    return _solve_rows(a, [i[keep]], [-n[keep]], [0.5 * b[keep]], v, obstacles, decel, gamma, a_max, dt, bound)
 
 
 @njit(cache=True)
-def _guard(a, normals, bounds, starts, a_max):
+def _guard(a, normals, bounds, starts, a_max, box_n, box_c):
     """Each robot's command, cut to ``a_max``, moved in place to the nearest point of its
-    half-spaces ``g . a <= c`` (rows ``starts[r]:starts[r + 1]``) when it breaks one."""
+    half-spaces ``g . a <= c`` (rows ``starts[r]:starts[r + 1]``) when it breaks one; when that
+    point breaks one of the bound's rows ``box_n . a <= box_c`` (none: no rows), solved again
+    with them added."""
     n_robots, dim = a.shape
     changed = 0
     infeasible = 0
@@ -167,6 +214,20 @@ def _guard(a, normals, bounds, starts, a_max):
             continue
         changed += 1
         best, ok = _nearest(p0, normals, bounds, lo, hi)
+        k = box_n.shape[0]
+        if ok and k > 0 and _worst(best, box_n, box_c, 0, k) > TOL:
+            m = hi - lo
+            both_n = np.empty((m + k, normals.shape[1]))
+            both_c = np.empty(m + k)
+            both_n[:m] = normals[lo:hi]
+            both_c[:m] = bounds[lo:hi]
+            both_n[m:] = box_n
+            both_c[m:] = box_c
+            inner, inside = _nearest(p0, both_n, both_c, 0, m + k)
+            if inside:
+                best = inner
+            else:  # no command within the bound meets every constraint: as without the bound
+                ok = False
         if not ok:
             infeasible += 1
         a[r] = best
