@@ -150,12 +150,34 @@ def _cmd_methods(args) -> int:
     from swarmnav.methods import registry
 
     if args.name is None:
+        plugins = set(registry.plugins())
         for name in registry.names():
-            print(f"{name:10s} {registry.spec(name).description}")
+            print(f"{name:10s} {registry.spec(name).description}" + ("  [plugin]" if name in plugins else ""))
         print("swarmnav methods NAME lists a method's parameters: default, unit, valid range, source")
+        for why in registry.plugin_errors():  # a broken plugin is named; the others fly as ever
+            print(f"swarmnav: warning: {why}", file=sys.stderr)
         return 0
     _print_params(registry.spec(args.name), sys.stdout)
     return 0
+
+
+def _cmd_check_method(args) -> int:
+    from swarmnav.sim.check import check_method, scenes_of
+
+    scenes = None
+    if args.scenes:
+        scenes = [x.strip() for x in args.scenes.split(",") if x.strip()]
+        known = scenes_of(args.name)
+        unknown = [x for x in scenes if x not in known]
+        if unknown:
+            raise ConfigError(f"--scenes: {', '.join(unknown)} not among the scenes {args.name} can fly "
+                              f"({', '.join(known)})")
+    if args.steps is not None and args.steps < 1:
+        raise ConfigError(f"--steps must be >= 1, got {args.steps}")
+    verdicts = check_method(args.name, scenes, args.steps, report=lambda v: print(v.line(), flush=True))
+    failed = sum(not v.ok for v in verdicts)
+    print(f"{args.name}: {'conforms' if not failed else f'{failed} of {len(verdicts)} checks failed'}")
+    return 0 if not failed else 1
 
 
 def _print_params(spec, out) -> None:
@@ -450,6 +472,12 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("methods", help="list registered methods, or one method's parameters")
     s.add_argument("name", nargs="?", help="a method: list its parameters (default, unit, valid range, source)")
     s.set_defaults(fn=_cmd_methods)
+
+    s = sub.add_parser("check-method", help="the conformance checks of a method (a plugin's, or module:Factory)")
+    s.add_argument("name", help="a registered method, or module:Factory / path/to/file.py:Factory")
+    s.add_argument("--scenes", metavar="A,B", help="only these of the scenes the method can fly (default: all)")
+    s.add_argument("--steps", type=int, help="steps of each scene run (default: 2 s of the method's steps, at least 40)")
+    s.set_defaults(fn=_cmd_check_method)
 
     s = sub.add_parser("run", help="run one simulation and write a run directory")
     s.add_argument("--method", required=True)
