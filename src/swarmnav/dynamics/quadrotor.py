@@ -288,6 +288,8 @@ def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, ene
                 elif cmd[c] >= wmax:
                     cmd[c] = wmax
                     at_bound = True
+                if tau <= 0.0:  # no lag: the rotor is at its command from the step's start
+                    w0[c] = cmd[c]
                 wh[c] = cmd[c] + (w0[c] - cmd[c]) * e_half
                 we[c] = cmd[c] + (w0[c] - cmd[c]) * e_full
             if at_bound:
