@@ -111,6 +111,10 @@ def test_controller_reaches_a_position_step(name):
     np.testing.assert_allclose(p, goal, atol=0.01)
     np.testing.assert_allclose(v, 0.0, atol=0.01)
     assert not f.flipped[0] and 5 < f.tilt_max_deg[0] < 60
+    R = f.attitude[0]  # a rotation, level again with yaw 0 at rest
+    np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(R, np.eye(3), atol=1e-2)  # within ~0.6 deg
+    np.testing.assert_allclose(f.thrust, f.airframe.mass * GRAVITY, rtol=1e-3)
 
 
 def _scenario(n, rng):
