@@ -157,12 +157,14 @@ def _filter(T: float, dt: float, second: bool):
         c = np.array([1.0])
     m = A.shape[0]
     P = solve_continuous_lyapunov(A, -B @ B.T)  # stationary covariance: A P + P A' + B B' = 0
-    # Van Loan: expm([[-A, BB'], [0, A']] dt) = [[., F12], [0, F22]], Phi = F22', Q_d = Phi F12
-    M = np.zeros((2 * m, 2 * m))
-    M[:m, :m], M[:m, m:], M[m:, m:] = -A, B @ B.T, A.T
-    F = expm(M * dt)
-    phi = F[m:, m:].T
-    Q = phi @ F[:m, m:]
+    phi = expm(A * dt)
+    if dt <= T:  # Van Loan: expm([[-A, BB'], [0, A']] dt) = [[., F12], [0, F22]], Q_d = F22' F12
+        M = np.zeros((2 * m, 2 * m))
+        M[:m, :m], M[:m, m:], M[m:, m:] = -A, B @ B.T, A.T
+        F = expm(M * dt)
+        Q = F[m:, m:].T @ F[:m, m:]
+    else:  # a step longer than the filter's memory: Q_d = P - Phi P Phi' (no cancellation, exp(-A dt) would overflow)
+        Q = P - phi @ P @ phi.T
     Q = 0.5 * (Q + Q.T)
     c = c / math.sqrt(c @ P @ c)
     return phi, _sqrt_psd(Q), _sqrt_psd(P), c
