@@ -1,7 +1,9 @@
 """Rotor downwash: the air velocity [m/s] each vehicle sits in from the wakes of the vehicles above it.
 
 Each vehicle's rotors act as one equivalent actuator disc of area A = n_rotors pi r^2 (radius
-R = sqrt(n_rotors) r) and thrust T, its wake a vertical round jet below it. The model joins two
+R = sqrt(n_rotors) r) and thrust T, its wake a vertical round jet below it. Far below, a round
+jet depends only on its momentum flux (the thrust), so the one disc is exact there; within a few
+rotor radii, where the rotors' wakes are still apart, it is an approximation. The model joins two
 classical results, both in closed form:
 
 Near wake: momentum theory for the hovering disc (Leishman, Principles of Helicopter
