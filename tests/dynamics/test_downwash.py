@@ -10,7 +10,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmnav.dynamics.downwash import DownwashParams, downwash_air, downwash_params, induced_velocity
+from scipy.integrate import quad
+
+from swarmnav.dynamics.downwash import (DownwashParams, descent_time, downwash_air, downwash_params,
+                                         induced_velocity)
 from swarmnav.errors import ConfigError
 
 R_ROT = 0.0231  # [m] Crazyflie 2.x rotor radius
@@ -25,8 +28,14 @@ def below(depth: float, radial: float = 0.0, thrust: float = T_HOVER, **kw) -> f
     return float(downwash_air(pos, np.array([thrust, T_HOVER]), R_ROT, **kw)[1, 2])
 
 
-def oracle(pos, thrust, r, n_rot=4, p=DownwashParams()):
-    """The model's equations pair by pair (module docstring of downwash), in plain Python."""
+def centreline(z, vh, R, decay=5.8):
+    """U_c(z) [m/s]: the smaller of the vortex-cylinder near wake and the round jet."""
+    return min(vh * (1 + z / math.sqrt(z * z + R * R)), 2 * vh * decay * math.sqrt(2) * R / z)
+
+
+def oracle(pos, thrust, r, n_rot=4, p=DownwashParams(), carry=None):
+    """The model's equations pair by pair (module docstring of downwash), in plain Python; the
+    carried wake's descent time by numerical quadrature of dz / U_c."""
     R = math.sqrt(n_rot) * r
     out = np.zeros_like(pos)
     for i in range(len(pos)):
@@ -36,9 +45,14 @@ def oracle(pos, thrust, r, n_rot=4, p=DownwashParams()):
                 continue
             vh = math.sqrt(thrust[j] / (2 * p.rho * n_rot * math.pi * r * r))
             near = vh * (1 + z / math.sqrt(z * z + R * R))
-            uc = min(near, 2 * vh * p.decay * math.sqrt(2) * R / z)
+            uc = centreline(z, vh, R, p.decay)
             half2 = 2 * math.log(2) * R * R * vh * near / (uc * uc)
-            rr = (pos[i][0] - pos[j][0]) ** 2 + (pos[i][1] - pos[j][1]) ** 2
+            cx, cy = pos[j][0], pos[j][1]
+            if carry is not None:
+                tau = quad(lambda q: 1 / centreline(q, vh, R, p.decay), 0, z, points=[8.2325 * R], limit=200,
+                           epsabs=0, epsrel=1e-12)[0]
+                cx, cy = cx + carry[j][0] * tau, cy + carry[j][1] * tau
+            rr = (pos[i][0] - cx) ** 2 + (pos[i][1] - cy) ** 2
             out[i][2] -= uc * math.exp(-math.log(2) * rr / half2)
     return out
 
@@ -125,6 +139,38 @@ def test_vectorised_kernel_equals_the_double_loop():
     # a hexarotor of a 1 kg class, with its own disc
     np.testing.assert_allclose(downwash_air(pos, 10 * thrust, 0.12, 6), oracle(pos, 10 * thrust, 0.12, 6),
                                rtol=1e-12, atol=1e-15)
+
+
+def test_carried_wake_lies_where_the_air_took_it():
+    # descent time: the integral of dz / U_c, against quadrature of the kernel's own centreline
+    for z in (0.02, 0.3, 1.0, 4.0):
+        want = quad(lambda q: -1 / below(q), 0, z, points=[8.2325 * R_EQ], limit=200, epsrel=1e-12)[0]
+        assert descent_time(z, V_H, R_ROT) == pytest.approx(want, rel=1e-8)
+    # a 3 m/s wind toward +x: at 1 m below the wake's axis is 3 tau downwind, with the centreline value
+    z, wind = 1.0, np.array([3.0, 0.0, 0.0])
+    shift = 3.0 * descent_time(z, V_H, R_ROT)
+    src = np.array([0.0, 0.0, 2.0])
+    xs = np.linspace(0.0, 2 * shift, 201)
+    w = np.array([downwash_air(np.array([src, [x, 0.0, 2.0 - z]]), np.array([T_HOVER, 0.0]), R_ROT,
+                               carry=wind)[1, 2] for x in xs])
+    assert xs[np.argmin(w)] == pytest.approx(shift, abs=xs[1])
+    assert w.min() == pytest.approx(below(z), rel=1e-4)
+    # zero relative air: the vertical wake, bit for bit
+    pos = np.random.default_rng(2).uniform(0, 1, (20, 3))
+    np.testing.assert_array_equal(downwash_air(pos, np.full(20, T_HOVER), R_ROT, carry=np.zeros(3)),
+                                  downwash_air(pos, np.full(20, T_HOVER), R_ROT))
+
+
+def test_carried_wake_equals_the_double_loop():
+    rng = np.random.default_rng(8)
+    n = 20
+    pos = np.column_stack([rng.uniform(0, 1.0, (n, 2)), rng.uniform(0, 2.0, n)])
+    thrust = rng.uniform(0.1, 0.6, n)
+    carry = rng.normal(0, 1.0, (n, 3))
+    got = downwash_air(pos, thrust, R_ROT, carry=carry)
+    want = oracle(pos, thrust, R_ROT, carry=carry)
+    assert np.count_nonzero(np.abs(want[:, 2]) > 1e-3) > 5
+    np.testing.assert_allclose(got, want, rtol=1e-7, atol=1e-12)
 
 
 coords = st.integers(-300, 300).map(lambda k: k / 100)  # [m], a 1 cm grid: level stays level when shifted
