@@ -140,7 +140,8 @@ def downwash_air(pos: np.ndarray, thrust: np.ndarray, rotor_radius: float, n_rot
     Returns:
         (N, d): downward (-z) air velocity, the sum of the sources' wakes u(z, r) (module docstring);
         a vehicle does not wash itself, and one level with or above a source, or more than
-        ``params.cutoff`` below it, gets nothing from it. Dense O(N^2) pairs: 0.13 ms at N = 100 (0.43 ms carried), 42 ms at N = 1000 (one core).
+        ``params.cutoff`` below it, gets nothing from it. Dense O(N^2) pairs: 0.13 ms at N = 100
+        (0.43 ms carried), 42 ms at N = 1000 (one core).
     """
     pos = np.asarray(pos, dtype=np.float64)
     n, d = pos.shape
