@@ -98,6 +98,7 @@ def test_zero_gust_is_the_constant_mean_wind_exactly():
     want = np.tile([6.0 * math.cos(math.radians(30.0)), 6.0 * math.sin(math.radians(30.0)), 0.0], (5, 1))
     for k in range(50):
         np.testing.assert_array_equal(wind.air(k * 0.1, np.zeros((5, 3))), want)
+        np.testing.assert_array_equal(wind.gust(), np.zeros((5, 3)))
 
 
 @given(speed=st.floats(0.0, 30.0), direction=st.floats(-360.0, 360.0), dt=st.floats(1e-3, 1.0),

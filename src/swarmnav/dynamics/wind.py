@@ -211,7 +211,9 @@ class Wind:
         self.x_own = self.rng_own.standard_normal((self.n, 5)) @ L0.T if self.b > 0 else None
 
     def gust(self) -> np.ndarray:
-        """The gust (N, 3) [m/s] of the state held, world axes."""
+        """The gust (N, 3) [m/s] of the state held, world axes (zeros without turbulence)."""
+        if not self.turbulent:
+            return np.zeros((self.n, 3))
         g = self.a * (self.x_shared @ self.out)
         if self.x_own is not None:
             g = g + self.b * (self.x_own @ self.out)
