@@ -44,9 +44,10 @@ right but overstated.
 
 Validity: a hovering source. The wake's axis is vertical (or carried as above): a tilted source
 is not modelled, nor the entrainment's radial inflow or the turbulence of the wake; wakes of
-several sources are summed (an upper bound: jets do not superpose linearly). Measured multirotor wakes decay sooner
-than the jet law in the far field; ``cutoff`` ends each wake at a stated depth. A vehicle level
-with or above a source feels nothing of it (the inflow above a disc is neglected).
+several sources are summed (an upper bound: jets do not superpose linearly). The jet law holds
+in still, quiet air; ambient turbulence mixes a real wake out sooner, and ``cutoff`` ends each
+wake at a stated depth. A vehicle level with or above a source feels nothing of it (the inflow
+above a disc is neglected).
 """
 
 from __future__ import annotations
