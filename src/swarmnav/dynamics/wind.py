@@ -4,8 +4,8 @@ Mean wind. ``speed`` [m/s] in the horizontal plane, blowing TOWARD ``direction``
 counter-clockwise from the scene's +x axis (a scene has no north, so the meteorological "from"
 bearing would only add a sign flip): mean = speed (cos direction, sin direction, 0).
 
-Turbulence. The Dryden form of MIL-F-8785C (Sec. 3.7.2, low altitude, h < 1000 ft) and
-MIL-HDBK-1797: three zero-mean Gaussian gust components in the wind axes (u along the mean wind,
+Turbulence. The Dryden form of MIL-F-8785C's continuous random turbulence at low altitude
+(h < 1000 ft), as MIL-HDBK-1797 repeats it: three zero-mean Gaussian gust components in the wind axes (u along the mean wind,
 v horizontal and 90 deg counter-clockwise from it, w vertical, +z) with the one-sided spectra in
 temporal frequency omega [rad/s], for a vehicle that sees the frozen turbulence field carried past
 it at speed V,
@@ -77,10 +77,10 @@ class WindParams:
                          "mean wind speed, horizontal")
     direction: float = param(0.0, "deg", "[-360, 360]", "ours",
                              "direction the mean wind blows toward, counter-clockwise from +x")
-    gust: float = param(0.0, "m/s", "[0, 10]", "MIL-F-8785C 3.7.2 (Dryden)",
+    gust: float = param(0.0, "m/s", "[0, 10]", "MIL-F-8785C (Dryden form)",
                         "standard deviation of each horizontal gust component (sigma_u = sigma_v); the "
                         "vertical sigma_w follows from the standard's ratio at the altitude; 0: no turbulence")
-    altitude: float = param(10.0, "m", "(0, 304.8]", "MIL-F-8785C 3.7.2",
+    altitude: float = param(10.0, "m", "(0, 304.8]", "MIL-F-8785C (low altitude)",
                             "altitude that sets the Dryden scale lengths and sigma_w / sigma_u; below 3.048 m "
                             "(10 ft) the standard's 10 ft values")
     coherence: float = param(1.0, "", "[0, 1]", "ours",
