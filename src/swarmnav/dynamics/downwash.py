@@ -57,6 +57,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from swarmnav.params import build, param
 
@@ -83,13 +84,6 @@ def induced_velocity(thrust, rotor_radius: float, n_rotors: int = 4, rho: float 
     A = n_rotors pi r^2 [m^2], for thrust ``thrust`` [N] (negative counts as 0)."""
     area = n_rotors * math.pi * rotor_radius**2
     return np.sqrt(np.maximum(thrust, 0.0) / (2.0 * rho * area))
-
-
-def _shape(zeta: np.ndarray, decay: float) -> tuple[np.ndarray, np.ndarray]:
-    near = 1.0 + zeta / np.sqrt(zeta * zeta + 1.0)
-    with np.errstate(divide="ignore"):
-        far = 2.0 * math.sqrt(2.0) * decay / zeta
-    return np.minimum(near, far), near
 
 
 def descent_time(depth, v_h, rotor_radius: float, n_rotors: int = 4, decay: float = 5.8):
@@ -141,8 +135,7 @@ def downwash_air(pos: np.ndarray, thrust: np.ndarray, rotor_radius: float, n_rot
     Returns:
         (N, d): downward (-z) air velocity, the sum of the sources' wakes u(z, r) (module docstring);
         a vehicle does not wash itself, and one level with or above a source, or more than
-        ``params.cutoff`` below it, gets nothing from it. Dense O(N^2) pairs: 0.13 ms at N = 100
-        (0.43 ms carried), 42 ms at N = 1000 (one core).
+        ``params.cutoff`` below it, gets nothing from it. A compiled loop over all N^2 pairs.
     """
     pos = np.asarray(pos, dtype=np.float64)
     n, d = pos.shape
@@ -150,23 +143,39 @@ def downwash_air(pos: np.ndarray, thrust: np.ndarray, rotor_radius: float, n_rot
     if d < 3 or n < 2:
         return out
     v_h = induced_velocity(np.asarray(thrust, dtype=np.float64), rotor_radius, n_rotors, params.rho)  # (N,)
-    R = math.sqrt(n_rotors) * rotor_radius
-    dz = pos[None, :, 2] - pos[:, None, 2]  # [i, j] depth of target i below source j
-    pair = (dz > 0.0) & (dz <= params.cutoff) & (v_h[None, :] > 0.0)
-    i, j = np.nonzero(pair)
-    if i.size == 0:
-        return out
-    zeta = dz[i, j] / R
-    f, near = _shape(zeta, params.decay)
-    dx = pos[i, 0] - pos[j, 0]
-    dy = pos[i, 1] - pos[j, 1]
-    if carry is not None:  # the wake's axis at this depth, carried by the air since it left the disc
-        w = np.broadcast_to(np.asarray(carry, dtype=np.float64), (n, 3))
-        tau = R / v_h[j] * _descent(zeta, params.decay)
-        dx = dx - w[j, 0] * tau
-        dy = dy - w[j, 1] * tau
-    rr = (dx * dx + dy * dy) / (R * R)
-    # u = U_c exp(-ln2 r^2 / r_half^2), r_half^2 = 2 ln2 R^2 v_h U_near / U_c^2: v_h cancels in the exponent
-    u = v_h[j] * f * np.exp(-0.5 * rr * f * f / near)
-    out[:, 2] = -np.bincount(i, weights=u, minlength=n)
+    v_h = np.ascontiguousarray(np.broadcast_to(v_h, (n,)))
+    w = np.zeros((n, 3)) if carry is None else np.ascontiguousarray(
+        np.broadcast_to(np.asarray(carry, dtype=np.float64), (n, 3)))
+    _wash(np.ascontiguousarray(pos), v_h, w, carry is not None, math.sqrt(n_rotors) * rotor_radius,
+          float(params.decay), float(params.cutoff), _near_end(float(params.decay)), out[:, 2])
     return out
+
+
+@njit(cache=True)
+def _wash(pos, v_h, w, carried, R, decay, cutoff, xs, out_z):
+    """:func:`downwash_air`'s sum over pairs into ``out_z`` (N,): target i, source j above it."""
+    n = pos.shape[0]
+    k = 2.0 * math.sqrt(2.0) * decay
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            dz = pos[j, 2] - pos[i, 2]
+            if v_h[j] <= 0.0 or dz <= 0.0 or dz > cutoff:
+                continue
+            x = dz / R
+            near = 1.0 + x / math.sqrt(x * x + 1.0)
+            f = min(near, k / x)
+            dx = pos[i, 0] - pos[j, 0]
+            dy = pos[i, 1] - pos[j, 1]
+            if carried:  # the wake's axis at this depth, carried by the air since it left the disc
+                xn = min(x, xs)
+                xf = max(x, xs)
+                q = xn * xn + 1.0
+                tau = R / v_h[j] * (xn + xn * xn * xn / 3.0 - (q * math.sqrt(q) - 1.0) / 3.0
+                                    + (xf * xf - xs * xs) / (2.0 * k))
+                dx -= w[j, 0] * tau
+                dy -= w[j, 1] * tau
+            rr = (dx * dx + dy * dy) / (R * R)
+            # u = U_c exp(-ln2 r^2 / r_half^2), r_half^2 = 2 ln2 R^2 v_h U_near / U_c^2: v_h cancels
+            acc += v_h[j] * f * math.exp(-0.5 * rr * f * f / near)
+        out_z[i] = -acc
