@@ -213,6 +213,20 @@ def _print_params(spec, out) -> None:
                       if ranged or i.name not in RANGE_OPTIONS)
     print(f"perception (--set sense.NAME; docs/sensing.md; defaults: perfect perception): {sense}"
           + ("" if ranged else " (no range sensor: the range options do not apply)"), file=out)
+    from swarmnav.dynamics.vehicle import VehicleParams
+    from swarmnav.dynamics.wind import WindParams
+
+    names = {"model": "vehicle", "downwash": "downwash"}
+
+    def values(i) -> str:
+        if i.choices:
+            return "|".join(map(str, i.choices))
+        return {"bool": "true|false", "text": "a name"}.get(i.kind, str(i.range))
+
+    veh = ", ".join(f"{names.get(i.name, 'vehicle.' + i.name)} [{i.unit or '-'}] {values(i)}"
+                    for i in describe(VehicleParams)) + ", " + ", ".join(
+        f"wind.{i.name} [{i.unit or '-'}] {values(i)}" for i in describe(WindParams))
+    print(f"vehicle (--set; docs/vehicle.md; defaults: the method's own point mass): {veh}", file=out)
     table = presets(spec.params)
     if table:
         cls, default = spec.params, default_build(spec.params)

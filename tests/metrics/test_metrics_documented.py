@@ -94,3 +94,10 @@ def test_flight_metrics_only_in_open_worlds():
     assert "sph_success" in open_world and "flight_distance" in open_world
     assert not {"sph_success", "flight_distance", "jerk_energy", "min_inter_robot_distance"} & set(periodic)
     assert open_world["min_inter_robot_distance"] == open_world["min_inter_agent_distance"]
+
+
+def test_vehicle_keys_are_documented(tmp_path):
+    for scene in ("default_corridor", "sph_cluttered_3d"):
+        res = swarmnav.run("apf", load_scenario(scene, n=N), seed=1, steps=STEPS, vehicle="quadrotor")
+        keys = {k for k in written_keys(res, tmp_path / scene) if k.startswith("vehicle_")}
+        assert keys and keys <= set(documented()), sorted(keys - set(documented()))

@@ -42,6 +42,7 @@ def plan(exp: Experiment) -> list[Job]:
     computed, such as SPH's ``threads``, which give identical results: :func:`swarmnav.params.identity`),
     the scene's identity (the text of a scene file, or a generator spec), swarm size, steps and seed.
     """
+    from swarmnav.dynamics.vehicle import is_vehicle_option, record as vehicle_record, vehicle_params
     from swarmnav.methods import registry
     from swarmnav.params import identity
     from swarmnav.sensing.perception import PREFIX as SENSE_PREFIX, record as sense_record, sense_params
@@ -55,13 +56,16 @@ def plan(exp: Experiment) -> list[Job]:
             method_params = {k: x for k, x in v.params.items() if not is_run_option(k)}
             params = identity(registry.make(v.method, **method_params).params)
             params.update({k: x for k, x in v.params.items()
-                           if is_run_option(k) and not k.startswith((NET_PREFIX, SENSE_PREFIX))})
+                           if is_run_option(k) and not k.startswith((NET_PREFIX, SENSE_PREFIX))
+                           and not is_vehicle_option(k)})
             net = net_params({k: x for k, x in v.params.items() if k.startswith(NET_PREFIX)})
             if not net.ideal:  # the network as resolved: `net.loss=0.30` and `net.loss=0.3` are one run,
                 params["net"] = net_record(net)  # and an ideal network leaves the key as without one
             sense = sense_params({k: x for k, x in v.params.items() if k.startswith(SENSE_PREFIX)})
             if not sense.perfect:  # perception as resolved, as the network; perfect leaves the key unchanged
                 params["sense"] = sense_record(sense)
+            # the vehicle as resolved ({"vehicle": ..., "wind": ...}); the point vehicle adds no key
+            params.update(vehicle_record(*vehicle_params({k: x for k, x in v.params.items() if is_vehicle_option(k)})))
             load_scenario(v.scenario.replace("{seed}", str(exp.seeds[0])), n=v.n)
         except SwarmnavError as e:
             raise ConfigError(f"{exp.name} variant '{v.name}': {e}") from None

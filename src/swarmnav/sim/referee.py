@@ -132,6 +132,21 @@ class Referee:
                  "reason": self._what(P[i]) if hit_obstacle[i] else "agent",
                  "clearance": float(clearance[i])} for i in np.flatnonzero(new)]
 
+    def fail(self, k: int, agents: np.ndarray, state: np.ndarray, reason: str) -> list[dict]:
+        """Crash the agents flagged in ``agents`` (N,) bool that are still flying, at recorded step
+        ``k``, for a reason other than a contact (a quadrotor that flipped: ``"flipped"``);
+        ``state`` as in :meth:`judge`. Returns one event per new crash."""
+        new = np.asarray(agents, dtype=bool) & ~self.crashed
+        if not new.any():
+            return []
+        if self.where.shape[1] != state.shape[1]:
+            self.where = np.zeros(state.shape)
+        self.where[new] = state[new]
+        self.crashed |= new
+        self.crash_step[new] = k
+        return [{"step": int(k), "action": "crash", "agent": int(i), "source": "referee", "reason": reason}
+                for i in np.flatnonzero(new)]
+
     def _what(self, p: np.ndarray) -> str:
         """What an agent at ``p`` touched: the boundary wall if it is within a body radius of the
         bounds (or beyond them), else an obstacle."""

@@ -10,6 +10,7 @@ import numpy as np
 from numba import njit
 
 from swarmnav._version import __version__
+from swarmnav.dynamics.vehicle import Quadrotors, is_vehicle_option, record as vehicle_record, vehicle_params
 from swarmnav.errors import ConfigError, DivergedError, ScenarioError
 from swarmnav.methods import registry
 from swarmnav.methods.base import Method, Observation
@@ -35,8 +36,9 @@ RUN_OPTIONS = ("z_fly", *SCENE_OPTIONS, "plans")
 
 def is_run_option(key: str) -> bool:
     """A ``--set`` key of the run rather than of its method: :data:`RUN_OPTIONS`, the
-    network's ``net.*`` (docs/network.md) and perception's ``sense.*`` (docs/sensing.md)."""
-    return key in RUN_OPTIONS or key.startswith(NET_PREFIX) or key.startswith(SENSE_PREFIX)
+    network's ``net.*`` (docs/network.md), perception's ``sense.*`` (docs/sensing.md) and the
+    vehicle's ``vehicle``, ``vehicle.*``, ``wind.*``, ``downwash`` (docs/vehicle.md)."""
+    return key in RUN_OPTIONS or key.startswith(NET_PREFIX) or key.startswith(SENSE_PREFIX) or is_vehicle_option(key)
 
 
 def run(
@@ -82,8 +84,9 @@ def run(
             docs/methods/contract.md) in ``RunResult.plans``; False (or ``"false"``) keeps
             none. Either way the run flies the same.
         **params: method parameters (unknown names raise ConfigError), and the network's
-            ``net.*`` options (pass them as ``**{"net.latency": 0.15}``; docs/network.md) and
-            perception's ``sense.*`` (``**{"sense.pos_noise": 0.05}``; docs/sensing.md).
+            ``net.*`` options (pass them as ``**{"net.latency": 0.15}``; docs/network.md),
+            perception's ``sense.*`` (``**{"sense.pos_noise": 0.05}``; docs/sensing.md) and the
+            vehicle's (``vehicle="quadrotor"``, ``**{"wind.speed": 6}``; docs/vehicle.md).
 
     The same (method, params, scene, seed, steps) always gives identical arrays.
     """
@@ -93,6 +96,7 @@ def run(
     keep_plans = coerce(plans, bool, "plans")
     net = net_params({k: params.pop(k) for k in [k for k in params if k.startswith(NET_PREFIX)]})
     sense = sense_params({k: params.pop(k) for k in [k for k in params if k.startswith(SENSE_PREFIX)]})
+    vehicle, wind = vehicle_params({k: params.pop(k) for k in [k for k in params if is_vehicle_option(k)]})
     m = registry.make(method, **params) if isinstance(method, str) else method
     if sense.ranged and not getattr(m, "range_sensor", False):
         raise ConfigError(f"{m.name} has no range sensor (it reads the obstacles from the world), so "
@@ -127,6 +131,12 @@ def run(
     perception = None  # perfect perception: the method reads the true state and exact ranges
     if not sense.perfect:
         perception = Perception(sense, pos, seed, world.goal_array if world.has_goal else None)
+    step = m.dynamics.step  # the point vehicle: the method's own model, untouched
+    quads = None
+    if not vehicle.point:
+        quads = Quadrotors(vehicle, wind, m.dynamics, pos, vel, dt, seed,
+                           period=world.bounds[2] - world.bounds[0] if world.periodic else None)
+        step = quads.step
     N = scn.n
     d = scn.dim
     P = np.empty((steps + 1, N, d))
@@ -178,8 +188,10 @@ def run(
                 cmd, info = m.act(Observation(k, k * dt, opos, ovel, view, perception), rng)
             if network is not None and "publish" in info:  # what the agents send from now on
                 network.publish(info["publish"])
-            pos, vel = m.dynamics.step(pos, vel, cmd, dt)
+            pos, vel = step(pos, vel, cmd, dt)
             if referee is not None:
+                if quads is not None and quads.new_flips.any():  # a flipped quadrotor has crashed
+                    events += referee.fail(k + 1, quads.new_flips, pos, "flipped")
                 referee.hold(pos, vel)
             if direct and _plain(pos, vel, d):
                 finite = _finite_into(pos, vel, P[k + 1], V[k + 1])
@@ -242,6 +254,7 @@ def run(
                           f"horizontal slice at z = {plane_z:g} m"}} if plane_z is not None else {}),
             **({"net": net_record(net)} if network is not None else {}),
             **({"sense": sense_record(sense)} if perception is not None else {}),
+            **vehicle_record(vehicle, wind),
         },
         positions=P, velocities=V, clearance=C, labels=lab, roles=roles, events=events, wall_time=wall,
     )
@@ -265,6 +278,8 @@ def run(
         metrics.update(network.summary())
     if perception is not None:
         metrics.update(perception.summary())
+    if quads is not None:
+        metrics.update(quads.summary())
     result.metrics = metrics
     timings = getattr(m, "timings", None)  # optional hook: wall-clock figures, never metrics
     if callable(timings):

@@ -1,0 +1,145 @@
+"""The vehicle of a run (swarmnav/dynamics/vehicle.py, docs/vehicle.md): the point vehicle changes
+nothing; every method flies a quadrotor, finite and measured; wind and downwash need one; bad
+input is one line; a run's key holds the vehicle as resolved."""
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+import swarmnav
+from _helpers.cli import run_cli
+from swarmnav.errors import ConfigError
+from swarmnav.methods import registry
+from swarmnav.methods.base import Observation
+from swarmnav.sim.referee import Referee
+
+QUAD = {"vehicle": "quadrotor"}
+
+
+@dataclass(frozen=True, slots=True)
+class _HoverParams:
+    dt: float = 0.05
+
+
+class _Hover:
+    """A user's method: every agent asks for no acceleration (a saturated double integrator)."""
+
+    name = "hover"
+    dims = (2, 3)
+    networked = True
+
+    def __init__(self):
+        from swarmnav.dynamics import SaturatedDoubleIntegrator
+        self.dt = 0.05
+        self.params = _HoverParams()
+        self.dynamics = SaturatedDoubleIntegrator(1.0, 1.5)
+
+    def reset(self, scenario, pos, vel, rng):
+        self.n, self.d = pos.shape
+
+    def act(self, obs: Observation, rng):
+        return np.zeros((self.n, self.d)), {}
+
+    def summary(self):
+        return {}
+
+
+def test_the_point_vehicle_named_is_the_run_without_one():
+    a = swarmnav.run("vasarhelyi", "default_corridor", seed=2, steps=60)
+    b = swarmnav.run("vasarhelyi", "default_corridor", seed=2, steps=60, vehicle="point")
+    assert np.array_equal(a.positions, b.positions) and np.array_equal(a.velocities, b.velocities)
+    assert "vehicle" not in b.config and not any(k.startswith("vehicle_") for k in b.metrics)
+
+
+def test_a_quadrotor_at_rest_hovers_where_it_started():
+    r = swarmnav.run(_Hover(), "default_corridor", seed=1, steps=100, **QUAD)
+    drift = np.linalg.norm(r.positions[-1] - r.positions[0], axis=1)
+    assert drift.max() < 1e-6  # 5 s of hover at the hover rotor speed: nothing moves
+    assert r.metrics["vehicle_tilt_max"] < 1e-6 and r.metrics["vehicle_flips"] == 0.0
+    assert r.config["vehicle"]["model"] == "quadrotor" and r.config["vehicle"]["airframe"] == "crazyflie"
+
+
+def _scenes(method):
+    spec = registry.spec(method)
+    if not spec.navigation:  # the Vicsek family flies its periodic box
+        return ["periodic_box:n=20,seed=1"]
+    dims = registry.make(method).dims
+    return ["default_corridor"] + (["sph_cluttered_3d"] if 3 in dims else [])
+
+
+@pytest.mark.parametrize("method, scene", [(m, s) for m in registry.names() for s in _scenes(m)])
+def test_every_method_flies_a_quadrotor(method, scene):
+    steps = max(20, int(round(1.0 / registry.make(method).dt)))
+    r = swarmnav.run(method, scene, seed=3, steps=steps, **QUAD)
+    assert np.isfinite(r.positions).all() and np.isfinite(r.velocities).all()
+    m = r.metrics
+    for key in ("vehicle_tilt_max", "vehicle_thrust_sat_fraction", "vehicle_track_err_mean",
+                "vehicle_track_err_max", "vehicle_energy_mean", "vehicle_flips"):
+        assert np.isfinite(m[key]), key
+    assert 0.0 <= m["vehicle_thrust_sat_fraction"] <= 1.0
+    assert 0.0 <= m["vehicle_track_err_mean"] <= m["vehicle_track_err_max"]
+    assert m["vehicle_energy_mean"] > 0.0  # the rotors hold the vehicle up: they spend energy
+
+
+def test_a_quadrotor_lags_the_point_model_and_the_lag_is_measured():
+    point = swarmnav.run("vasarhelyi", "default_corridor", seed=4, steps=200)
+    quad = swarmnav.run("vasarhelyi", "default_corridor", seed=4, steps=200, **QUAD)
+    assert not np.array_equal(point.positions, quad.positions)
+    assert quad.metrics["vehicle_track_err_max"] > 0.0 and quad.metrics["vehicle_tilt_max"] > 0.0
+    # the same seed flies the same quadrotors
+    again = swarmnav.run("vasarhelyi", "default_corridor", seed=4, steps=200, **QUAD)
+    assert np.array_equal(quad.positions, again.positions)
+
+
+def test_wind_pushes_a_quadrotor_that_no_one_steers():
+    calm = swarmnav.run(_Hover(), "default_corridor", seed=1, steps=100, **QUAD)
+    windy = swarmnav.run(_Hover(), "default_corridor", seed=1, steps=100, **QUAD,
+                         **{"wind.speed": 6.0, "wind.direction": 0.0})
+    push = windy.positions[-1] - calm.positions[-1]
+    assert np.all(push[:, 0] > 0.01)  # downwind, along +x: the drag of the wind outruns the velocity loop
+    assert windy.config["wind"]["speed"] == 6.0
+
+
+@pytest.mark.parametrize("options, words", [
+    ({"vehicle": "boat"}, "vehicle"),
+    ({"vehicle": "quadrotor", "vehicle.airframe": "blimp"}, "blimp"),
+    ({"vehicle": "quadrotor", "vehicle.mass": -1.0}, "mass"),
+    ({"vehicle": "quadrotor", "vehicle.mass": 5.0}, "hover"),  # a Crazyflie's rotors cannot lift 5 kg
+    ({"vehicle": "quadrotor", "vehicle.inner_hz": 5.0}, "inner_hz"),  # slower than the method's 20 Hz
+    ({"wind.speed": 3.0}, "vehicle=quadrotor"),
+    ({"downwash": True}, "vehicle=quadrotor"),
+    ({"vehicle.airframe": "hummingbird"}, "vehicle=quadrotor"),
+    ({"vehicle": "quadrotor", "wind.speed": -1.0}, "speed"),
+])
+def test_bad_vehicle_options_are_one_line(options, words):
+    with pytest.raises(ConfigError) as e:
+        swarmnav.run(_Hover(), "default_corridor", seed=1, steps=5, **options)
+    assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_bad_vehicle_option_on_the_cli_is_exit_2(tmp_path):
+    r = run_cli("run", "--method", "apf", "--scenario", "default_corridor", "--steps", "5",
+                "--out", str(tmp_path / "r"), "--set", "wind.speed=6")
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_the_cli_flies_a_quadrotor_in_wind(tmp_path):
+    r = run_cli("run", "--method", "apf", "--scenario", "default_corridor", "--steps", "20",
+                "--out", str(tmp_path / "r"), "--set", "vehicle=quadrotor", "--set", "wind.speed=3")
+    assert r.returncode == 0, r.stderr
+    import json
+    cfg = json.loads((tmp_path / "r" / "config.json").read_text())
+    assert cfg["vehicle"]["model"] == "quadrotor" and cfg["wind"]["speed"] == 3.0
+
+
+def test_the_referee_crashes_an_agent_for_a_stated_reason():
+    ref = Referee(3, 0.2)
+    pos = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])
+    ev = ref.fail(7, np.array([False, True, False]), pos, "flipped")
+    assert ev == [{"step": 7, "action": "crash", "agent": 1, "source": "referee", "reason": "flipped"}]
+    assert ref.crashed.tolist() == [False, True, False]
+    assert ref.fail(8, np.array([False, True, False]), pos, "flipped") == []  # crashed once
+    moved, vel = pos + 1.0, np.ones((3, 2))
+    ref.hold(moved, vel)
+    assert np.array_equal(moved[1], pos[1]) and np.array_equal(vel[1], [0.0, 0.0])
