@@ -65,7 +65,9 @@ def _scenes(method):
     if not spec.navigation:  # the Vicsek family flies its periodic box
         return ["periodic_box:n=20,seed=1"]
     dims = registry.make(method).dims
-    return ["default_corridor"] + (["sph_cluttered_3d"] if 3 in dims else [])
+    # MADER's first 3-D plan costs ~40 s here; the vehicle layer does not depend on the method, and
+    # MADER flies the 2-D scene (its 3-D flight is in the conformance tests)
+    return ["default_corridor"] + (["sph_cluttered_3d"] if 3 in dims and method != "mader" else [])
 
 
 @pytest.mark.parametrize("method, scene", [(m, s) for m in registry.names() for s in _scenes(m)])
