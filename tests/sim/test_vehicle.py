@@ -145,3 +145,56 @@ def test_the_referee_crashes_an_agent_for_a_stated_reason():
     moved, vel = pos + 1.0, np.ones((3, 2))
     ref.hold(moved, vel)
     assert np.array_equal(moved[1], pos[1]) and np.array_equal(vel[1], [0.0, 0.0])
+
+
+class _Push(_Hover):
+    """Every agent asks for 1 m/s^2 along +x, and the method ends the run after ``stop`` steps."""
+
+    name = "push"
+
+    def __init__(self, stop):
+        super().__init__()
+        self.stop = stop
+
+    def act(self, obs: Observation, rng):
+        a = np.zeros((self.n, self.d))
+        a[:, 0] = 1.0
+        return a, {"done": obs.step + 1 >= self.stop}
+
+
+def test_a_quadrotor_run_records_its_thrust_axes_and_they_round_trip(tmp_path):
+    r = swarmnav.run(_Push(16), "default_corridor", seed=1, steps=100, **QUAD)  # 0.8 s, below v_max
+    K1, N, d = r.positions.shape
+    assert (K1, d) == (17, 2)  # the method ended the run: the axes are cut with the positions
+    A = r.thrust_axis
+    assert A.shape == (K1, N, 3) and A.dtype == np.float32
+    np.testing.assert_allclose(np.linalg.norm(A, axis=2), 1.0, atol=1e-6)
+    assert np.array_equal(A[0], np.tile([0.0, 0.0, 1.0], (N, 1)))  # level at the start
+    # accelerating at a = 1 m/s^2 along +x, each vehicle leans its thrust forward by atan(a / g),
+    # 5.8 deg (a little more against its body drag), once its attitude has caught up (~0.3 s)
+    lean = np.degrees(np.arctan2(A[-5:, :, 0], A[-5:, :, 2]))
+    assert np.all((lean > 5.3) & (lean < 7.0)), lean
+    assert np.abs(A[:, :, 1]).max() < 1e-3  # no sideways lean
+    assert np.degrees(np.arccos(A[..., 2].min())) <= r.metrics["vehicle_tilt_max"] + 1e-3
+    r.save(tmp_path)
+    with np.load(tmp_path / "trajectory.npz") as z:
+        assert z["thrust_axis"].dtype == np.float32
+    back = swarmnav.RunResult.load(tmp_path)
+    assert np.array_equal(back.thrust_axis, A)
+
+
+def test_a_point_mass_run_has_no_thrust_axis(tmp_path):
+    r = swarmnav.run(_Push(5), "default_corridor", seed=1, steps=10)
+    assert r.thrust_axis is None
+    r.save(tmp_path)
+    with np.load(tmp_path / "trajectory.npz") as z:
+        assert "thrust_axis" not in z.files
+    assert swarmnav.RunResult.load(tmp_path).thrust_axis is None
+
+
+def test_a_damaged_thrust_axis_is_one_line(tmp_path):
+    r = swarmnav.run(_Push(5), "default_corridor", seed=1, steps=10, **QUAD)
+    r.thrust_axis = r.thrust_axis[:-1]
+    r.save(tmp_path)
+    with pytest.raises(swarmnav.SwarmnavError, match="thrust_axis"):
+        swarmnav.RunResult.load(tmp_path)

@@ -213,3 +213,40 @@ def test_committed_plans_travel_in_the_page_within_the_stated_error(tmp_path):
     main(["view", str(hes)])
     data = page_data(hes / "viewer.html")
     assert data["plans"] is None and not [k for k in data["arrays"] if k.startswith("plan_")]
+
+
+@pytest.fixture(scope="module")
+def quad_dir(tmp_path_factory):
+    """APF flown on quadrotors (issue 38): a run with thrust axes."""
+    d = tmp_path_factory.mktemp("quad")
+    run("apf", "default_corridor", seed=1, steps=150, vehicle="quadrotor").save(d)
+    return d
+
+
+def test_a_quadrotor_runs_thrust_axes_travel_in_the_page_within_the_stated_error(quad_dir):
+    from swarmnav.sim import RunResult
+    from swarmnav.viz.viewer import AXIS_LEVELS, axis_error
+
+    assert main(["view", str(quad_dir)]) == 0
+    d = page_data(quad_dir / "viewer.html")
+    res = RunResult.load(quad_dir)
+    th = d["thrust"]
+    assert th["levels"] == AXIS_LEVELS and th["error"] == pytest.approx(axis_error())
+    A = -1.0 + decode(d["arrays"]["thrust_axis"]) * 2.0 / AXIS_LEVELS
+    assert A.shape == res.thrust_axis.shape
+    assert np.linalg.norm(A - res.thrust_axis, axis=2).max() <= th["error"] + 1e-7
+    assert np.degrees(th["error"]) < 0.1  # [deg] the direction, to a tenth of a degree
+    # the largest tilt of the run, where it happened, as the page's header states it
+    tilt = np.degrees(np.arccos(res.thrust_axis[..., 2].astype(float)))
+    assert th["tilt_max"] == pytest.approx(tilt.max()) and tilt[th["step"], th["agent"]] == pytest.approx(tilt.max())
+    assert 2.0 < th["tilt_max"] <= res.metrics["vehicle_tilt_max"] + 1e-3  # APF's swarm leans to accelerate
+    # what the axes add to the page: about 2 bytes per agent and step (base64 of the gzip of
+    # delta-coded 10-bit codes); docs/viewer.md gives the figure for 20 agents x 1000 steps
+    added = len(d["arrays"]["thrust_axis"]["data"])
+    assert added <= 3.0 * res.thrust_axis.shape[0] * res.thrust_axis.shape[1], added
+
+
+def test_a_point_mass_runs_page_has_no_thrust_axes(hes_dir):
+    assert main(["view", str(hes_dir)]) == 0
+    d = page_data(hes_dir / "viewer.html")
+    assert "thrust" not in d and "thrust_axis" not in d["arrays"]

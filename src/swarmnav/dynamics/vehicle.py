@@ -206,6 +206,13 @@ class Quadrotors:
         self.steps += 1
         return pos1, vel1
 
+    @property
+    def thrust_axis(self) -> np.ndarray:
+        """(N, 3) each vehicle's body z axis (its thrust direction) in world axes, a unit vector:
+        (0, 0, 1) level, tilted by arccos of its z. Always 3-D: on a 2-D scene its x and y are the
+        scene's axes and its z the vertical the scene does not record."""
+        return self.fleet.attitude[:, :, 2].copy()
+
     def summary(self) -> dict[str, float]:
         """Run metrics of the vehicle (docs/metrics.md): units in the names' documentation."""
         f = self.fleet

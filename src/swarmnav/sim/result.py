@@ -28,6 +28,10 @@ class RunResult:
         labels: (K + 1, N) sub-swarm id of each agent.
         roles: (K + 1, N) uint8 role of each agent (0 follower, 1 subleader, 2 leader) when the
             method reports roles (``info["roles"]``); None otherwise, and then not saved.
+        thrust_axis: (K + 1, N, 3) float32 body z axis (thrust direction) of each agent, a unit
+            vector in world axes, when the run flew quadrotors (``vehicle=quadrotor``,
+            docs/vehicle.md); always 3-D (on a 2-D scene: the scene's x, y and the vertical);
+            None for the point vehicle, and then not saved.
         events: structural events, dicts with ``step``, ``action``, ``source``, ``reason``.
         metrics: scalar metrics (floats).
         wall_time: seconds spent in the rollout loop [s].
@@ -46,6 +50,7 @@ class RunResult:
     clearance: np.ndarray
     labels: np.ndarray
     roles: np.ndarray | None = None
+    thrust_axis: np.ndarray | None = None
     events: list[dict[str, Any]] = field(default_factory=list)
     metrics: dict[str, float] = field(default_factory=dict)
     wall_time: float = 0.0
@@ -81,6 +86,8 @@ class RunResult:
             if (d / name).exists() and not (d / name).is_file():
                 raise SwarmnavError(f"cannot write {d / name}: a directory (or other non-file) is in the way")
         extra = {} if self.roles is None else {"roles": self.roles}  # a run without roles keeps its old file
+        if self.thrust_axis is not None:  # and a point-mass run
+            extra["thrust_axis"] = np.asarray(self.thrust_axis, dtype=np.float32)
         if self.plans is not None:  # likewise a run without plans
             extra.update({PLAN_PREFIX + k: v for k, v in self.plans.arrays().items()})
         _atomic(d / "trajectory.npz", lambda f: np.savez_compressed(
@@ -114,10 +121,13 @@ class RunResult:
         P = arrays["positions"]
         if P.ndim != 3 or P.shape[0] < 1 or P.shape[2] not in (2, 3) or arrays["velocities"].shape != P.shape \
                 or arrays["clearance"].shape != P.shape[:2] or arrays["labels"].shape != P.shape[:2] \
-                or arrays.get("roles", arrays["labels"]).shape != P.shape[:2]:
+                or arrays.get("roles", arrays["labels"]).shape != P.shape[:2] \
+                or ("thrust_axis" in arrays and arrays["thrust_axis"].shape != (*P.shape[:2], 3)):
             raise SwarmnavError(f"{d}: trajectory.npz arrays disagree in shape (positions {P.shape}, velocities "
                                 f"{arrays['velocities'].shape}, clearance {arrays['clearance'].shape}, labels "
-                                f"{arrays['labels'].shape})")
+                                f"{arrays['labels'].shape}"
+                                + (f", thrust_axis {arrays['thrust_axis'].shape}" if "thrust_axis" in arrays else "")
+                                + ")")
         stored = {k.removeprefix(PLAN_PREFIX): arrays.pop(k) for k in list(arrays) if k.startswith(PLAN_PREFIX)}
         plans = None  # a run directory without plan arrays: a method without the hook, or an older run
         if stored:

@@ -143,6 +143,10 @@ def run(
     V = np.empty((steps + 1, N, d))
     C = np.empty((steps + 1, N))
     lab = np.zeros((steps + 1, N), dtype=np.int32)
+    axis = None  # (K + 1, N, 3) the quadrotors' thrust axes; none on the point vehicle
+    if quads is not None:
+        axis = np.empty((steps + 1, N, 3), dtype=np.float32)
+        axis[0] = quads.thrust_axis
     roles = None  # (K + 1, N) role codes, recorded only for a method whose info gives "roles"
     geom = scn.geometry
     no_obstacles = geom.is_empty
@@ -223,6 +227,8 @@ def run(
             if evs:
                 for ev in evs:
                     events.append({"step": k, **ev})
+            if axis is not None:
+                axis[k + 1] = quads.thrust_axis
             if referee is not None:
                 events += referee.judge(k + 1, P[k + 1], C[k + 1], pos)
             if bar is not None and (k % 10 == 9 or k == steps - 1):
@@ -230,6 +236,7 @@ def run(
             if info.get("done") or (referee is not None and referee.crashed.all()):  # the method's task is complete: record this state and stop
                 P, V, C, lab = P[: k + 2].copy(), V[: k + 2].copy(), C[: k + 2].copy(), lab[: k + 2].copy()
                 roles = None if roles is None else roles[: k + 2].copy()
+                axis = None if axis is None else axis[: k + 2].copy()
                 if bar is not None:
                     bar(steps)
                 break
@@ -256,7 +263,8 @@ def run(
             **({"sense": sense_record(sense)} if perception is not None else {}),
             **vehicle_record(vehicle, wind),
         },
-        positions=P, velocities=V, clearance=C, labels=lab, roles=roles, events=events, wall_time=wall,
+        positions=P, velocities=V, clearance=C, labels=lab, roles=roles, thrust_axis=axis, events=events,
+        wall_time=wall,
     )
     n_struct = sum(1 for e in events if e.get("action") in ("split", "merge"))
     crashed = referee.crashed if referee is not None else np.zeros(N, dtype=bool)

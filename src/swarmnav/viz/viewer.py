@@ -6,7 +6,8 @@ offline from any folder. It shows the run top-down (a 2-D canvas) or in perspect
 (three.js with OrbitControls: a 3-D run's obstacles as solids; a planar run at the fixed
 altitude of HES Appendix A, Figure A1), with play / pause, speed, a timeline with the
 structural events, a strip chart of minimum clearance and sub-swarm count and, when the run
-recorded them (``RunResult.plans``), each robot's committed plan ahead of it.
+recorded them (``RunResult.plans``), each robot's committed plan ahead of it, and for a quadrotor
+run (``RunResult.thrust_axis``) each vehicle's thrust axis, so its tilt shows.
 
 Data are kept small: positions and velocities are quantised to 16 bits per axis against the
 run's own box (:func:`quantise`; the largest error is half a step, :func:`quantisation_error`),
@@ -45,15 +46,25 @@ PLANAR_ALTITUDE = 10.0
 #: Height [m] of the slabs a planar run's obstacles become in perspective (our choice: above
 #: the 10 m flight plane, so walls read as walls around the arrows).
 SLAB_HEIGHT = 12.0
+#: Quantisation levels of a quadrotor run's thrust axes per component over [-1, 1] (10 bits: a
+#: component is off by at most 1 / 1023, the direction by at most 0.1 deg; 16 bits would double
+#: the bytes they add to a page for a precision no drawing shows).
+AXIS_LEVELS = 1023
 #: Role codes of ``trajectory.npz``'s optional ``roles`` array.
 ROLE_NAMES = ("follower", "subleader", "leader")
 
 
-def quantise(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """``x`` (..., d) as uint16 codes: 0 at ``lo``, LEVELS at ``hi`` per axis (a zero-width axis
-    gets a 1 m range). Decoded as ``lo + code * (hi - lo) / LEVELS``."""
+def quantise(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, levels: int = LEVELS) -> np.ndarray:
+    """``x`` (..., d) as uint16 codes: 0 at ``lo``, ``levels`` at ``hi`` per axis (a zero-width
+    axis gets a 1 m range). Decoded as ``lo + code * (hi - lo) / levels``."""
     span = np.where(hi > lo, hi - lo, 1.0)
-    return np.rint((np.clip(x, lo, hi) - lo) / span * LEVELS).astype(np.uint16)
+    return np.rint((np.clip(x, lo, hi) - lo) / span * levels).astype(np.uint16)
+
+
+def axis_error(levels: int = AXIS_LEVELS) -> float:
+    """Largest error of a unit vector coded by :func:`quantise` over [-1, 1] per component:
+    half a step, 1 / levels, per component, combined over the three (Euclidean)."""
+    return math.sqrt(3.0) / levels
 
 
 def quantisation_error(lo: np.ndarray, hi: np.ndarray) -> float:
@@ -147,6 +158,17 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
                    "plan_offsets": _blob(plans.offsets.astype("<u4")),
                    "plan_points": _blob(quantise(plans.points.astype(float), lo, hi), delta=True),
                    "plan_tau": _blob(np.round(since, 3).astype("<f4"))}
+    thrust = None
+    axis = getattr(result, "thrust_axis", None)
+    if axis is not None:  # a quadrotor run: each agent's body z axis, 10-bit codes per component
+        A = np.asarray(axis, dtype=float)
+        if A.shape != (K + 1, N, 3) or not np.isfinite(A).all():
+            raise SwarmnavError(f"thrust_axis must be finite, (K + 1, N, 3) = {(K + 1, N, 3)}, got {A.shape}")
+        arrays["thrust_axis"] = _blob(quantise(A, -np.ones(3), np.ones(3), AXIS_LEVELS), delta=True)
+        tilt = np.degrees(np.arccos(np.clip(A[..., 2], -1.0, 1.0)))  # [deg] from the vertical
+        ks, i = np.unravel_index(int(np.argmax(tilt)), tilt.shape)
+        thrust = {"levels": AXIS_LEVELS, "error": axis_error(), "tilt_max": float(tilt[ks, i]), "step": int(ks),
+                  "agent": int(i)}
     plane = result.config.get("plane")
     return {
         "format": 1,
@@ -170,6 +192,7 @@ def viewer_data(result: RunResult) -> dict[str, Any]:
         "events": [{"step": int(e.get("step", 0)), "action": str(e.get("action", "event")),
                     "source": str(e.get("source", "")), "reason": str(e.get("reason", ""))[:200]}
                    for e in result.events],
+        **({"thrust": thrust} if thrust is not None else {}),  # a point-mass run's data as before
         "metrics": {k: (float(m[k]) if isinstance(m.get(k), (int, float)) and math.isfinite(m[k]) else None)
                     for k in ("Y", "R_goal", "E_mean", "R_unsafe", "d_clr_min") if k in m},
         "arrays": arrays,

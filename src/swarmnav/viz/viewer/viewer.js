@@ -15,6 +15,8 @@
   // committed plans: dashed lines in the agent's colour (dashes: ahead, against the trail behind)
   const PLAN_WIDTH = 1.5, PLAN_ALPHA = 0.9, PLAN_DASH = [6, 3];  // [css px]
   const ROLE_NAMES = D.roles || null;
+  // a quadrotor run's thrust axes (D.thrust): a dark stick from each agent along its body z axis
+  const AXIS_COLOR = '#222', AXIS_PX = 40;  // top-down: a 40 css px stick seen from above (a level vehicle's: a point)
   const LARGE = N > 300;  // a large swarm: cheaper drawing (see buildScene)
 
   // ------------------------------------------------------------------ data
@@ -41,19 +43,24 @@
       for (let j = 0; j < DIM; j++) out[i + j] = lo[j] + codes[i + j] * scale[j];
     return out;
   }
-  let P, V, C, LAB, ROLE, MINC, NSUB;
+  let P, V, C, LAB, ROLE, MINC, NSUB, AX = null;
   // committed trajectories (D.plans, when the run recorded them): plan j of robot PL.robot[j],
   // committed at step PL.step[j], is points PL.pts[off[j] .. off[j + 1]) at run times PL.t[...]
   const PL = {byRobot: null, maxLen: 0};
   async function load() {
     const A = D.arrays, q = D.quant;
-    const [p, v, c, lab, minc, nsub, role, pstep, probot, poff, ppts, ptau] = await Promise.all(
+    const [p, v, c, lab, minc, nsub, role, pstep, probot, poff, ppts, ptau, ax] = await Promise.all(
       ['positions', 'velocities', 'clearance', 'labels', 'min_clearance', 'n_subswarms', 'roles',
-       'plan_step', 'plan_robot', 'plan_offsets', 'plan_points', 'plan_tau']
+       'plan_step', 'plan_robot', 'plan_offsets', 'plan_points', 'plan_tau', 'thrust_axis']
         .map(k => A[k] ? decode(A[k]) : null));
     P = dequantise(p, q.lo, q.hi);
     V = dequantise(v, q.lo.map(() => -q.vmax), q.lo.map(() => q.vmax));
     C = c; LAB = lab; MINC = minc; NSUB = nsub; ROLE = role;
+    if (D.thrust) {  // unit body z axes, (K + 1) x N x 3, coded over [-1, 1] per component
+      const L = D.thrust.levels;
+      AX = new Float32Array(ax.length);
+      for (let j = 0; j < ax.length; j++) AX[j] = -1 + ax[j] * 2 / L;
+    }
     if (D.plans) {
       const t = new Float64Array(ptau.length), lists = Array.from({length: N}, () => []);
       for (let j = 0; j < pstep.length; j++) {
@@ -98,6 +105,8 @@
   };
   const speedOf = (k, i) => { let s = 0; for (let j = 0; j < DIM; j++) s += V[(k * N + i) * DIM + j] ** 2; return Math.sqrt(s); };
   const roleOf = (k, i) => ROLE ? ROLE_NAMES[ROLE[k * N + i]] : 'not recorded';
+  /** Agent i's tilt at step k [deg]: the angle of its thrust axis from the vertical (null: no record). */
+  const tiltOf = (k, i) => AX ? Math.acos(Math.max(-1, Math.min(1, AX[(k * N + i) * 3 + 2] / Math.hypot(...AX.subarray((k * N + i) * 3, (k * N + i) * 3 + 3))))) * 180 / Math.PI : null;
 
   // ------------------------------------------------------------------ state
   let k = 0, kf = 0, playing = false, rate = 1, view = DIM === 3 ? 'persp' : 'top', showTrails = true, showPlans = !!D.plans;
@@ -110,6 +119,7 @@
   const lo = D.world.lo, hi = D.world.hi;
   const X = x => T.ox + (x - lo[0]) * T.s, Y = y => T.oy + (hi[1] - y) * T.s;
   const drawn = new Float32Array(N * 2);  // screen position of each agent as last drawn [css px]
+  const axisTip = new Float32Array(N * 2);  // screen position of the end of each agent's thrust axis [css px]
   function layoutTop() {
     const w = stage.clientWidth, h = stage.clientHeight, dpr = window.devicePixelRatio || 1;
     top.width = Math.max(1, Math.round(w * dpr)); top.height = Math.max(1, Math.round(h * dpr));
@@ -218,6 +228,15 @@
         ctx.moveTo(x + r, y); ctx.arc(x, y, r, 0, 2 * Math.PI);
       }
       ctx.fillStyle = D.palette[c]; ctx.fill();
+    }
+    if (AX) {  // thrust axes seen from above: a stick of AXIS_PX along body z, so its length is sin(tilt)
+      ctx.beginPath();
+      for (let i = 0; i < N; i++) {
+        const b = (k * N + i) * 3, x = drawn[2 * i] + AXIS_PX * AX[b], y = drawn[2 * i + 1] - AXIS_PX * AX[b + 1];
+        axisTip[2 * i] = x; axisTip[2 * i + 1] = y;
+        ctx.moveTo(drawn[2 * i], drawn[2 * i + 1]); ctx.lineTo(x, y);
+      }
+      ctx.strokeStyle = AXIS_COLOR; ctx.lineWidth = N > 300 ? 1 : 1.5; ctx.stroke();
     }
     if (ROLE) {  // leader: thick black ring; subleaders: thin ring
       for (const [code, width, rr] of [[1, 1.2, r + 2], [2, 2.2, r + 3.5]]) {
@@ -396,6 +415,15 @@
       const m = new THREE.InstancedMesh(new THREE.TorusGeometry(a * r[0], a * r[1], 5, 20), new THREE.MeshBasicMaterial({color: 0x111111}), N);
       m.count = 0; m.frustumCulled = false; scene.add(m); return m;
     });
+    // thrust axes of a quadrotor run: one set of line segments, from each agent along its body z
+    // axis, 2 arrow lengths long, rewritten in place each frame (one draw call for all agents)
+    let axes = null;
+    if (AX) {
+      const xGeo = new THREE.BufferGeometry();
+      xGeo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(N * 6), 3).setUsage(THREE.DynamicDrawUsage));
+      axes = new THREE.LineSegments(xGeo, new THREE.LineBasicMaterial({color: AXIS_COLOR}));
+      axes.frustumCulled = false; axes.userData.length = 2 * a; scene.add(axes);
+    }
     // trails: fading segments (RGBA vertex colours)
     const maxSeg = N * TRAIL_POINTS;
     const tPos = new Float32Array(maxSeg * 6), tCol = new Float32Array(maxSeg * 8);
@@ -424,7 +452,7 @@
     controls.target.copy(centre); controls.update();
     controls.addEventListener('change', () => { dirty = true; });
     const palette = D.palette.map(c => new THREE.Color(c));
-    const g = {THREE, renderer, scene, camera, controls, agents, arrow, trails, tGeo, tPos, tCol, pGeo, pPos, pCol, pDist, palette, ring, roleRings, altitude,
+    const g = {THREE, renderer, scene, camera, controls, agents, arrow, axes, trails, tGeo, tPos, tCol, pGeo, pPos, pCol, pDist, palette, ring, roleRings, altitude,
                m: new THREE.Matrix4(), q: new THREE.Quaternion(), p: new THREE.Vector3(), s: new THREE.Vector3(1, 1, 1),
                ux: new THREE.Vector3(1, 0, 0), u: new THREE.Vector3(), ray: new THREE.Raycaster(), ptr: new THREE.Vector2()};
     layoutPersp(g);
@@ -458,6 +486,15 @@
       }
     }
     aGeo.attributes.position.needsUpdate = true; aGeo.attributes.color.needsUpdate = true;
+    if (g.axes) {  // each stick from the agent (its arrow's centre) along its thrust axis
+      const xp = g.axes.geometry.attributes.position.array, len = g.axes.userData.length;
+      for (let i = 0; i < N; i++) {
+        const a = (k * N + i) * DIM, b = (k * N + i) * 3, o = 6 * i, pz = zOf(k, i);
+        xp[o] = P[a]; xp[o + 1] = P[a + 1]; xp[o + 2] = pz;
+        xp[o + 3] = P[a] + len * AX[b]; xp[o + 4] = P[a + 1] + len * AX[b + 1]; xp[o + 5] = pz + len * AX[b + 2];
+      }
+      g.axes.geometry.attributes.position.needsUpdate = true;
+    }
     if (ROLE) {
       q.identity();
       for (const code of [1, 2]) {
@@ -630,7 +667,8 @@
   }
   function showTip(i) {
     const c = clearanceOf(k, i), ids = D.label_ids[LAB[k * N + i]];
-    tip.textContent = `agent ${i}\nrole: ${roleOf(k, i)}\nsub-swarm: ${ids}\nspeed: ${fmt(speedOf(k, i))} m/s\nclearance: ${isFinite(c) ? fmt(c) + ' m' : 'no obstacle'}`;
+    tip.textContent = `agent ${i}\nrole: ${roleOf(k, i)}\nsub-swarm: ${ids}\nspeed: ${fmt(speedOf(k, i))} m/s\nclearance: ${isFinite(c) ? fmt(c) + ' m' : 'no obstacle'}` +
+      (AX ? `\ntilt: ${fmt(tiltOf(k, i), 1)} deg` : '');
     tip.hidden = false; tip.style.left = (tipXY[0] + 14) + 'px'; tip.style.top = (tipXY[1] + 10) + 'px';
   }
   const pick = (x, y) => view === 'persp' ? (G ? pickPersp(x, y) : -1) : pickTop(x, y);
@@ -672,9 +710,11 @@
     if (D.palette.length <= 8) D.palette.forEach((c, j) => parts.push(`<span class="sw" style="background:${c}"></span>sub-swarm ${D.label_ids[j]}`));
     if (ROLE) parts.push('<span class="sw" style="border:2px solid #000"></span>leader (thick ring), subleader (ring)');
     if (D.plans) parts.push(`&nbsp; - - plan ahead (${D.plans.count} committed)`);
+    if (D.thrust) parts.push(`&nbsp; <span class="sw" style="width:14px;height:0;border-radius:0;border-top:2px solid ${AXIS_COLOR}"></span>thrust axis (body z)`);
     $('legend').innerHTML = parts.join(' ');
     const m = D.metrics;
     $('summary').textContent = `N = ${N}, K = ${K}, dt = ${DT} s` + ('Y' in m ? `  ·  Y = ${fmt(m.Y, 0)}  R_goal = ${fmt(m.R_goal)}  E_mean = ${fmt(m.E_mean)} m  R_unsafe = ${fmt(m.R_unsafe, 3)}` : '') +
+      (D.thrust ? `  ·  largest tilt ${fmt(D.thrust.tilt_max, 1)} deg (agent ${D.thrust.agent}, t = ${fmt(D.thrust.step * DT, 2)} s)` : '') +
       `  ·  positions within ${fmt(D.quant.error * 1000, 2)} mm` + (D.note ? `  ·  ${D.note}` : '');
   }
 
@@ -733,7 +773,28 @@
       return out;
     },
     /** What the tooltip says of agent i at the current step. */
-    agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i)}),
+    agent: i => ({id: i, role: roleOf(k, i), subswarm: D.label_ids[LAB[k * N + i]], speed: speedOf(k, i), clearance: clearanceOf(k, i), tilt: tiltOf(k, i)}),
+    /** A quadrotor run's thrust axes as drawn at the current step, per agent (null: the run has
+     * none): in perspective [x, y, z], read back from the sticks' vertices over their length;
+     * top-down [x, y], the stick's end on the canvas over AXIS_PX (the axis seen from above). */
+    thrustAxes() {
+      if (!AX) return null;
+      const out = [];
+      if (view === 'top') {
+        for (let i = 0; i < N; i++) out.push([(axisTip[2 * i] - drawn[2 * i]) / AXIS_PX, -(axisTip[2 * i + 1] - drawn[2 * i + 1]) / AXIS_PX]);
+        return out;
+      }
+      const xp = G.axes.geometry.attributes.position.array, len = G.axes.userData.length;
+      for (let i = 0; i < N; i++) out.push([0, 1, 2].map(j => (xp[6 * i + 3 + j] - xp[6 * i + j]) / len));
+      return out;
+    },
+    /** What the perspective scene holds: its objects by three.js type (e.g. LineSegments: 4). */
+    sceneObjects() {
+      if (!G) return null;
+      const out = {};
+      G.scene.traverse(o => { if (o !== G.scene) out[o.type] = (out[o.type] || 0) + 1; });
+      return out;
+    },
     stats: () => ({...stats, playing, scale: RES.scale}),
     /** Adaptive resolution of the perspective view: 'adaptive' (the default) or 'full', and
      * optionally the frame budget [ms] (1000 / 30); returns the mode, budget and current scale. */
