@@ -469,7 +469,7 @@ def load_grid(path: str | Path, cell: float | None = None, unknown: str = "occup
     if kind == "ros":
         if cell is not None:
             raise ScenarioError(f"{p}: a ROS map has its own resolution: cell is for MovingAI grids and voxel maps")
-        key = (str(p.resolve()), _stamp(p), None, unknown)
+        key = (str(p.resolve()), (_stamp(p), _stamp(_ros_image(p))), None, unknown)
     elif kind in ("movingai", "voxel"):
         if unknown != "occupied":
             raise ScenarioError(f"{p}: unknown is for ROS maps (a MovingAI map has no unknown cells)")
@@ -477,6 +477,17 @@ def load_grid(path: str | Path, cell: float | None = None, unknown: str = "occup
     else:
         raise ScenarioError(f"{p}: not a map file (map files: {', '.join(s for s in MAP_SUFFIXES if s != '.scen')})")
     return _cached_grid(kind, str(p), *key)
+
+
+def _ros_image(p: Path) -> Path:
+    """The image a ROS map YAML names (for the cache key only; the reader checks everything)."""
+    import yaml
+
+    try:
+        image = yaml.safe_load(p.read_text(encoding="utf-8")).get("image")
+        return Path(image) if Path(image).is_absolute() else p.parent / image
+    except Exception:  # noqa: BLE001 - any damage is reported by read_ros_map
+        return p
 
 
 def _stamp(p: Path) -> tuple[int, int]:
