@@ -90,6 +90,8 @@ def test_sensing_on_merged_map_matches_per_cell_oracle(tmp_path_factory, occ, se
         assert merged.is_empty
         return
     assert (points_inside(merged, pts) == points_inside(cells, pts)).all()
+    centres = np.stack(np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5), -1).reshape(-1, 2)
+    assert (points_inside(merged, centres) == occ.ravel()).all()
     ring_m, ring_c = lidar_ring(merged, pts, 72, 15.0), lidar_ring(cells, pts, 72, 15.0)
     np.testing.assert_allclose(ring_m, ring_c, rtol=0, atol=1e-12)  # the same edges, the same lines
     e_m = Esdf.build(merged, (-1.0, -1.0, w + 1.0, h + 1.0), 0.25)
