@@ -11,7 +11,8 @@ for today's corridor (benchmarks/bench_sensing.py) and a random_forest scene: th
 merged random512-25 map against one box per occupied cell (the per-cell oracle).
 
 Timings are the best of several repeats after a warm-up call (compilation excluded), pinned
-to CPU 0 where ``os.sched_setaffinity`` exists.
+to CPU 0 where ``os.sched_setaffinity`` exists. The maps of 256 boxes or more are sensed through
+``swarmnav.sensing.index``. Figures: docs/maps.md (Speed).
 """
 
 from __future__ import annotations
