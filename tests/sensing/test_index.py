@@ -1,5 +1,5 @@
 """The grid index of large planar worlds (swarmnav.sensing.index) gives the plain scan's LiDAR
-ranges, signed distances and inside tests bit for bit."""
+ranges, signed distances, inside tests and line of sight bit for bit."""
 
 from __future__ import annotations
 
@@ -9,7 +9,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import swarmnav.sensing.index as index
-from swarmnav.sensing import Esdf, PreparedGeometry, lidar_ring, nearest_obstacle, points_inside, signed_distance
+from swarmnav.sensing import (
+    Esdf,
+    PreparedGeometry,
+    lidar_ring,
+    nearest_obstacle,
+    points_inside,
+    segments_blocked,
+    signed_distance,
+)
 from swarmnav.sensing.lidar import ray_table
 from swarmnav.world.obstacles import Box, Circle, Geometry, Polygon
 
@@ -40,13 +48,14 @@ def test_indexed_queries_equal_the_plain_scan(seed, n_boxes, grid):
     geom = _world(seed, n_boxes, grid)
     pts = _points(seed, geom)
     indexed = index.polygon_index(geom) is not None
+    ends = np.roll(pts, 7, axis=0) * np.random.default_rng(seed).uniform(0.0, 1.0, (len(pts), 1))
     got = (lidar_ring(geom, pts, 90, 12.0), signed_distance(geom, pts), points_inside(geom, pts),
-           nearest_obstacle(geom, pts)[0])
+           nearest_obstacle(geom, pts)[0], segments_blocked(geom, pts, ends))
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(index, "INDEX_MIN_POLYGONS", 10**9)
         assert index.polygon_index(geom) is None
         want = (lidar_ring(geom, pts, 90, 12.0), signed_distance(geom, pts), points_inside(geom, pts),
-                nearest_obstacle(geom, pts)[0])
+                nearest_obstacle(geom, pts)[0], segments_blocked(geom, pts, ends))
     assert indexed == (geom.n_polygons >= 256)
     for g, w in zip(got, want):
         np.testing.assert_array_equal(g, w)
@@ -60,9 +69,12 @@ def test_prepared_geometry_and_esdf_use_the_index_with_the_same_results():
     c, s = ray_table(72)
     ring = prep.lidar_into(pts, c, s, 15.0, np.empty((len(pts), 72)))
     dist = prep.distance_into(pts, np.empty(len(pts)))
+    ends = pts[::-1] + 0.5
+    sight = prep.blocked_into(pts, ends, np.empty(len(pts), dtype=bool))
     esdf = Esdf.build(geom, (-45.0, -45.0, 45.0, 45.0), 0.5)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(index, "INDEX_MIN_POLYGONS", 10**9)
         np.testing.assert_array_equal(ring, lidar_ring(geom, pts, 72, 15.0))
         np.testing.assert_array_equal(dist, signed_distance(geom, pts))
+        np.testing.assert_array_equal(sight, segments_blocked(geom, pts, ends))
         np.testing.assert_array_equal(esdf.values, Esdf.build(geom, (-45.0, -45.0, 45.0, 45.0), 0.5).values)

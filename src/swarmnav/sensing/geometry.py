@@ -28,7 +28,12 @@ from swarmnav.sensing._kernels3d import (
     segments_blocked3d_kernel,
 )
 
-from swarmnav.sensing.index import nearest_indexed_kernel, points_inside_indexed_kernel, polygon_index
+from swarmnav.sensing.index import (
+    nearest_indexed_kernel,
+    points_inside_indexed_kernel,
+    polygon_index,
+    segments_blocked_indexed_kernel,
+)
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
@@ -154,5 +159,9 @@ def segments_blocked(geom: Geometry, p: np.ndarray, q: np.ndarray) -> np.ndarray
     if a.shape != b.shape:
         raise ValueError(f"p and q must have the same shape, got {a.shape} and {b.shape}")
     out = np.empty(a.shape[0], dtype=np.bool_)
-    segments_blocked_kernel(*geom_arrays(geom), a, b, out)
+    index = polygon_index(geom)
+    if index is not None:
+        segments_blocked_indexed_kernel(*geom_arrays(geom), *index, a, b, out)
+    else:
+        segments_blocked_kernel(*geom_arrays(geom), a, b, out)
     return out

@@ -3,9 +3,9 @@ near it (maps from files: ``docs/maps.md``).
 
 A geometry with at least :data:`INDEX_MIN_POLYGONS` polygons is indexed: the bounding box of
 all polygons is cut into square cells, each listing the polygons whose bounding box overlaps
-it. The LiDAR ring visits the cells within its range, the signed distance the cells in rings
-of growing distance until no unvisited polygon can be nearer, the inside test the point's own
-cell. They compute, per polygon, exactly what the plain scan computes, and their results are
+it. The LiDAR ring visits the cells in rings around the agent until no ray reaches past them,
+the signed distance the cells in rings until no unvisited polygon can be nearer, the inside
+test the point's own cell, the line-of-sight test the cells under the segment. They compute, per polygon, exactly what the plain scan computes, and their results are
 minima over the same candidates, so ranges, distances and inside tests are the plain
 kernels' bit for bit (only the direction to the nearest point may differ where two boundary
 points are exactly as near). Smaller geometries (every built-in and generated scene) keep the
@@ -26,6 +26,8 @@ from swarmnav.sensing._kernels import (
     polygon_nearest,
     polygon_orientations,
     polygon_rays,
+    segment_meets_disc,
+    segment_meets_polygon,
 )
 
 #: Polygons from which a planar geometry is indexed (our choice: below a few hundred boxes the
@@ -308,3 +310,47 @@ def nearest_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, 
             else:
                 out_dir[i, 0] = 0.0
                 out_dir[i, 1] = 0.0
+
+
+@njit(cache=True)
+def segments_blocked_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi,
+                                    x0, y0, cell, nx, ny, start, items, p, q, out):
+    """As ``segments_blocked_kernel``: only the polygons listed in the cells under the segment's
+    bounding box can meet it."""
+    n_poly = poly_offsets.shape[0] - 1
+    inv = 1.0 / cell
+    seen = np.full(n_poly, -1, dtype=np.int64)
+    for m in range(p.shape[0]):
+        p0x = p[m, 0]
+        p0y = p[m, 1]
+        p1x = q[m, 0]
+        p1y = q[m, 1]
+        lox = min(p0x, p1x)
+        hix = max(p0x, p1x)
+        loy = min(p0y, p1y)
+        hiy = max(p0y, p1y)
+        blocked = False
+        ix0, ix1 = _cell_range(lox, hix, x0, inv, nx)
+        iy0, iy1 = _cell_range(loy, hiy, y0, inv, ny)
+        for iy in range(iy0, iy1 + 1):
+            for ix in range(ix0, ix1 + 1):
+                for k in range(start[iy * nx + ix], start[iy * nx + ix + 1]):
+                    pg = items[k]
+                    if seen[pg] == m:
+                        continue
+                    seen[pg] = m
+                    if hix < bbox_lo[pg, 0] or lox > bbox_hi[pg, 0] or hiy < bbox_lo[pg, 1] or loy > bbox_hi[pg, 1]:
+                        continue
+                    if segment_meets_polygon(p0x, p0y, p1x, p1y, seg_a, seg_b, poly_offsets[pg], poly_offsets[pg + 1]):
+                        blocked = True
+                        break
+                if blocked:
+                    break
+            if blocked:
+                break
+        if not blocked:
+            for c in range(circ_r.shape[0]):
+                if segment_meets_disc(p0x, p0y, p1x, p1y, circ_c[c, 0], circ_c[c, 1], circ_r[c]):
+                    blocked = True
+                    break
+        out[m] = blocked

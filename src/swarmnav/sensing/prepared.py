@@ -15,7 +15,12 @@ import numpy as np
 
 from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, nearest_kernel, segments_blocked_kernel
 from swarmnav.sensing._kernels3d import geom_arrays3d, nearest3d_kernel, range_scan_kernel, segments_blocked3d_kernel
-from swarmnav.sensing.index import lidar_indexed_kernel, nearest_indexed_kernel, polygon_index
+from swarmnav.sensing.index import (
+    lidar_indexed_kernel,
+    nearest_indexed_kernel,
+    polygon_index,
+    segments_blocked_indexed_kernel,
+)
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
@@ -70,6 +75,9 @@ class PreparedGeometry:
         :func:`swarmnav.sensing.segments_blocked` (either dimension)."""
         if self._arrays3d is not None:
             segments_blocked3d_kernel(*self._arrays3d, p, q, out)
+            return out
+        if self._index is not None:
+            segments_blocked_indexed_kernel(*self._arrays, *self._index, p, q, out)
             return out
         segments_blocked_kernel(*self._arrays, p, q, out)
         return out
