@@ -159,6 +159,17 @@ def test_scen_row_gives_spawn_and_goal():
     assert again.goal == big.goal and again.swarm == big.swarm
 
 
+@pytest.mark.parametrize("spec", ["warehouse.map.scen#3", "office.yaml#start=1:2,goal=24:14,n=5"])
+def test_map_scene_round_trips_through_a_toml_scene(spec):
+    from swarmnav.world import loads
+
+    scn = load_scenario(f"{EXAMPLES}/{spec}")
+    back = loads(scn.to_toml(), source="back.toml")
+    assert back.obstacles == scn.obstacles and back.bounds == scn.bounds and back.boundary == scn.boundary
+    assert back.goal == scn.goal and back.swarm == scn.swarm and back.contact == scn.contact
+    assert back.rules.goal_radius == scn.rules.goal_radius
+
+
 def test_toml_scene_takes_its_obstacles_from_a_map():
     scn = load_scenario(EXAMPLES / "warehouse_flight.toml")
     grid = load_grid(EXAMPLES / "warehouse.map")
