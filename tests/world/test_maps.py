@@ -253,6 +253,8 @@ def test_voxel_map_merges_exactly_and_flies_as_a_3d_scene(tmp_path):
     ("type octile\nwidth 2\nmap\n..\n", "no 'height' line"),
     ("type octile\nheight two\nwidth 2\nmap\n..\n..\n", "height must be an integer"),
     ("", "no 'type' line"),
+    ("type hex\nheight 1\nwidth 1\nmap\n.\n", "not a square grid"),
+    ("type octile\nheight 1\nwidth 2\nmap\n.\u00e9\n", "unknown terrain '\u00e9'"),
 ])
 def test_bad_movingai_map_is_one_line(tmp_path, text, fragment):
     (tmp_path / "b.map").write_text(text)

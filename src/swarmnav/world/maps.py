@@ -36,6 +36,9 @@ from swarmnav.world.obstacles import Box
 #: MovingAI characters (movingai.com/benchmarks/formats.html): passable and blocked terrain.
 MOVINGAI_FREE = ".GS"
 MOVINGAI_BLOCKED = "@OTW"
+#: Square-grid map types (octile: the benchmarks' type; tile and octile_unicost: the same grid
+#: with other move costs, which do not change the obstacles).
+MOVINGAI_TYPES = ("octile", "tile", "octile_unicost")
 #: Largest map a file may declare [cells] (our choice: 16.8 M cells, four times the largest
 #: MovingAI benchmark map, so a typo in a header fails at once instead of exhausting memory).
 MAX_CELLS = 1 << 24
@@ -224,6 +227,9 @@ def read_movingai_map(path: str | Path, cell: float = 1.0) -> OccupancyGrid:
         if key not in head:
             raise ScenarioError(f"{src}: the header has no '{key}' line (a MovingAI map starts 'type octile', "
                                 "'height H', 'width W', 'map')")
+    if head["type"].lower() not in MOVINGAI_TYPES:
+        raise ScenarioError(f"{src}: map type {head['type']!r} is not a square grid "
+                            f"(types: {', '.join(MOVINGAI_TYPES)})")
     if k == len(lines):
         raise ScenarioError(f"{src}: no 'map' line: the file ends in its header")
     h = _int(head["height"], src, "height", 1)
@@ -242,10 +248,9 @@ def read_movingai_map(path: str | Path, cell: float = 1.0) -> OccupancyGrid:
     for r, row in enumerate(rows):
         if len(row) != w:
             raise ScenarioError(f"{src}: map row {r} has {len(row)} characters, the header says width {w}")
-        b = np.frombuffer(row.encode("latin-1", "replace"), dtype=np.uint8) if row.isascii() else None
-        kind = table[b] if b is not None else np.full(w, 2, dtype=np.int8)
+        kind = table[np.frombuffer(row.encode("ascii", "replace"), dtype=np.uint8)]  # non-ASCII: '?'
         if (kind == 2).any():
-            x = int(np.argmax(kind == 2)) if b is not None else next(i for i, c in enumerate(row) if not c.isascii())
+            x = int(np.argmax(kind == 2))
             raise ScenarioError(f"{src}: map row {r}, column {x}: unknown terrain {row[x]!r} "
                                 f"(passable: {' '.join(MOVINGAI_FREE)}; obstacles: {' '.join(MOVINGAI_BLOCKED)})")
         grid[h - 1 - r] = kind == 1
@@ -411,7 +416,8 @@ def _grey_alpha(im, src: str, ip: Path) -> tuple[np.ndarray, np.ndarray]:
 def read_voxel_map(path: str | Path, cell: float = 1.0) -> OccupancyGrid:
     """Read a MovingAI 3-D voxel map (``.3dmap``): a ``voxel W H D`` line, then one ``x y z`` line
     per occupied voxel (0 <= x < W, 0 <= y < H, 0 <= z < D). Voxel ``(x, y, z)`` is the cube
-    ``[x, x + 1] x [y, y + 1] x [z, z + 1]`` times ``cell`` [m]; z is up."""
+    ``[x, x + 1] x [y, y + 1] x [z, z + 1]`` times ``cell`` [m]; z is up (our reading: the
+    format does not name its vertical axis)."""
     p = Path(path)
     src = str(p)
     cell = _cell(cell, src)
