@@ -401,6 +401,18 @@ def test_damaged_ros_image_loads_or_fails_in_one_line(tmp_path, cut, flip, byte)
     _loads_or_one_line(f"{d}/office.yaml#start=1:2,goal=24:14")
 
 
+def test_cli_runs_and_shows_a_map_scene(tmp_path, capsys):
+    import tomllib
+
+    from swarmnav.cli import main
+
+    assert main(["run", "--method", "apf", "--scenario-file", f"{EXAMPLES}/warehouse.map.scen#2", "--steps", "20",
+                 "--out", str(tmp_path / "r"), "--quiet"]) == 0
+    assert "apf on warehouse.map.scen#row=2,n=4" in capsys.readouterr().out
+    assert main(["scenarios", "show", f"{EXAMPLES}/warehouse.map.scen#2"]) == 0
+    assert tomllib.loads(capsys.readouterr().out)["goal"]["position"] == [44.5, 14.5]
+
+
 def test_cli_map_scene_error_is_one_line_exit_2(tmp_path):
     import os
 
