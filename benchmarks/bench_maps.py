@@ -8,7 +8,8 @@ room512-32 maps). Prints the merged box count, the time to load the scene, and f
 for today's corridor (benchmarks/bench_sensing.py) and a random_forest scene: the LiDAR ring
 (20 agents x 360 rays, 20 m) per ray, signed distance per point, and an ESDF build per node
 (a 40 m x 40 m window at 0.25 m). It also checks the LiDAR ring and the signed distance on the
-merged random512-25 map against one box per occupied cell (the per-cell oracle).
+merged random512-25 map against one box per occupied cell (the per-cell oracle), and times the
+3-D range scan on a 64 x 64 x 16 MovingAI-style voxel map beside the SPH 3-D forest.
 
 Timings are the best of several repeats after a warm-up call (compilation excluded), pinned
 to CPU 0 where ``os.sched_setaffinity`` exists. The maps of 256 boxes or more are sensed through
@@ -34,7 +35,7 @@ except ImportError:  # running from a checkout without installing
 
 from bench_sensing import best_time, corridor  # noqa: E402
 
-from swarmnav.sensing import Esdf, lidar_ring, signed_distance  # noqa: E402
+from swarmnav.sensing import Esdf, lidar_ring, range_scan, signed_distance  # noqa: E402
 from swarmnav.world import load_scenario  # noqa: E402
 from swarmnav.world.maps import load_grid  # noqa: E402
 from swarmnav.world.obstacles import Box, Geometry  # noqa: E402
@@ -87,6 +88,30 @@ def measure(name: str, geom: Geometry, window: tuple[float, float, float, float]
             "boxes": geom.n_polygons + geom.n_circles}
 
 
+def measure3d(rng) -> list[tuple[str, int, float]]:
+    """3-D range scan (20 agents x 360 random directions, 20 m) per ray [s]: a 64 x 64 x 16 voxel
+    map at 0.5 m (each voxel occupied with probability 0.1, seed 0) and the SPH 3-D forest."""
+    occ = np.random.default_rng(0).random((16, 64, 64)) < 0.1
+    z, y, x = np.nonzero(occ)
+    dirs = rng.normal(size=(360, 3))
+    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
+    out = []
+    with tempfile.TemporaryDirectory() as d:
+        f = Path(d) / "v.3dmap"
+        f.write_text("voxel 64 64 16\n" + "".join(f"{a} {b} {c}\n" for a, b, c in zip(x, y, z)))
+        voxels = Geometry.from_obstacles(load_grid(f, cell=0.5).boxes(), dim=3)
+    forest = load_scenario("random_forest_3d:density=0.15,seed=3")
+    for name, geom, lo, hi in ((f"voxel map 64x64x16 ({int(occ.sum())} voxels)", voxels, (0, 0, 0), (32, 32, 8)),
+                               ("random_forest_3d:density=0.15,seed=3", forest.geometry, forest.lower, forest.upper)):
+        agents = np.zeros((0, 3))
+        while len(agents) < 20:
+            p = rng.uniform(lo, hi, (80, 3))
+            agents = np.vstack([agents, p[signed_distance(geom, p) > 0.05]])
+        t = best_time(lambda: range_scan(geom, agents[:20], dirs, 20.0), repeats=3)
+        out.append((name, geom.n_polygons + geom.n_circles + geom.n_spheres, t / (20 * 360)))
+    return out
+
+
 def main() -> None:
     pinned = False
     if hasattr(os, "sched_setaffinity"):
@@ -132,6 +157,10 @@ def main() -> None:
         load = f"{r['load']:.2f}" if "load" in r else "-"
         print(f"{r['name']:<40}{r['boxes']:>8}{load:>8}{r['ray'] * 1e9:>9.1f}{r['ray'] / base:>8.1f}"
               f"{r['point'] * 1e6:>10.2f}{r['node'] * 1e6:>9.2f}")
+    rows3 = measure3d(rng)
+    print(f"3-D range scan, 20 agents x 360 directions, 20 m (no index in 3-D)\n{'scene':<40}{'boxes':>8}{'us/ray':>9}")
+    for name, n, t in rows3:
+        print(f"{name:<40}{n:>8}{t * 1e6:>9.2f}")
 
 
 if __name__ == "__main__":
