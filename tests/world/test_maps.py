@@ -324,6 +324,19 @@ def test_bad_ros_map_is_one_line(tmp_path, yaml_text, fragment):
     assert fragment in str(e.value) and "\n" not in str(e.value)
 
 
+@pytest.mark.parametrize("text, fragment", [
+    ("voxel 4 4 2\n0 0 0 1\n1 1\n", "line 2: a voxel is three integers"),
+    ("voxel 4 4 2\n0 0 x\n", "line 2: a voxel is three integers"),
+    ("voxel 4 4 2\n0 0 0\n4 0 0\n", "line 3: voxel [4, 0, 0] lies outside"),
+    ("voxel 4 4\n", "starts with 'voxel W H D'"),
+])
+def test_bad_voxel_map_is_one_line(tmp_path, text, fragment):
+    (tmp_path / "b.3dmap").write_text(text)
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(f"{tmp_path}/b.3dmap#start=0.5:3.5:0.5,goal=3.5:3.5:1.5,n=1,spread=0.4")
+    assert fragment in str(e.value) and "\n" not in str(e.value)
+
+
 def test_bad_map_table_in_a_scene(tmp_path):
     base = '[swarm]\nn = 2\nspawn = [1, 1, 5, 5]\n[goal]\nposition = [40, 20]\n'
     for table, fragment in (('[map]\nfile = "nope.map"\n', "no such map file"),

@@ -429,13 +429,16 @@ def read_voxel_map(path: str | Path, cell: float = 1.0) -> OccupancyGrid:
     if w * h * d > MAX_CELLS:
         raise ScenarioError(f"{src}: {w} x {h} x {d} voxels is more than {MAX_CELLS} cells")
     body = lines[1:]
-    try:
-        xyz = np.array([[int(t) for t in ln.split()] for ln in body], dtype=np.int64).reshape(-1, 3)
-    except ValueError:
-        bad = next(k for k, ln in enumerate(body) if len(ln.split()) != 3 or not all(
-            t.lstrip("-").isdigit() for t in ln.split()))
-        raise ScenarioError(f"{src}: line {bad + 2}: a voxel is three integers 'x y z', "
-                            f"got {body[bad].strip()[:40]!r}") from None
+    xyz = np.zeros((len(body), 3), dtype=np.int64)
+    for k, ln in enumerate(body):
+        tok = ln.split()
+        try:
+            if len(tok) != 3:
+                raise ValueError
+            xyz[k] = [int(t) for t in tok]
+        except (ValueError, OverflowError):
+            raise ScenarioError(f"{src}: line {k + 2}: a voxel is three integers 'x y z', "
+                                f"got {ln.strip()[:40]!r}") from None
     out = (xyz < 0) | (xyz >= np.array([w, h, d]))
     if out.any():
         k = int(np.argmax(out.any(axis=1)))
