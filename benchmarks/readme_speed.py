@@ -59,6 +59,11 @@ FACTS = (
     Fact("vem step at N = 1e5, ours / NumPy + cKDTree [ms] and ratio", "`vem` step, N = 1e5",
          r"^([\d.]+) ms; ([\d.]+)x faster than the usual NumPy \+ cKDTree Vicsek step measured beside it \(([\d.]+) ms\)$",
          "docs/methods/vicsek.md", r"\| 10\^5 \| ([\d.]+) ms \([\d.]+ steps/s\) \| ([\d.]+) ms \| ([\d.]+)× \|"),
+    Fact("LiDAR per ray on 512 x 512 maps, rooms / random [ns] and ratios to the corridor",
+         "LiDAR ring on 512 x 512 MovingAI-style maps",
+         r"^([\d.]+) / ([\d.]+) ns \(([\d.]+)x / ([\d.]+)x the corridor's", "docs/maps.md",
+         r"\| room512-32 style map [^|]*\| [\d ]+ \| ([\d.]+) \| ([\d.]+)× \|.*?"
+         r"\| random512-25 style map [^|]*\| [\d ]+ \| ([\d.]+) \| ([\d.]+)× \|"),
     Fact("portable / native wall time: range and geometric mean", "portable numerics (the default) against native",
          r"^([\d.]+)-([\d.]+)x wall time, geometric mean ([\d.]+)$", "docs/determinism.md", ""),
     Fact("swarmnav.env vs VMAS: env steps/s (1 env, 64 copies) and ratio ranges", "`swarmnav.env`, 20 agents",
@@ -71,6 +76,9 @@ def _order(fact: Fact, readme: list[str]) -> list[str]:
     if fact.name.startswith("vem"):
         ours, ratio, plain = readme
         return [ours, plain, ratio]
+    if fact.name.startswith("LiDAR per ray on 512"):
+        rooms, scattered, rooms_x, scattered_x = readme
+        return [rooms, rooms_x, scattered, scattered_x]
     return readme
 
 

@@ -132,6 +132,8 @@ def _cmd_scenarios(args) -> int:
             s = load_scenario(name)
             print(f"{name:28s} N={s.n:<4d} goal=({s.goal[0]:g}, {s.goal[1]:g}) m  {s.description}")
         print("generators: " + ", ".join(f"{g}:key=value,..." for g in GENERATORS))
+        print("map files (docs/maps.md): X.map.scen#ROW, X.map#start=x:y,goal=x:y, X.yaml#start=x:y,goal=x:y, "
+              "X.3dmap#start=x:y:z,goal=x:y:z")
         return 0
     if args.action != "show" or not args.name:
         raise ConfigError("usage: swarmnav scenarios [show NAME [--plot PNG]]")
@@ -496,7 +498,8 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("run", help="run one simulation and write a run directory")
     s.add_argument("--method", required=True)
     s.add_argument("--scenario", metavar="NAME", help="built-in scene or generator spec")
-    s.add_argument("--scenario-file", metavar="PATH", help="a .toml scene file")
+    s.add_argument("--scenario-file", metavar="PATH",
+                   help="a .toml scene file, or a map file with options (X.map.scen#ROW; docs/maps.md)")
     s.add_argument("--seed", type=int, default=1)
     length = s.add_mutually_exclusive_group()
     length.add_argument("--steps", type=int, help="integration steps (default 1000; the method's dt each)")

@@ -213,17 +213,10 @@ def lidar_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, p
     n_agents = positions.shape[0]
     n_rays = cos_t.shape[0]
     n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
     inv_dth = n_rays / (2.0 * math.pi)
     r2max = max_range * max_range
 
-    # +1 for counter-clockwise polygons, -1 for clockwise (sign of the shoelace area).
-    orient = np.empty(n_poly)
-    for p in range(n_poly):
-        area2 = 0.0
-        for k in range(poly_offsets[p], poly_offsets[p + 1]):
-            area2 += seg_a[k, 0] * seg_b[k, 1] - seg_a[k, 1] * seg_b[k, 0]
-        orient[p] = 1.0 if area2 > 0.0 else -1.0
+    orient = polygon_orientations(seg_a, seg_b, poly_offsets)
 
     for i in range(n_agents):
         px = positions[i, 0]
@@ -237,79 +230,106 @@ def lidar_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, p
             row[r] = max_range
 
         for p in range(n_poly):
-            # Whole-polygon cull on the distance to its bounding box.
-            dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
-            dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
-            if dx * dx + dy * dy >= r2max:
-                continue
-            sgn = orient[p]
-            for k in range(poly_offsets[p], poly_offsets[p + 1]):
-                ax = seg_a[k, 0] - px
-                ay = seg_a[k, 1] - py
-                bx = seg_b[k, 0] - px
-                by = seg_b[k, 1] - py
-                ex = bx - ax
-                ey = by - ay
-                cr = ax * ey - ay * ex  # cross(a - p, b - a) = cross(a - p, b - p)
-                # Back-facing or edge-on (agent on the supporting line): never a first hit;
-                # an edge-on edge's near vertex is hit through the neighbouring edge.
-                if sgn * cr >= 0.0:
-                    continue
-                ee = ex * ex + ey * ey
-                ae = ax * ex + ay * ey
-                aa = ax * ax + ay * ay
-                s_near = min(max(-ae / ee, 0.0), 1.0)
-                nx = ax + s_near * ex
-                ny = ay + s_near * ey
-                if nx * nx + ny * ny >= r2max:
-                    continue
-                # Clip the edge to the range disc |a + s e - p| <= max_range, so long walls
-                # only cost the rays that can see them within range.
-                disc = ae * ae - ee * (aa - r2max)
-                sq = math.sqrt(max(disc, 0.0))
-                s0 = max((-ae - sq) / ee, 0.0)
-                s1 = min((-ae + sq) / ee, 1.0)
-                c0x = ax + s0 * ex
-                c0y = ay + s0 * ey
-                c1x = ax + s1 * ex
-                c1y = ay + s1 * ey
-                th0 = _bearing(c0y, c0x)
-                th1 = _bearing(c1y, c1x)
-                # cr > 0: b is counter-clockwise of a seen from p, so sweep a -> b.
-                if cr > 0.0:
-                    t_start = th0
-                    span = th1 - th0
-                else:
-                    t_start = th1
-                    span = th0 - th1
-                if span < 0.0:
-                    span += 2.0 * math.pi
-                # the bearings' error covered by a margin on both ends (a full turn at most)
-                r_lo, r_hi = _ray_index_span(t_start - BEARING_PAD, min(span + 2.0 * BEARING_PAD, 2.0 * math.pi),
-                                             inv_dth)
-                while r_lo <= r_hi:  # the unwrapped interval, one piece within [0, n_rays) at a time
-                    base = (r_lo // n_rays) * n_rays
-                    hi = min(r_hi - base + 1, n_rays)
-                    _edge_rays(row, r_lo - base, hi, cos_t, sin_t, ax, ay, bx, by, cr)
-                    r_lo = base + hi
+            polygon_rays(row, p, px, py, orient[p], seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi, cos_t, sin_t,
+                         r2max, inv_dth)
+        circles_rays(row, px, py, circ_c, circ_r, cos_t, sin_t, max_range, inv_dth)
 
-        for c in range(n_circ):
-            cx = circ_c[c, 0] - px
-            cy = circ_c[c, 1] - py
-            rc = circ_r[c]
-            d2 = cx * cx + cy * cy
-            dc = math.sqrt(d2)
-            if dc - rc >= max_range:
-                continue
-            half = math.asin(min(rc / dc, 1.0))  # half-angle of the tangent cone
-            phi = math.atan2(cy, cx)
-            q = (dc - rc) * (dc + rc)  # |c - p|^2 - r^2 > 0 outside
-            r_lo, r_hi = _ray_index_span(phi - half, 2.0 * half, inv_dth)
-            while r_lo <= r_hi:
-                base = (r_lo // n_rays) * n_rays
-                hi = min(r_hi - base + 1, n_rays)
-                _disc_rays(row, r_lo - base, hi, cos_t, sin_t, cx, cy, rc, q)
-                r_lo = base + hi
+
+@njit(cache=True)
+def polygon_orientations(seg_a, seg_b, poly_offsets):
+    """+1 for each counter-clockwise polygon, -1 for a clockwise one (sign of the shoelace area)."""
+    n_poly = poly_offsets.shape[0] - 1
+    orient = np.empty(n_poly)
+    for p in range(n_poly):
+        area2 = 0.0
+        for k in range(poly_offsets[p], poly_offsets[p + 1]):
+            area2 += seg_a[k, 0] * seg_b[k, 1] - seg_a[k, 1] * seg_b[k, 0]
+        orient[p] = 1.0 if area2 > 0.0 else -1.0
+    return orient
+
+
+@njit(cache=True)
+def polygon_rays(row, p, px, py, sgn, seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi, cos_t, sin_t, r2max, inv_dth):
+    """The LiDAR ring ``row`` of an agent at (px, py), outside every obstacle, against polygon ``p``
+    (orientation ``sgn``): each facing edge within range lowers the rays it crosses."""
+    n_rays = cos_t.shape[0]
+    # Whole-polygon cull on the distance to its bounding box.
+    dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
+    dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
+    if dx * dx + dy * dy >= r2max:
+        return
+    for k in range(poly_offsets[p], poly_offsets[p + 1]):
+        ax = seg_a[k, 0] - px
+        ay = seg_a[k, 1] - py
+        bx = seg_b[k, 0] - px
+        by = seg_b[k, 1] - py
+        ex = bx - ax
+        ey = by - ay
+        cr = ax * ey - ay * ex  # cross(a - p, b - a) = cross(a - p, b - p)
+        # Back-facing or edge-on (agent on the supporting line): never a first hit;
+        # an edge-on edge's near vertex is hit through the neighbouring edge.
+        if sgn * cr >= 0.0:
+            continue
+        ee = ex * ex + ey * ey
+        ae = ax * ex + ay * ey
+        aa = ax * ax + ay * ay
+        s_near = min(max(-ae / ee, 0.0), 1.0)
+        nx = ax + s_near * ex
+        ny = ay + s_near * ey
+        if nx * nx + ny * ny >= r2max:
+            continue
+        # Clip the edge to the range disc |a + s e - p| <= max_range, so long walls
+        # only cost the rays that can see them within range.
+        disc = ae * ae - ee * (aa - r2max)
+        sq = math.sqrt(max(disc, 0.0))
+        s0 = max((-ae - sq) / ee, 0.0)
+        s1 = min((-ae + sq) / ee, 1.0)
+        c0x = ax + s0 * ex
+        c0y = ay + s0 * ey
+        c1x = ax + s1 * ex
+        c1y = ay + s1 * ey
+        th0 = _bearing(c0y, c0x)
+        th1 = _bearing(c1y, c1x)
+        # cr > 0: b is counter-clockwise of a seen from p, so sweep a -> b.
+        if cr > 0.0:
+            t_start = th0
+            span = th1 - th0
+        else:
+            t_start = th1
+            span = th0 - th1
+        if span < 0.0:
+            span += 2.0 * math.pi
+        # the bearings' error covered by a margin on both ends (a full turn at most)
+        r_lo, r_hi = _ray_index_span(t_start - BEARING_PAD, min(span + 2.0 * BEARING_PAD, 2.0 * math.pi),
+                                     inv_dth)
+        while r_lo <= r_hi:  # the unwrapped interval, one piece within [0, n_rays) at a time
+            base = (r_lo // n_rays) * n_rays
+            hi = min(r_hi - base + 1, n_rays)
+            _edge_rays(row, r_lo - base, hi, cos_t, sin_t, ax, ay, bx, by, cr)
+            r_lo = base + hi
+
+
+@njit(cache=True)
+def circles_rays(row, px, py, circ_c, circ_r, cos_t, sin_t, max_range, inv_dth):
+    """The LiDAR ring ``row`` of an agent at (px, py), outside every obstacle, against every circle."""
+    n_rays = cos_t.shape[0]
+    for c in range(circ_r.shape[0]):
+        cx = circ_c[c, 0] - px
+        cy = circ_c[c, 1] - py
+        rc = circ_r[c]
+        d2 = cx * cx + cy * cy
+        dc = math.sqrt(d2)
+        if dc - rc >= max_range:
+            continue
+        half = math.asin(min(rc / dc, 1.0))  # half-angle of the tangent cone
+        phi = math.atan2(cy, cx)
+        q = (dc - rc) * (dc + rc)  # |c - p|^2 - r^2 > 0 outside
+        r_lo, r_hi = _ray_index_span(phi - half, 2.0 * half, inv_dth)
+        while r_lo <= r_hi:
+            base = (r_lo // n_rays) * n_rays
+            hi = min(r_hi - base + 1, n_rays)
+            _disc_rays(row, r_lo - base, hi, cos_t, sin_t, cx, cy, rc, q)
+            r_lo = base + hi
 
 
 # ---------------------------------------------------------------------------------------------

@@ -28,6 +28,13 @@ from swarmnav.sensing._kernels3d import (
     segments_blocked3d_kernel,
 )
 
+from swarmnav.sensing.index import (
+    nearest_indexed_kernel,
+    points_inside_indexed_kernel,
+    polygon_index,
+    segments_blocked_indexed_kernel,
+)
+
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
 
@@ -68,8 +75,16 @@ def signed_distance(geom: Geometry, points: np.ndarray) -> np.ndarray:
         return d
     pts = as_points(points)
     d = np.empty(pts.shape[0])
-    nearest_kernel(*geom_arrays(geom), pts, d, _NO_DIR, False)
+    _nearest(geom, pts, d, _NO_DIR, False)
     return d
+
+
+def _nearest(geom: Geometry, pts: np.ndarray, d: np.ndarray, v: np.ndarray, want_dir: bool) -> None:
+    index = polygon_index(geom)
+    if index is not None:  # a large map: the same distances, visiting only the polygons near each point
+        nearest_indexed_kernel(*geom_arrays(geom), *index, pts, d, v, want_dir)
+    else:
+        nearest_kernel(*geom_arrays(geom), pts, d, v, want_dir)
 
 
 def nearest_obstacle(geom: Geometry, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -94,7 +109,7 @@ def nearest_obstacle(geom: Geometry, points: np.ndarray) -> tuple[np.ndarray, np
     pts = as_points(points)
     d = np.empty(pts.shape[0])
     v = np.empty((pts.shape[0], 2))
-    nearest_kernel(*geom_arrays(geom), pts, d, v, True)
+    _nearest(geom, pts, d, v, True)
     return d, v
 
 
@@ -109,7 +124,11 @@ def points_inside(geom: Geometry, points: np.ndarray) -> np.ndarray:
         return out
     pts = as_points(points)
     out = np.empty(pts.shape[0], dtype=np.bool_)
-    points_inside_kernel(*geom_arrays(geom), pts, out)
+    index = polygon_index(geom)
+    if index is not None:
+        points_inside_indexed_kernel(*geom_arrays(geom), *index, pts, out)
+    else:
+        points_inside_kernel(*geom_arrays(geom), pts, out)
     return out
 
 
@@ -140,5 +159,9 @@ def segments_blocked(geom: Geometry, p: np.ndarray, q: np.ndarray) -> np.ndarray
     if a.shape != b.shape:
         raise ValueError(f"p and q must have the same shape, got {a.shape} and {b.shape}")
     out = np.empty(a.shape[0], dtype=np.bool_)
-    segments_blocked_kernel(*geom_arrays(geom), a, b, out)
+    index = polygon_index(geom)
+    if index is not None:
+        segments_blocked_indexed_kernel(*geom_arrays(geom), *index, a, b, out)
+    else:
+        segments_blocked_kernel(*geom_arrays(geom), a, b, out)
     return out

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from swarmnav.sensing._kernels import as_points, geom_arrays, lidar_kernel
+from swarmnav.sensing.index import lidar_indexed_kernel, polygon_index
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
@@ -72,5 +73,9 @@ def lidar_ring(geom: Geometry, positions: np.ndarray, n_rays: int = 360, max_ran
         raise ValueError("positions must be finite")
     cos_t, sin_t = ray_table(n_rays)
     out = np.empty((pos.shape[0], n_rays), dtype=np.float64)
-    lidar_kernel(*geom_arrays(geom), pos, cos_t, sin_t, max_range, out)
+    index = polygon_index(geom)
+    if index is not None:  # a large map: the same ranges, visiting only the polygons in range
+        lidar_indexed_kernel(*geom_arrays(geom), *index, pos, cos_t, sin_t, max_range, out)
+    else:
+        lidar_kernel(*geom_arrays(geom), pos, cos_t, sin_t, max_range, out)
     return out

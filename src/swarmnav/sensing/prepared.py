@@ -15,6 +15,12 @@ import numpy as np
 
 from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, nearest_kernel, segments_blocked_kernel
 from swarmnav.sensing._kernels3d import geom_arrays3d, nearest3d_kernel, range_scan_kernel, segments_blocked3d_kernel
+from swarmnav.sensing.index import (
+    lidar_indexed_kernel,
+    nearest_indexed_kernel,
+    polygon_index,
+    segments_blocked_indexed_kernel,
+)
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
@@ -31,12 +37,13 @@ class PreparedGeometry:
     (M, d) arrays, ``d = geom.dim``, and ``out`` a buffer of the documented shape and dtype.
     """
 
-    __slots__ = ("geom", "_arrays", "_arrays3d")
+    __slots__ = ("geom", "_arrays", "_arrays3d", "_index")
 
     def __init__(self, geom: Geometry):
         self.geom = geom
         self._arrays = geom_arrays(geom) if geom.dim == 2 else None
         self._arrays3d = geom_arrays3d(geom) if geom.dim == 3 else None
+        self._index = polygon_index(geom)  # None but for a large planar map (sensing.index)
 
     @property
     def is_empty(self) -> bool:
@@ -57,7 +64,10 @@ class PreparedGeometry:
         as :func:`swarmnav.sensing.lidar_ring` (``max_range`` where nothing is hit). Planar only."""
         if self._arrays is None:
             raise ValueError("lidar_into is the planar ring; use range_into in a 3-D world")
-        lidar_kernel(*self._arrays, positions, cos_t, sin_t, float(max_range), out)
+        if self._index is not None:
+            lidar_indexed_kernel(*self._arrays, *self._index, positions, cos_t, sin_t, float(max_range), out)
+        else:
+            lidar_kernel(*self._arrays, positions, cos_t, sin_t, float(max_range), out)
         return out
 
     def blocked_into(self, p: np.ndarray, q: np.ndarray, out: np.ndarray) -> np.ndarray:
@@ -65,6 +75,9 @@ class PreparedGeometry:
         :func:`swarmnav.sensing.segments_blocked` (either dimension)."""
         if self._arrays3d is not None:
             segments_blocked3d_kernel(*self._arrays3d, p, q, out)
+            return out
+        if self._index is not None:
+            segments_blocked_indexed_kernel(*self._arrays, *self._index, p, q, out)
             return out
         segments_blocked_kernel(*self._arrays, p, q, out)
         return out
@@ -74,6 +87,8 @@ class PreparedGeometry:
         :func:`swarmnav.sensing.signed_distance` (either dimension; the geometry must not be empty)."""
         if self._arrays3d is not None:
             nearest3d_kernel(*self._arrays3d, points, out, _NO_DIR3, False)
+        elif self._index is not None:
+            nearest_indexed_kernel(*self._arrays, *self._index, points, out, _NO_DIR, False)
         else:
             nearest_kernel(*self._arrays, points, out, _NO_DIR, False)
         return out

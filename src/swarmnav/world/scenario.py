@@ -289,7 +289,8 @@ class Scenario:
 
 # --------------------------------------------------------------------------- parsing
 
-_TOP_KEYS = {"name", "description", "world", "swarm", "goal", "rules", "obstacles"}
+_TOP_KEYS = {"name", "description", "world", "swarm", "goal", "rules", "obstacles", "map"}
+_MAP_KEYS = {"file", "cell", "unknown"}
 _WORLD_KEYS = {"bounds", "periodic", "boundary"}
 _RULES_KEYS = {"goal_radius", "d_safe", "body_radius", "contact"}
 _SWARM_KEYS = {"n", "spawn", "min_spacing", "clearance", "density"}
@@ -326,9 +327,12 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     periodic = world.get("periodic", False)
     if not isinstance(periodic, bool):
         raise ctx.err("world.periodic", "must be true or false")
-    # a scene that declares its world is closed by default; without bounds there is no declared
-    # world to close (its bounds are only the padded extent of what it holds): open
-    boundary = world.get("boundary", "periodic" if periodic else "wall" if "bounds" in world else "open")
+    grid = _map_grid(ctx, data) if "map" in data else None
+    # a scene that declares its world is closed by default (a map declares its world: its
+    # extent); without bounds there is no declared world to close (its bounds are only the
+    # padded extent of what it holds): open
+    declared = "bounds" in world or grid is not None
+    boundary = world.get("boundary", "periodic" if periodic else "wall" if declared else "open")
     if not isinstance(boundary, str) or boundary not in BOUNDARIES:
         raise ctx.err("world.boundary", f"must be one of {', '.join(repr(b) for b in BOUNDARIES)}, got {boundary!r}")
     if periodic and boundary != "periodic":
@@ -391,9 +395,15 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
     if not isinstance(obstacles_raw, list):
         raise ctx.err("obstacles", "must be an array of tables ([[obstacles]])")
     obstacles = tuple(ctx.obstacle(o, k, dim) for k, o in enumerate(obstacles_raw))
+    if grid is not None:
+        if grid.dim != dim:
+            raise ctx.err("map.file", f"is a {grid.dim}-D map but {_WORLD[dim]}")
+        obstacles = grid.boxes() + obstacles
 
     if "bounds" in world:
         bounds = ctx.rect(world["bounds"], "world.bounds", dim)
+    elif grid is not None:
+        bounds = grid.bounds
     else:
         bounds = _default_bounds(Swarm(n=n, spawn=spawn, density=density).region, goal, obstacles)
 
@@ -411,6 +421,30 @@ def from_dict(data: dict, source: str = "<dict>") -> Scenario:
         rules=rules,
     )
     return validate(scn)
+
+
+def _map_grid(ctx: _Ctx, data: dict):
+    """The ``[map]`` table's occupancy grid: ``file`` relative to the scene file, ``cell`` [m] for
+    the formats without a resolution, ``unknown`` for ROS maps (docs/maps.md)."""
+    from swarmnav.world import maps
+
+    t = ctx.table(data, "map", required=False)
+    ctx.keys(t, _MAP_KEYS, "map")
+    f = t.get("file")
+    if not isinstance(f, str) or not f:
+        raise ctx.err("map.file", f"must be the map file's path, got {f!r}" if "file" in t else "is required")
+    kind = maps.map_kind(f)
+    if kind is None or kind == "scen":
+        raise ctx.err("map.file", f"must be a .map, .yaml/.yml (ROS) or .3dmap file, got {f!r}")
+    cell = ctx.positive(t["cell"], "map.cell") if "cell" in t else None
+    if cell is not None and kind == "ros":
+        raise ctx.err("map.cell", "is for MovingAI grids and voxel maps: a ROS map has its own resolution")
+    unknown = t.get("unknown", "occupied")
+    if unknown not in maps.UNKNOWN_AS or kind != "ros" and "unknown" in t:
+        raise ctx.err("map.unknown", f"must be one of {', '.join(maps.UNKNOWN_AS)} (ROS maps only), got {unknown!r}")
+    base = Path(ctx.source).parent if not ctx.source.startswith("<") else Path.cwd()
+    path = Path(f) if Path(f).is_absolute() else base / f
+    return maps.load_grid(path, cell=cell, unknown=unknown)
 
 
 def validate(scn: Scenario) -> Scenario:
@@ -682,9 +716,12 @@ def builtin_names() -> list[str]:
 def load_file(path: str | Path) -> Scenario:
     """Load and validate a scene file."""
     p = Path(path)
-    if p.suffix.lower() in (".json", ".yaml", ".yml"):
-        raise ScenarioError(f"{p}: scene files are TOML (.toml), not {p.suffix[1:].upper()}; "
+    if p.suffix.lower() == ".json":
+        raise ScenarioError(f"{p}: scene files are TOML (.toml), not JSON; "
                             "'swarmnav scenarios show NAME' prints one to start from")
+    if p.suffix.lower() in (".map", ".scen", ".yaml", ".yml", ".3dmap"):
+        raise ScenarioError(f"{p}: a map file, not a scene file: load_scenario (--scenario-file) reads it "
+                            "(docs/maps.md), or a scene's [map] table names it")
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
