@@ -265,8 +265,8 @@ class HesParams:
     llm_threads: int = param(0, "", "[0, 1024]", "ours", "llama.cpp CPU threads (0: llama-cpp-python's default)")
     # ---------------------------------------------------------------- decision=oracle (ours, docs/oracle.md)
     oracle_horizon: float = param(20.0, "s", "(0, 1000]", "ours",
-        "lookahead flown after each feasible action, the rule deciding (20 s: a sub-swarm's passage of "
-        "one obstacle row at cruise speed)")
+        "lookahead flown after each feasible action, the rule deciding (20 s: half the ~40 s crossing "
+        "of the 70 m scenes at cruise speed)")
     oracle_w_reach: float = param(50.0, "m", "[0, inf)", "ours",
         "objective weight of R (fraction of agents at the goal at the horizon's end), metres of progress")
     oracle_w_success: float = param(100.0, "m", "[0, inf)", "ours",
