@@ -118,6 +118,8 @@ class OracleSource:
                 "hes_oracle_gap": self.gap / d if d else 0.0, "hes_oracle_gain": self.gain / d if d else 0.0}
 
     def timings(self) -> dict[str, float]:
-        """Wall-clock figures: the lookahead flights per decision point [ms] and in all [s]."""
+        """Wall-clock figures: the lookahead flights per decision point [ms] and in all [s], and the
+        copies of the run the simulator keeps at the start of every step [s]."""
         d = self.decisions
-        return {"oracle_ms_per_decision": 1e3 * self.wall / d if d else math.nan, "oracle_s": self.wall}
+        return {"oracle_ms_per_decision": 1e3 * self.wall / d if d else math.nan, "oracle_s": self.wall,
+                "oracle_copy_s": float(getattr(self.lookahead, "copy_wall", 0.0))}
