@@ -5,7 +5,7 @@ arrays, the random generator, the referee's crash record -- and :meth:`Flight.st
 one step exactly as :func:`swarmnav.sim.rollout.run` does (the method acts, the dynamics
 integrate, the referee judges). :meth:`Flight.copy` gives an independent continuation: a copy and
 its original fly on bit-identically (tests/methods/hes/test_copy.py checks both against ``run``).
-It flies the ideal network with perfect perception (the run's defaults).
+It flies the ideal network with perfect perception and the point vehicle (the run's defaults).
 
 :class:`Lookahead` is what :func:`run` hands a method that decides by looking ahead (its
 optional ``oracle`` hook, docs/oracle.md): at the start of every step it keeps a copy of the run,

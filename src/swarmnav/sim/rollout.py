@@ -176,7 +176,7 @@ def run(
         if scn.contact == "crash" else None
     if referee is not None:
         events += referee.judge(0, P[0], C[0], pos)
-    look = _lookahead(m, scn, steps, plane_z, network, perception, period)
+    look = _lookahead(m, scn, steps, plane_z, network, perception, period, quads)
     # a diverging state is reported in one line (DivergedError below), not by NumPy's floating-point
     # warnings on the way there (an overflow in a power, inf - inf): they only repeat it
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), _closing(m):
@@ -301,16 +301,17 @@ def run(
 
 
 def _lookahead(m: Method, scn: Scenario, steps: int, plane_z: float | None, network: Any, perception: Any,
-               period: float | None) -> Lookahead | None:
+               period: float | None, quads: Any) -> Lookahead | None:
     """The :class:`Lookahead` handed to the method's optional ``oracle`` hook (None: the method
     has none, or it is switched off); an oracle flies copies of the run, which need the ideal
-    network, perfect perception and a walled or open world with a goal (docs/oracle.md)."""
+    network, perfect perception, the point vehicle and a walled or open world with a goal
+    (docs/oracle.md)."""
     oracle = getattr(m, "oracle", None)
     if oracle is None:
         return None
-    if network is not None or perception is not None:
-        raise ConfigError("decision=oracle flies copies of the run on the ideal network with perfect perception; "
-                          "drop the net.* and sense.* options")
+    if network is not None or perception is not None or quads is not None:
+        raise ConfigError("decision=oracle flies copies of the run on the ideal network with perfect perception "
+                          "and the point vehicle; drop the net.*, sense.* and vehicle options")
     if period is not None or not scn.has_goal:
         raise ConfigError(f"decision=oracle scores progress to a goal; {scn.name} has none")
     look = Lookahead(scn, steps, plane_z)
