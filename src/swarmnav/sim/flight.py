@@ -81,12 +81,13 @@ class Flight:
     """
 
     def __init__(self, method: Method, scene: Scenario, k: int, pos: np.ndarray, vel: np.ndarray,
-                 rng: np.random.Generator, referee: Referee | None, plane_z: float | None = None):
+                 rng: np.random.Generator, referee: Referee | None, plane_z: float | None = None,
+                 prepared: PreparedGeometry | None = None):
         self.method, self.scene, self.k = method, scene, int(k)
         self.pos, self.vel, self.rng, self.referee, self.plane_z = pos, vel, rng, referee, plane_z
         self.dt = float(method.dt)
-        geom = scene.geometry
-        self._prepared = None if geom.is_empty else PreparedGeometry(geom)
+        # the scene's obstacles converted once for the clearance queries, shared by every copy
+        self._prepared = prepared if prepared is not None or scene.geometry.is_empty else PreparedGeometry(scene.geometry)
 
     @classmethod
     def start(cls, method: str | Method, scenario: str | Scenario, *, seed: int, **params: Any) -> Flight:
@@ -148,7 +149,7 @@ class Flight:
         clone = getattr(self.method, "clone", None)
         m = clone() if callable(clone) else copy.deepcopy(self.method)
         return Flight(m, self.scene, self.k, self.pos.copy(), self.vel.copy(), copy.deepcopy(self.rng),
-                      copy.deepcopy(self.referee), self.plane_z)
+                      copy.deepcopy(self.referee), self.plane_z, self._prepared)
 
 
 @dataclass(frozen=True, slots=True)
@@ -188,6 +189,7 @@ class Lookahead:
         self.goal = scene.goal_array if scene.has_goal else None
         self.tau = MetricParams().tau_ms
         self._start: Flight | None = None
+        self._prepared = None if scene.geometry.is_empty else PreparedGeometry(scene.geometry)
         self.steps = 0  # simulated lookahead steps in all
         self.copy_wall = 0.0  # [s] wall time of the copies kept at the start of every step
 
@@ -195,7 +197,7 @@ class Lookahead:
              referee: Referee | None) -> None:
         """Keep a copy of the run at the start of step ``k`` (called by the run before the method acts)."""
         t0 = time.perf_counter()
-        self._start = Flight(method, self.scene, k, pos, vel, rng, referee, self.plane_z).copy()
+        self._start = Flight(method, self.scene, k, pos, vel, rng, referee, self.plane_z, self._prepared).copy()
         self.copy_wall += time.perf_counter() - t0
 
     def __call__(self, action: str, k: int, steps: int) -> Outcome:
