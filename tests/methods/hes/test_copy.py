@@ -51,3 +51,14 @@ def test_a_clone_keeps_the_shared_scene_and_copies_the_memory():
     assert c.obstacles is f.method.obstacles and c.params is f.method.params  # never changed after reset
     c.labels[:] = 7  # the copy's memory is its own
     assert not np.any(f.method.labels == 7)
+
+
+def test_an_llm_source_refuses_to_be_copied():
+    """A model or a server cannot be copied: a copied run must say so, not share the back end."""
+    from swarmnav.llm import LlmDecisionSource
+
+    from swarmnav.methods.hes import Hes
+
+    f = Flight.start(Hes().use_source(LlmDecisionSource(rule=None, decider=None, project=None)), SCENE, seed=SEED)
+    with pytest.raises(TypeError, match="cannot be copied"):
+        f.copy()
