@@ -37,7 +37,7 @@ def _parse_sets(items: Sequence[str] | None) -> dict[str, str]:
 
 #: LLM decision flags (HES Section 3.3): sugar for ``--set KEY=VALUE``, see docs/llm.md.
 _LLM_FLAGS = (
-    ("--decision", "decision", "rule (default) | ollama | openai | llamacpp | replay"),
+    ("--decision", "decision", "rule (default) | ollama | openai | llamacpp | replay | oracle (docs/oracle.md)"),
     ("--llm-url", "llm_url", "model server URL (ollama: http://HOST:11434, openai: http://HOST:PORT/v1)"),
     ("--llm-model", "llm_model", "model name on the server (default qwen2.5:3b)"),
     ("--llm-timeout", "llm_timeout", "per-call timeout [s] (default 120)"),
@@ -315,6 +315,11 @@ def _cmd_run(args) -> int:
         from swarmnav.viz.viewer import llm_marks, write_viewer
 
         print(f"  viewer: {write_viewer(res, out / 'viewer.html', marks=llm_marks(out))}")
+    if "hes_oracle_decisions" in m:  # decision=oracle (docs/oracle.md)
+        t = res.timings
+        print(f"  oracle: {m['hes_oracle_decisions']:.0f} decision points flown ahead, {m['hes_oracle_changed']:.0f} "
+              f"changed from the rule's action, {m['hes_oracle_steps_per_decision']:.0f} lookahead steps and "
+              f"{t.get('oracle_ms_per_decision', float('nan')):.0f} ms per decision point")
     if m.get("llm_calls", 0) > 0 and "llm_latency_median_s" in m:
         print(f"  LLM: {m['llm_calls']:.0f} calls, {m['llm_fallback_used']:.0f} fallbacks, "
               f"{m['llm_projected']:.0f} projected to keep, latency median {m['llm_latency_median_s']:.2f} s "

@@ -74,6 +74,14 @@ def test_llm_decision_keys_are_documented(tmp_path):
     assert not missing, f"HES with an LLM back end writes undocumented metrics: {missing}"
 
 
+def test_oracle_decision_keys_are_documented(tmp_path):
+    res = swarmnav.run("hes", "off_axis_goal", seed=3, steps=25, decision="oracle", oracle_horizon=0.5)
+    keys = written_keys(res, tmp_path)
+    assert res.metrics["hes_oracle_decisions"] >= 1 and "hes_oracle_gain" in keys  # a decision point was flown
+    missing = sorted(keys - set(documented()))
+    assert not missing, f"HES with decision=oracle writes undocumented metrics: {missing}"
+
+
 def test_successful_hes_run_reports_no_contradicting_success():
     res = swarmnav.run("hes", "default_corridor", seed=1, steps=500)  # N = 20, 50 s: on its ring
     m = res.metrics

@@ -34,7 +34,7 @@ import numpy as np
 
 from swarmnav.errors import ConfigError
 from swarmnav.llm.backends import LlmError, make_backend
-from swarmnav.llm.config import LlmParams
+from swarmnav.llm.config import LlmParams, backend_of
 from swarmnav.llm.decider import feasible_in
 from swarmnav.llm.parse import parse_answer
 from swarmnav.llm.prompt import ACTIONS, build_prompt
@@ -91,7 +91,7 @@ def bench(p: LlmParams, states: list[dict[str, Any]], progress: TextIO | None = 
 
     ``sink``: each answer is written there as a transcript line as soon as it is in, so an
     interrupted bench keeps what it measured."""
-    if p.decision == "rule":
+    if backend_of(p) == "rule":
         res = BenchResult("rule", "-")
         for i, row in enumerate(states):
             res.records.append(_record(i, row, "rule", row["rule"], 0.0, None))

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TextIO
 
 from swarmnav.llm.backends import LlmError, make_backend
-from swarmnav.llm.config import LlmParams
+from swarmnav.llm.config import LlmParams, backend_of
 from swarmnav.llm.parse import parse_answer
 from swarmnav.llm.prompt import build_prompt
 
@@ -19,7 +19,7 @@ SAMPLE_STATE = {
 def check(p: LlmParams, out: TextIO) -> int:
     """Ask back end ``p.decision`` once about :data:`SAMPLE_STATE`; 0 if it answered with a
     parsable action, 1 otherwise. ``decision=rule`` needs no model and passes."""
-    if p.decision == "rule":
+    if backend_of(p) == "rule":
         print("decision=rule: the rule policy needs no model", file=out)
         return 0
     backend = make_backend(p.decision, url=p.llm_url, model=p.llm_model, timeout=p.llm_timeout, gguf=p.llm_gguf,

@@ -10,8 +10,9 @@ from typing import Any
 
 from swarmnav.errors import ConfigError
 
-#: Values of ``decision``: the rule policy, or an LLM back end.
-DECISIONS = ("rule", "ollama", "openai", "llamacpp", "replay")
+#: Values of ``decision``: the rule policy, an LLM back end, or the lookahead oracle (a bound, not a
+#: back end: the method builds it, docs/oracle.md).
+DECISIONS = ("rule", "ollama", "openai", "llamacpp", "replay", "oracle")
 
 
 @dataclass(frozen=True, slots=True)
@@ -19,7 +20,7 @@ class LlmParams:
     """Parameters of the LLM decision layer (HES Section 3.3). A method that offers LLM
     decisions carries these fields under the same names (``--set llm_timeout=...``)."""
 
-    decision: str = "rule"  # rule | ollama | openai | llamacpp | replay
+    decision: str = "rule"  # rule | ollama | openai | llamacpp | replay | oracle
     llm_url: str = ""  # server URL; "" = the back end's default (Ollama :11434, OpenAI-compatible :8000/v1)
     llm_model: str = "qwen2.5:3b"  # model name, HES Section 3.3 (ignored by llamacpp and replay)
     llm_timeout: float = 120.0  # per-call timeout [s], HES Section 3.3
@@ -95,6 +96,15 @@ def validate(p: Any) -> None:
         t = Path(p.llm_replay).expanduser()
         if not (t / "llm_transcript.jsonl" if t.is_dir() else t).is_file():
             raise ConfigError(f"llm_replay: no transcript at {t}")
+
+
+def backend_of(p: Any) -> str:
+    """``p.decision`` if it names an LLM back end or ``rule``; ConfigError for ``oracle``, which
+    is no model to ask: it flies copies of a run (docs/oracle.md)."""
+    if p.decision == "oracle":
+        raise ConfigError("decision=oracle is no LLM back end: it decides by flying copies of a run, "
+                          "so only `swarmnav run` / experiments fly it (docs/oracle.md)")
+    return p.decision
 
 
 def llm_params(p: Any) -> LlmParams:

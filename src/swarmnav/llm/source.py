@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any, Callable
 
 from swarmnav.llm.backends import make_backend
-from swarmnav.llm.config import LatencyMode, llm_params
+from swarmnav.llm.config import LatencyMode, backend_of, llm_params
 from swarmnav.llm.decider import TRANSCRIPT, LlmDecider
 
 
@@ -41,6 +41,10 @@ class LlmDecisionSource:
             return r
         return type(r)(action=d.action, reason=d.reason, source=d.source)
 
+    def __deepcopy__(self, memo: dict) -> Any:
+        raise TypeError("an LLM decision source cannot be copied (its back end is a model or a server); "
+                        "a copied run decides by the rule (decision=oracle, docs/oracle.md)")
+
     def summary(self) -> dict[str, float]:
         return self.decider.summary()
 
@@ -55,7 +59,7 @@ def decision_source(params: Any, rule: Any, project: Callable[[str, Any], str]) 
     ``project`` is the method's Pi_feas (eq. 22), which the LLM's answers go through as the
     rule's do."""
     p = llm_params(params)
-    if p.decision == "rule":
+    if backend_of(p) == "rule":
         return rule
     backend = make_backend(p.decision, url=p.llm_url, model=p.llm_model, timeout=p.llm_timeout, gguf=p.llm_gguf,
                            replay=p.llm_replay, response_format=p.llm_response_format, threads=p.llm_threads)

@@ -17,8 +17,9 @@ optional ``plans()`` returns the trajectories the method committed, as flat arra
 (P,), ``robot`` (P,), ``offsets`` (P + 1,), ``points`` (M, d) [m] and ``times`` (M,) [s]
 (``swarmnav.planning.plan_log.PlanLog`` builds them), kept in ``RunResult.plans`` and drawn by
 the replay viewer. An optional ``close()`` releases what ``reset`` started (planning threads);
-the rollout calls it when the steps end, however they end. docs/methods/contract.md states the
-whole contract.
+the rollout calls it when the steps end, however they end. An optional ``oracle`` attribute
+(HES's ``decision=oracle``) receives the run's lookahead simulator (docs/oracle.md).
+docs/methods/contract.md states the whole contract.
 """
 
 from __future__ import annotations

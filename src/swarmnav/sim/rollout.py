@@ -21,6 +21,7 @@ from swarmnav.portable import numerics
 from swarmnav.sensing import PreparedGeometry
 from swarmnav.sensing.perception import PREFIX as SENSE_PREFIX, Perception, record as sense_record, sense_params
 from swarmnav.sim.network import PREFIX as NET_PREFIX, Network, net_params, record as net_record
+from swarmnav.sim.flight import Lookahead, inside_walls, world_of
 from swarmnav.sim.referee import Referee
 from swarmnav.sim.result import Plans, RunResult
 from swarmnav.world.catalog import load_scenario
@@ -115,7 +116,7 @@ def run(
         raise ConfigError(f"steps must be an integer >= 1, got {steps!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
-    world, plane_z = _world_of(scn, m.dims, z_fly, m.name)
+    world, plane_z = world_of(scn, m.dims, z_fly, m.name)
     if world.periodic and not getattr(m, "periodic", True):
         raise ConfigError(f"{m.name} cannot fly a periodic world ({scn.name}): its plans cross the world's "
                           "edge, where a periodic box wraps; fly it in a walled or open world")
@@ -165,7 +166,7 @@ def run(
     walled = scn.boundary == "wall"  # beyond the walls' far side an agent is still outside the world
     w_lo, w_hi = scn.lower, scn.upper
     if walled:
-        _inside_walls(P[0], w_lo, w_hi, C[0])
+        inside_walls(P[0], w_lo, w_hi, C[0])
     events: list[dict] = []
     bar = _progress(progress, steps)
     t0 = time.perf_counter()
@@ -179,10 +180,13 @@ def run(
         if scn.contact == "crash" else None
     if referee is not None:
         events += referee.judge(0, P[0], C[0], pos)
+    look = _lookahead(m, scn, steps, plane_z, network, perception, period, quads)
     # a diverging state is reported in one line (DivergedError below), not by NumPy's floating-point
     # warnings on the way there (an overflow in a power, inf - inf): they only repeat it
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), _closing(m):
         for k in range(steps):
+            if look is not None:  # a copy of the run at the start of this step, for the method's oracle
+                look.mark(m, k, pos, vel, rng, referee)
             if perception is None:
                 view = None if network is None else network.step(k * dt, pos, vel)
                 cmd, info = m.act(Observation(k, k * dt, pos, vel, view), rng)
@@ -213,7 +217,7 @@ def run(
             else:  # written in place (a row of C is a contiguous float64 buffer): the same values
                 distance_into(P[k + 1], C[k + 1])
             if walled:
-                _inside_walls(P[k + 1], w_lo, w_hi, C[k + 1])
+                inside_walls(P[k + 1], w_lo, w_hi, C[k + 1])
             labels = info.get("labels")
             lab[k + 1] = lab[k] if labels is None else labels
             r = info.get("roles")
@@ -304,6 +308,25 @@ def run(
     return result
 
 
+def _lookahead(m: Method, scn: Scenario, steps: int, plane_z: float | None, network: Any, perception: Any,
+               period: float | None, quads: Any) -> Lookahead | None:
+    """The :class:`Lookahead` handed to the method's optional ``oracle`` hook (None: the method
+    has none, or it is switched off); an oracle flies copies of the run, which need the ideal
+    network, perfect perception, the point vehicle and a walled or open world with a goal
+    (docs/oracle.md)."""
+    oracle = getattr(m, "oracle", None)
+    if oracle is None:
+        return None
+    if network is not None or perception is not None or quads is not None:
+        raise ConfigError("decision=oracle flies copies of the run on the ideal network with perfect perception "
+                          "and the point vehicle; drop the net.*, sense.* and vehicle options")
+    if period is not None or not scn.has_goal:
+        raise ConfigError(f"decision=oracle scores progress to a goal; {scn.name} has none")
+    look = Lookahead(scn, steps, plane_z)
+    oracle.attach(look)
+    return look
+
+
 def with_rules(scn: Scenario, *, boundary: Any = None, contact: Any = None, goal_radius: Any = None,
                d_safe: Any = None, body_radius: Any = None) -> Scenario:
     """``scn`` with its boundary and referee settings overridden where given (None: the scene's).
@@ -365,20 +388,6 @@ def _finite_into(pos, vel, p_row, v_row):
 
 
 @njit(cache=True)
-def _inside_walls(P, lo, hi, clearance):
-    """Lower each agent's clearance to its signed distance to the outside of the world's box
-    (negative beyond the bounds). Inside the bounds the walls give the same distance; beyond the
-    walls' far side this keeps an agent that left the world from reading as clear."""
-    n, d = P.shape
-    for i in range(n):
-        m = np.inf
-        for c in range(d):
-            m = min(m, P[i, c] - lo[c], hi[c] - P[i, c])
-        if m < clearance[i]:
-            clearance[i] = m
-
-
-@njit(cache=True)
 def _finite_kernel(a, b):
     for i in range(a.shape[0]):
         if not np.isfinite(a[i]):
@@ -424,28 +433,6 @@ def _closing(m: Method):
 
 def _identity(x: np.ndarray) -> np.ndarray:
     return x
-
-
-def _world_of(scn: Scenario, dims: tuple[int, ...], z_fly: Any, name: str) -> tuple[Scenario, float | None]:
-    """The scene the method flies and the altitude of its plane (None: the scene itself)."""
-    if scn.dim in dims:
-        if z_fly is not None:
-            raise ConfigError(f"z_fly applies only to a planar method on a 3-D scene ({name} flies "
-                              f"this {scn.dim}-D scene as it is)")
-        return scn, None
-    if scn.dim == 2:
-        raise ConfigError(f"{name} flies 3-D scenes only; {scn.name} is planar")
-    if z_fly is None:
-        z = scn.default_altitude()
-    else:
-        try:
-            z = float(z_fly)
-        except (TypeError, ValueError):
-            raise ConfigError(f"z_fly must be a number [m], got {z_fly!r}") from None
-    try:
-        return scn.planar_slice(z), z
-    except ScenarioError as e:
-        raise ConfigError(str(e)) from None
 
 
 def _progress(progress, steps):

@@ -18,6 +18,7 @@ memory (partition, sub-swarms, cooldowns) and the parts of ours that the paramet
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Any
 
@@ -32,6 +33,7 @@ from swarmnav.methods.hes.corridors import Corridor
 from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePolicy, project
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.navigate import navigate
+from swarmnav.methods.hes.oracle import OracleSource
 from swarmnav.methods.hes.networked import (PLAN, REPORT, RING_MIN, TRUE_STATE_PARTS, control_known, flown_rows,
                                             plan_of, plans_flown, publication, reports_received, reports_sent)
 from swarmnav.methods.hes.params import HesParams
@@ -65,6 +67,8 @@ class Hes:
         p = self.params
         self.ring_angles = np.linspace(0.0, 2 * np.pi, p.core.enc_samples, endpoint=False)  # encircle slot candidates
         self._source_override: DecisionSource | None = None
+        #: decision=oracle: the source the run hands its lookahead simulator (docs/oracle.md); else None
+        self.oracle: OracleSource | None = None
         self.parts: list[Part] = []
         self.at: dict[str, list[Part]] = hook_table([])  # hook name -> the parts that override it
         self._part_key: tuple | None = None  # the labels and ids the cached Partition was built for
@@ -98,7 +102,13 @@ class Hes:
         self.n = n
         self.arange = np.arange(n)  # agent indices (compared with per-agent indices every step)
         rule = RulePolicy(p.paper.d_merge, p.paper.t_cd, merge=p.core.merge_rule)
-        self.source: DecisionSource = self._source_override or decision_source(p, rule, project)
+        if self._source_override is not None:
+            self.source: DecisionSource = self._source_override
+        elif p.decision == "oracle":
+            self.source = OracleSource(rule, p)
+        else:
+            self.source = decision_source(p, rule, project)
+        self.oracle = self.source if isinstance(self.source, OracleSource) else None
         c = positions.mean(axis=0)
         self.leader = int(np.argmin(np.sum((positions - c) ** 2, axis=1)))  # one leader, eq. (1) roles
         self.labels = np.zeros(n, dtype=np.int64)
@@ -138,6 +148,20 @@ class Hes:
         if hasattr(self.source, "summary"):
             out.update({k: float(v) for k, v in self.source.summary().items()})
         return out
+
+    def timings(self) -> dict[str, float]:
+        """Wall-clock figures (``RunResult.timings``): the oracle's lookahead cost when it decides."""
+        return self.oracle.timings() if self.oracle is not None else {}
+
+    def clone(self) -> Hes:
+        """An independent copy of this method mid-run (its planner memory, parts, caches and
+        decision source): fed the same observations, the copy and the original act
+        bit-identically. What never changes after reset (parameters, scene, prepared obstacles,
+        ray tables) is shared, not copied. A copied oracle source decides by the rule; an LLM
+        source cannot be copied (TypeError)."""
+        shared = [getattr(self, name) for name in ("params", "scenario", "geom", "obstacles", "dynamics", "gains",
+                                                   "cos", "sin", "dirs", "ring_angles") if hasattr(self, name)]
+        return copy.deepcopy(self, {id(o): o for o in shared})
 
     def artifacts(self) -> dict[str, str]:
         """Extra run files: ``llm_transcript.jsonl`` when an LLM decides (docs/llm.md)."""

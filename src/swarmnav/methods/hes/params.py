@@ -245,7 +245,8 @@ class HesParams:
     # ---------------------------------------------------------------- decision source (Section 3.3)
     # the fields of swarmnav.llm.LlmParams, under the same names (shared with ``swarmnav llm``)
     decision: str = param("rule", "", None, "Section 3.3",
-        "rule | ollama | openai | llamacpp | replay, Section 3.3 (docs/llm.md)")
+        "rule | ollama | openai | llamacpp | replay, Section 3.3 (docs/llm.md); oracle: the lookahead "
+        "bound of ours (docs/oracle.md)")
     llm_url: str = param("", "", None, "ours",
         "model server URL; \"\" = the back end's default (Ollama :11434, OpenAI-compatible "
         ":8000/v1)")
@@ -262,6 +263,20 @@ class HesParams:
     llm_response_format: str = param("json_object", "", None, "ours",
         "openai back end: json_object | json_schema | none")
     llm_threads: int = param(0, "", "[0, 1024]", "ours", "llama.cpp CPU threads (0: llama-cpp-python's default)")
+    # ---------------------------------------------------------------- decision=oracle (ours, docs/oracle.md)
+    oracle_horizon: float = param(20.0, "s", "(0, 1000]", "ours",
+        "lookahead flown after each feasible action, the rule deciding (20 s: half the ~40 s crossing "
+        "of the 70 m scenes at cruise speed)")
+    oracle_w_reach: float = param(50.0, "m", "[0, inf)", "ours",
+        "objective weight of R (fraction of agents at the goal at the horizon's end), metres of progress")
+    oracle_w_success: float = param(100.0, "m", "[0, inf)", "ours",
+        "objective weight of Y (R >= 0.8 at the horizon's end), metres of progress")
+    oracle_w_crash: float = param(200.0, "m", "[0, inf)", "ours",
+        "objective weight of the fraction of agents crashed within the horizon, metres of progress")
+    oracle_w_unsafe: float = param(10.0, "m", "[0, inf)", "ours",
+        "objective weight of the fraction of agent-steps within d_safe of an obstacle, metres of progress")
+    oracle_margin: float = param(0.01, "m", "[0, inf)", "ours",
+        "objective gain over the rule's action below which the oracle keeps the rule's action")
 
     def __post_init__(self) -> None:
         # single values are checked against their declared ranges by params.build; here the
