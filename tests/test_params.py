@@ -214,6 +214,8 @@ def _valid_setting(draw):
 @given(_valid_setting())
 @example(("sph", "rho0", "3.5802690758179364e-104"))  # found by this test: NumPy's overflow warning came before the line
 @example(("mader", "v_max", "5e-324"))  # found by this test: a NaN knot span, now refused in one line
+@example(("sph", "plan_speed", "1.1125369292536007e-308"))  # found by this test: the spline's knot span overflowed
+@example(("sph", "inflation", "5.0"))  # found by this test: no free node for the yielding order's field
 def test_random_valid_values_run_or_fail_in_one_line(setting):
     """In-range values of one parameter: the run completes, or (a relation between parameters,
     a diverged state) ends in one line with exit 2; never a traceback."""

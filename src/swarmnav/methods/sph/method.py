@@ -31,6 +31,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator
+from swarmnav.errors import ConfigError
 from swarmnav.methods.base import Observation, check_map_bytes, format_extent
 from swarmnav.methods.sph.kernel import environment_force, released_environment_force, sph_forces
 from swarmnav.methods.sph.params import SphParams, for_dim
@@ -45,7 +46,7 @@ from swarmnav.planning.bspline import SplineCosts, optimize
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import POSITION_BYTES, CommLog
 from swarmnav.planning.plan_log import PlanLog, sample_times
-from swarmnav.planning.schedule import ReplanSchedule, plan_time_summary
+from swarmnav.planning.schedule import MAX_PLAN_STEPS, ReplanSchedule, plan_time_summary
 from swarmnav.planning.tracker import References, track
 from swarmnav.sensing.esdf import Esdf, grid_nodes
 from swarmnav.world.scenario import Scenario
@@ -121,6 +122,11 @@ class Sph:
         self._costs = SplineCosts(p.lambda_s, p.lambda_c, p.lambda_f, p.d_thr, self._plan_v, plan_a)
         # knot span [s]: control points ctrl_spacing apart at plan_speed * (planner's) v_max
         self._dt_knot = p.ctrl_spacing / (p.plan_speed * self._plan_v)
+        if not self._dt_knot / p.dt <= MAX_PLAN_STEPS:  # near-zero speeds (plan_speed = 1e-308) overflow the spline
+            raise ConfigError(f"sph: control points ctrl_spacing = {p.ctrl_spacing:g} m apart at plan_speed x v_max = "
+                              f"{p.plan_speed * self._plan_v:.3g} m/s are {self._dt_knot:.3g} s apart, "
+                              f"{self._dt_knot / p.dt:.3g} control steps of dt (at most {MAX_PLAN_STEPS:.0e}); "
+                              "raise plan_speed or v_max")
         self._pool: ThreadPoolExecutor | None = None  # the planning threads of a run (threads > 1)
 
     # ------------------------------------------------------------------ contract

@@ -23,6 +23,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from swarmnav.errors import ConfigError
 from swarmnav.sensing.esdf import Esdf
 
 
@@ -34,6 +35,10 @@ def goal_distance_field(esdf: Esdf, goal: np.ndarray, clearance: float, resoluti
     step = max(1, int(round(resolution / esdf.resolution)))
     sl = (slice(None, None, step),) * esdf.dim
     free = esdf.values[sl] > clearance
+    if not free.any():
+        raise ConfigError(f"sph: no node of the map is farther than inflation = {clearance:g} m from every obstacle, "
+                          "so the yielding order has no free space to measure the way to the goal in; lower "
+                          "inflation (or set yield_range = 0)")
     h = esdf.resolution * step
     shape = free.shape
     idx = np.arange(free.size).reshape(shape)
