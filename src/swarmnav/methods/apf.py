@@ -36,7 +36,7 @@ from swarmnav.dynamics import DampedDoubleIntegrator, clip_norm
 from swarmnav.methods.base import Observation
 from swarmnav.methods.registry import register
 from swarmnav.params import build, param
-from swarmnav.sensing import PreparedGeometry, lidar_ring, neighbor_pairs
+from swarmnav.sensing import PreparedGeometry, fibonacci_sphere, lidar_ring, neighbor_pairs
 from swarmnav.world.scenario import Scenario
 
 
@@ -175,16 +175,6 @@ def separation_known(x: np.ndarray, kx: np.ndarray, heard: np.ndarray, k: float,
     d2 = np.einsum("ij,ij->i", diff, diff)
     near = d2 < r * r
     return _khatib(n, x.shape[1], i[near], None, diff[near], k, r, d_floor)
-
-
-def fibonacci_sphere(n: int) -> np.ndarray:
-    """(n, 3) unit vectors of the Fibonacci lattice: near-uniform directions over the sphere,
-    each standing for the solid angle ``4 pi / n`` (deterministic, no random seed)."""
-    k = np.arange(n) + 0.5
-    z = 1.0 - 2.0 * k / n
-    phi = np.pi * (3.0 - np.sqrt(5.0)) * k
-    rho = np.sqrt(1.0 - z * z)
-    return np.ascontiguousarray(np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z]))
 
 
 @lru_cache(maxsize=8)

@@ -7,7 +7,7 @@ return arrays; the ESDF is a grid of the same signed distance with an interpolat
 from swarmnav.sensing._kernels import segments_blocked_kernel
 from swarmnav.sensing.esdf import Esdf, esdf3d_query_kernel, esdf_query_kernel
 from swarmnav.sensing.geometry import nearest_obstacle, points_inside, segments_blocked, signed_distance
-from swarmnav.sensing.lidar import lidar_ring, ray_table
+from swarmnav.sensing.lidar import fibonacci_sphere, lidar_ring, ray_table
 from swarmnav.sensing.neighbors import neighbor_lists, neighbor_pairs, pairwise_min_distance
 from swarmnav.sensing.prepared import PreparedGeometry
 from swarmnav.sensing.scan import range_scan
@@ -17,6 +17,7 @@ __all__ = [
     "PreparedGeometry",
     "esdf3d_query_kernel",
     "esdf_query_kernel",
+    "fibonacci_sphere",
     "lidar_ring",
     "nearest_obstacle",
     "neighbor_lists",

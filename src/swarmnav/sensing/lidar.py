@@ -79,3 +79,13 @@ def lidar_ring(geom: Geometry, positions: np.ndarray, n_rays: int = 360, max_ran
     else:
         lidar_kernel(*geom_arrays(geom), pos, cos_t, sin_t, max_range, out)
     return out
+
+
+def fibonacci_sphere(n: int) -> np.ndarray:
+    """(n, 3) unit vectors of the Fibonacci lattice: near-uniform directions over the sphere,
+    each standing for the solid angle ``4 pi / n`` (deterministic, no random seed)."""
+    k = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * k / n
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * k
+    rho = np.sqrt(1.0 - z * z)
+    return np.ascontiguousarray(np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z]))

@@ -20,7 +20,7 @@ import numpy as np
 
 from swarmnav.dynamics import SaturatedDoubleIntegrator, clip_norm
 from swarmnav.params import build, param
-from swarmnav.sensing import range_scan, ray_table
+from swarmnav.sensing import fibonacci_sphere, range_scan, ray_table
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,10 +61,7 @@ class Steer:
         if positions.shape[1] == 2:  # a ring of rays in the plane
             self.rays = np.column_stack(ray_table(p.n_rays))
         else:  # rays spread evenly over the sphere (a Fibonacci lattice)
-            i = np.arange(p.n_rays) + 0.5
-            z = 1.0 - 2.0 * i / p.n_rays
-            phi = np.pi * (3.0 - np.sqrt(5.0)) * i
-            self.rays = np.column_stack([np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z])
+            self.rays = fibonacci_sphere(p.n_rays)
 
     def _cast(self, origins):
         """The exact sensor: range [m] along every ray from every origin (the run adds its imperfections)."""

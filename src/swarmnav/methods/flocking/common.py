@@ -19,10 +19,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from swarmnav.methods.apf import fibonacci_sphere
 from swarmnav.methods.base import Observation
 from swarmnav.planning.messages import FLOAT, HEADERS, INT, CommLog
-from swarmnav.sensing import PreparedGeometry, lidar_ring
+from swarmnav.sensing import PreparedGeometry, fibonacci_sphere, lidar_ring
 from swarmnav.world.scenario import Scenario
 
 #: [B] one state message: sender id (4 B), time stamp (8 B), position and velocity (3 floats each),

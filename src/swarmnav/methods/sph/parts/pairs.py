@@ -42,6 +42,8 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
+from swarmnav.sensing import fibonacci_sphere
+
 #: Slack [m/s^2] within which a constraint counts as met (rounding of the KKT solves).
 TOL = 1e-9
 
@@ -121,20 +123,11 @@ def bound_rows(dim: int, a_max: float, clip: str = "norm", sides: int = 16) -> t
     if dim == 2:
         t = 2.0 * np.pi * np.arange(sides) / sides
         return np.column_stack([np.cos(t), np.sin(t)]), np.full(sides, a_max * np.cos(np.pi / sides))
-    g = _fibonacci(4 * sides)
-    probe = _fibonacci(20000)
+    g = fibonacci_sphere(4 * sides)
+    probe = fibonacci_sphere(20000)
     cover = np.arccos(np.clip(np.min(np.max(probe @ g.T, axis=1)), -1.0, 1.0))
     spacing = np.sqrt(4.0 * np.pi / 20000)  # [rad] the probes' own spacing, added as a margin
     return g, np.full(len(g), a_max * np.cos(min(cover + spacing, np.pi / 2)))
-
-
-def _fibonacci(k: int) -> np.ndarray:
-    """``k`` unit vectors spread evenly over the sphere (the Fibonacci lattice)."""
-    i = np.arange(k) + 0.5
-    z = 1.0 - 2.0 * i / k
-    r = np.sqrt(1.0 - z * z)
-    phi = np.pi * (3.0 - np.sqrt(5.0)) * i
-    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
 
 
 def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, gamma: float,
