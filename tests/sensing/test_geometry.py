@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swarmnav.sensing import nearest_obstacle, points_inside, segments_blocked, signed_distance
+from swarmnav.sensing import nearest_obstacle, points_inside, segments_blocked, signed_distance, surfaces_within
 from _helpers.scenes import random_scene
 from swarmnav.world.obstacles import Box, Circle, Geometry, Polygon
 
@@ -202,3 +202,36 @@ def test_shape_checks():
         segments_blocked(geom, np.zeros((3, 2)), np.zeros((2, 2)))
     with pytest.raises(ValueError):
         signed_distance(geom, np.zeros(4))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_surfaces_within_lists_every_obstacle_in_reach(seed):
+    """Oracle: one row per (point, obstacle) whose own signed distance is within reach, that
+    distance and direction equal to nearest_obstacle's against a world of that obstacle alone."""
+    rng = np.random.default_rng(seed)
+    obstacles = random_scene(rng, extent=10.0, n_boxes=3, with_l_shape=False)
+    geom = Geometry.from_obstacles(obstacles)
+    pts = rng.uniform(-13, 13, (200, 2))
+    reach = 2.5
+    point, dist, direc = surfaces_within(geom, pts, reach)
+    assert np.all(np.diff(point) >= 0)
+    expected = []
+    for ob in obstacles:
+        d, v = nearest_obstacle(Geometry.from_obstacles([ob]), pts)
+        for i in np.flatnonzero(d <= reach):
+            expected.append((i, d[i], v[i]))
+    assert len(expected) == len(point) > len(pts) // 4  # the scene puts many points near obstacles
+    got = sorted(zip(point, dist, map(tuple, direc)), key=lambda r: (r[0], r[1]))
+    expected.sort(key=lambda r: (r[0], r[1]))
+    for (i, d, v), (ei, ed, ev) in zip(got, expected):
+        assert i == ei
+        assert d == pytest.approx(ed, abs=1e-12)
+        np.testing.assert_allclose(v, ev, atol=1e-12)
+    # a point between two obstacles has a row for each, where nearest_obstacle sees one
+    assert np.max(np.bincount(point)) >= 2
+
+
+def test_surfaces_within_refuses_3d_worlds():
+    from swarmnav.world.obstacles import Sphere
+    with pytest.raises(ValueError, match="planar"):
+        surfaces_within(Geometry.from_obstacles([Sphere((0, 0, 0), 1.0)], dim=3), np.zeros((1, 3)), 1.0)

@@ -6,7 +6,13 @@ return arrays; the ESDF is a grid of the same signed distance with an interpolat
 
 from swarmnav.sensing._kernels import segments_blocked_kernel
 from swarmnav.sensing.esdf import Esdf, esdf3d_query_kernel, esdf_query_kernel
-from swarmnav.sensing.geometry import nearest_obstacle, points_inside, segments_blocked, signed_distance
+from swarmnav.sensing.geometry import (
+    nearest_obstacle,
+    points_inside,
+    segments_blocked,
+    signed_distance,
+    surfaces_within,
+)
 from swarmnav.sensing.lidar import fibonacci_sphere, lidar_ring, ray_table
 from swarmnav.sensing.neighbors import neighbor_lists, neighbor_pairs, pairwise_min_distance
 from swarmnav.sensing.prepared import PreparedGeometry
@@ -29,4 +35,5 @@ __all__ = [
     "segments_blocked",
     "segments_blocked_kernel",
     "signed_distance",
+    "surfaces_within",
 ]

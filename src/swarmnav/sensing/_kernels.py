@@ -462,6 +462,55 @@ def nearest_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi,
                 out_dir[i, 1] = 0.0
 
 
+@njit(cache=True)
+def surfaces_within_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, points, reach,
+                           out_point, out_d, out_dir, fill):
+    """Every (point, obstacle) pair whose boundary lies within ``reach`` [m] of the point: the
+    point's index, its signed distance to that obstacle alone (negative inside it) and the unit
+    direction from the point toward that obstacle's nearest boundary point. Returns the number of
+    pairs; writes them only when ``fill`` (a first pass with ``fill=False`` sizes the arrays)."""
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
+    k = 0
+    for i in range(points.shape[0]):
+        px = points[i, 0]
+        py = points[i, 1]
+        for p in range(n_poly):
+            dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
+            dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
+            if dx * dx + dy * dy > reach * reach:
+                continue
+            dmin2, inside, qx, qy = polygon_nearest(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1])
+            norm = math.sqrt(dmin2)
+            if not inside and norm > reach:
+                continue
+            if fill:
+                out_point[k] = i
+                out_d[k] = -norm if inside else norm
+                out_dir[k, 0] = qx / norm if norm > 0.0 else 0.0
+                out_dir[k, 1] = qy / norm if norm > 0.0 else 0.0
+            k += 1
+        for c in range(n_circ):
+            cx = circ_c[c, 0] - px
+            cy = circ_c[c, 1] - py
+            dc = math.sqrt(cx * cx + cy * cy)
+            d = dc - circ_r[c]
+            if d > reach:
+                continue
+            if fill:
+                out_point[k] = i
+                out_d[k] = d
+                if dc > 0.0:  # toward the nearest boundary point: along c - p outside, p - c inside
+                    s = 1.0 if d >= 0.0 else -1.0
+                    out_dir[k, 0] = s * cx / dc
+                    out_dir[k, 1] = s * cy / dc
+                else:
+                    out_dir[k, 0] = -1.0
+                    out_dir[k, 1] = 0.0
+            k += 1
+    return k
+
+
 # ---------------------------------------------------------------------------------------------
 # Segment blocking
 # ---------------------------------------------------------------------------------------------

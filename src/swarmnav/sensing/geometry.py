@@ -20,6 +20,7 @@ from swarmnav.sensing._kernels import (
     nearest_kernel,
     points_inside_kernel,
     segments_blocked_kernel,
+    surfaces_within_kernel,
 )
 from swarmnav.sensing._kernels3d import (
     geom_arrays3d,
@@ -111,6 +112,32 @@ def nearest_obstacle(geom: Geometry, points: np.ndarray) -> tuple[np.ndarray, np
     v = np.empty((pts.shape[0], 2))
     _nearest(geom, pts, d, v, True)
     return d, v
+
+
+def surfaces_within(geom: Geometry, points: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each obstacle whose boundary lies within ``reach`` [m] of a point, one row per (point,
+    obstacle) pair: not only the nearest obstacle, as :func:`nearest_obstacle` gives, but every
+    one a point must keep clear of (a point between two trunks has a row for each). Planar worlds.
+
+    Args:
+        geom: obstacles of a 2-D world.
+        points: (M, 2) query points [m].
+        reach: [m] rows farther than this are left out; a point inside an obstacle always has its row.
+
+    Returns:
+        ``(point, dist, direction)``: the row's point index (Q,) int64, ascending; the point's
+        signed distance to that obstacle alone (Q,) [m]; the unit direction (Q, 2) from the point
+        toward that obstacle's nearest boundary point (as :func:`nearest_obstacle`'s).
+    """
+    if geom.dim != 2:
+        raise ValueError("surfaces_within takes a planar world")
+    pts = as_points(points)
+    arrays = geom_arrays(geom)
+    dummy_i, dummy_d, dummy_v = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 2))
+    q = surfaces_within_kernel(*arrays, pts, float(reach), dummy_i, dummy_d, dummy_v, False)
+    point, dist, direction = np.empty(q, np.int64), np.empty(q), np.empty((q, 2))
+    surfaces_within_kernel(*arrays, pts, float(reach), point, dist, direction, True)
+    return point, dist, direction
 
 
 def points_inside(geom: Geometry, points: np.ndarray) -> np.ndarray:

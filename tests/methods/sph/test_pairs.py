@@ -7,7 +7,9 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize
 
 import swarmnav
-from swarmnav.methods.sph.parts.pairs import bound_rows, obstacle_constraints, pair_constraints, pair_guard
+from swarmnav.methods.sph.parts.pairs import bound_rows, obstacle_constraints, pair_constraints, pair_guard, pair_reach
+from swarmnav.sensing import nearest_obstacle, surfaces_within
+from swarmnav.world.obstacles import Box, Circle, Geometry
 from swarmnav.world import from_dict
 
 D_SAFE, DECEL, GAMMA, V_MAX, DT = 0.42, 0.75, 2.0, 1.0, 0.01
@@ -189,3 +191,31 @@ def test_default_build_guards_pairs_on_crowds_only_and_paper_never():
     assert "sph_pair_guarded_fraction" not in small.metrics
     paper = swarmnav.run("sph", from_dict(scn), seed=1, steps=200, preset="paper")
     assert "sph_pair_guarded_fraction" not in paper.metrics
+
+
+def _between_trunks(every: bool, dt: float = 0.01) -> float:
+    """Closest clearance [m] to trunk B of a robot driven at full thrust along +x beside a wall
+    A, 0.25 m from its path (the nearest obstacle until too late), towards a trunk B ahead."""
+    geom = Geometry.from_obstacles([Box((-1.0, 0.25), (6.0, 1.0)), Circle((3.0, -0.1), 0.3)])
+    x = np.array([[0.0, 0.0], [0.0, 3.0]])
+    v = np.array([[1.0, 0.0], [0.0, 0.0]])
+    closest = np.inf
+    for _ in range(int(4.0 / dt)):
+        a = np.array([[1.5, 0.0], [0.0, 0.0]])
+        if every:
+            robots, gap, toward = surfaces_within(geom, x, pair_reach(0.22, DECEL, GAMMA, 1.5, V_MAX))
+            walls = (gap, -toward, 0.22, robots)
+        else:
+            d, toward = nearest_obstacle(geom, x)
+            walls = (d, -toward, 0.22)
+        a, _, _ = pair_guard(a, x, v, D_SAFE, DECEL, GAMMA, 1.5, V_MAX, dt, walls)
+        v = v + a * dt
+        v = v * np.minimum(1.0, V_MAX / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-12))
+        x = x + v * dt
+        closest = min(closest, float(np.hypot(*(x[0] - (3.0, -0.1))) - 0.3))
+    return closest
+
+
+def test_a_row_per_obstacle_stops_a_robot_at_a_trunk_that_is_not_its_nearest():
+    assert _between_trunks(False) < 0.2  # the nearest obstacle's row alone lets it into B
+    assert 0.2 <= _between_trunks(True) <= 0.3  # every trunk's row stops it near the 0.22 m asked

@@ -38,7 +38,7 @@ from swarmnav.methods.sph.params import SphParams, for_dim
 from swarmnav.methods.sph.visibility import components, link_changes, structural_events, visible_pairs
 from swarmnav.methods.sph.parts.guard import band_guard
 from swarmnav.methods.sph.networked import directed_forces, directed_yield_rates, heard_pairs
-from swarmnav.methods.sph.parts.pairs import bound_rows, pair_guard, pair_guard_known
+from swarmnav.methods.sph.parts.pairs import bound_rows, pair_guard, pair_guard_known, pair_reach
 from swarmnav.methods.sph.parts.retime import retimed
 from swarmnav.methods.sph.parts.yielding import goal_distance_field, yield_rates
 from swarmnav.params import build
@@ -49,6 +49,7 @@ from swarmnav.planning.plan_log import PlanLog, sample_times
 from swarmnav.planning.schedule import MAX_PLAN_STEPS, ReplanSchedule, plan_time_summary
 from swarmnav.planning.tracker import References, track
 from swarmnav.sensing.esdf import Esdf, grid_nodes
+from swarmnav.sensing.geometry import surfaces_within
 from swarmnav.world.scenario import Scenario
 
 
@@ -273,7 +274,13 @@ class Sph:
         if p.pair_guard:  # ours: no command drives a robot into another (parts/pairs.py)
             body = self.scenario.rules.body_radius
             safe = 2.0 * body + p.pair_margin
-            walls = (d, grad, body + p.pair_margin) if p.pair_obstacles else None
+            walls = None
+            if p.pair_obstacles and x.shape[1] == 2:  # a row for every trunk near a robot, exact
+                robots, gap, toward = surfaces_within(self.geom, x, pair_reach(body + p.pair_margin, p.pair_decel,
+                                                                               p.pair_gamma, p.a_max, p.v_max))
+                walls = (gap, -toward, body + p.pair_margin, robots)
+            elif p.pair_obstacles:  # 3-D: the nearest obstacle, from the ESDF
+                walls = (d, grad, body + p.pair_margin)
             bound = bound_rows(x.shape[1], p.a_max, p.clip) if p.pair_bound else None
             if view is None:
                 a, changed, infeasible = pair_guard(a, x, v, safe, p.pair_decel, p.pair_gamma, p.a_max, p.v_max, p.dt,

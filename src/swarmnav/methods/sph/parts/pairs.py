@@ -57,7 +57,7 @@ def pair_constraints(x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, 
     ``d_safe``; applied over a control step ``dt`` [s] it would overshoot, so ``root`` is floored at
     ``4 decel dt`` there (the term's gain times dt stays at most 1/2)."""
     n_robots, dim = x.shape
-    pairs = cKDTree(x).query_pairs(r=_reach(d_safe, decel, gamma, a_max, v_max), output_type="ndarray")
+    pairs = cKDTree(x).query_pairs(r=pair_reach(d_safe, decel, gamma, a_max, v_max), output_type="ndarray")
     if pairs.shape[0] == 0:
         return np.zeros((0, 2), np.int64), np.zeros((0, dim)), np.zeros(0)
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]  # the tree's order is not ours
@@ -67,7 +67,7 @@ def pair_constraints(x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, 
     return pairs[keep], n[keep], b[keep]
 
 
-def _reach(d_safe: float, decel: float, gamma: float, a_max: float, v_max: float) -> float:
+def pair_reach(d_safe: float, decel: float, gamma: float, a_max: float, v_max: float) -> float:
     """Distance [m] beyond which no pair's bound can bind: there b >= gamma (root - 2 v_max) -
     2 decel >= 2 a_max for any closing speed up to 2 v_max."""
     root = 2.0 * v_max + (2.0 * a_max + 2.0 * decel) / gamma
@@ -75,9 +75,12 @@ def _reach(d_safe: float, decel: float, gamma: float, a_max: float, v_max: float
 
 
 def _barrier(dp: np.ndarray, dv: np.ndarray, d_safe: float, decel: float, gamma: float,
-             dt: float) -> tuple[np.ndarray, np.ndarray]:
+             dt: float, turning: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Unit ``n`` (P, D) along ``dp`` and bound ``b`` (P,) of ``-n . (a_i - a_j) <= b`` for pairs
-    at offsets ``dp = p_i - p_j`` [m] moving apart at ``dv = v_i - v_j`` [m/s]."""
+    at offsets ``dp = p_i - p_j`` [m] moving apart at ``dv = v_i - v_j`` [m/s]. ``turning``: the
+    distance's second derivative counts the sideways motion, ``(|dv|^2 - s^2) / |dp|``, exact for
+    two points; off for an obstacle, where ``|dp|`` is the clearance, not the radius of the
+    surface's curvature (a flat wall has none), and the term would let a robot slide into it."""
     root_floor = 4.0 * decel * dt
     d = np.sqrt(np.einsum("pd,pd->p", dp, dp))
     n = dp / np.maximum(d, 1e-12)[:, None]
@@ -85,27 +88,32 @@ def _barrier(dp: np.ndarray, dv: np.ndarray, d_safe: float, decel: float, gamma:
     gap = d - d_safe
     root = np.sign(gap) * np.sqrt(4.0 * decel * np.abs(gap))  # signed: inside d_safe, h < 0 asks them apart
     h = root + s
-    tangential = np.maximum(np.einsum("pd,pd->p", dv, dv) - s * s, 0.0) / np.maximum(d, 1e-12)
+    tangential = np.maximum(np.einsum("pd,pd->p", dv, dv) - s * s, 0.0) / np.maximum(d, 1e-12) if turning else 0.0
     b = gamma * h + 2.0 * decel * s / np.maximum(np.abs(root), root_floor) + tangential
     return n, b
 
 
 def obstacle_constraints(v: np.ndarray, clearance: np.ndarray, away: np.ndarray, d_safe: float, decel: float,
-                         gamma: float, a_max: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                         gamma: float, a_max: float, dt: float,
+                         robots: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Robots ``r`` (Q,), unit ``n`` (Q, D) pointing away from their nearest obstacle and bound
     ``b`` (Q,) [m/s^2] of ``-n . a_r <= b``: the pair barrier against a standing obstacle, whose
     whole bound the robot keeps, for every robot whose bound a command within ``a_max`` could
     break. ``clearance`` (N,) [m] is each robot centre's distance to its nearest obstacle surface,
     ``away`` (N, D) the unit direction away from it (the ESDF's value and gradient), ``d_safe``
-    the clearance the robot must stop at (its body radius + a margin)."""
+    the clearance the robot must stop at (its body radius + a margin). With ``robots`` (Q,) the
+    rows are (robot, obstacle) pairs instead, ``clearance`` (Q,) and ``away`` (Q, D) one per row
+    (:func:`swarmnav.sensing.geometry.surfaces_within`), so a robot keeps clear of every obstacle
+    near it, not only the nearest."""
     near = np.flatnonzero(np.isfinite(clearance) & (clearance > 0.0))
     if near.size == 0:
         return near, np.zeros((0, v.shape[1])), np.zeros(0)
+    robot = near if robots is None else robots[near]
     g = away[near]
     g = g / np.maximum(np.linalg.norm(g, axis=1), 1e-12)[:, None]
-    n, b = _barrier(g * clearance[near, None], v[near], d_safe, decel, gamma, dt)
+    n, b = _barrier(g * clearance[near, None], v[robot], d_safe, decel, gamma, dt, turning=False)
     keep = b < a_max  # |n . a_r| <= a_max: these cannot bind
-    return near[keep], n[keep], b[keep]
+    return robot[keep], n[keep], b[keep]
 
 
 @functools.lru_cache(maxsize=16)
@@ -132,12 +140,13 @@ def bound_rows(dim: int, a_max: float, clip: str = "norm", sides: int = 16) -> t
 
 def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel: float, gamma: float,
                a_max: float, v_max: float, dt: float,
-               obstacles: tuple[np.ndarray, np.ndarray, float] | None = None,
+               obstacles: tuple | None = None,
                bound: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, int, int]:
     """Commands ``a`` (N, D) [m/s^2] changed as little as possible so that no pair closes faster
     than both robots can brake before ``d_safe`` [m] (module docstring); how many robots'
     commands changed, and for how many no command met every constraint. ``obstacles`` =
-    ``(clearance, away, d_safe_obstacle)`` adds a row per robot for its nearest obstacle
+    ``(clearance, away, d_safe_obstacle)`` adds a row per robot for its nearest obstacle, and
+    ``(clearance, away, d_safe_obstacle, robots)`` a row per (robot, obstacle) pair
     (:func:`obstacle_constraints`), so that no command the guard moves drives a robot into one.
     ``bound``: :func:`bound_rows`, so that a moved command lies within what the dynamics fly."""
     pairs, n, b = pair_constraints(x, v, d_safe, decel, gamma, a_max, v_max, dt)
@@ -149,7 +158,8 @@ def pair_guard(a: np.ndarray, x: np.ndarray, v: np.ndarray, d_safe: float, decel
 def _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt, bound=None):
     """The guard's QPs over the given rows, plus the obstacle rows when ``obstacles`` is given."""
     if obstacles is not None:
-        r, n, b = obstacle_constraints(v, obstacles[0], obstacles[1], obstacles[2], decel, gamma, a_max, dt)
+        r, n, b = obstacle_constraints(v, obstacles[0], obstacles[1], obstacles[2], decel, gamma, a_max, dt,
+                                       obstacles[3] if len(obstacles) > 3 else None)
         rows, normals, bounds = [*rows, r], [*normals, -n], [*bounds, b]
     rows = np.concatenate(rows)
     if rows.size == 0:
@@ -169,14 +179,14 @@ def _solve_rows(a, rows, normals, bounds, v, obstacles, decel, gamma, a_max, dt,
 
 def pair_guard_known(a: np.ndarray, x: np.ndarray, v: np.ndarray, kx: np.ndarray, kv: np.ndarray,
                      heard: np.ndarray, d_safe: float, decel: float, gamma: float, a_max: float, v_max: float,
-                     dt: float, obstacles: tuple[np.ndarray, np.ndarray, float] | None = None,
+                     dt: float, obstacles: tuple | None = None,
                      bound: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, int, int]:
     """:func:`pair_guard` on a network (docs/network.md): robot i keeps its half of the bound of
     every pair (i, j) it has heard, from its own state and its picture ``kx[i, j]``, ``kv[i, j]``
     of robot j (N, N, D), trusting j to keep the other half. Obstacles are its own sensing, as in
     :func:`pair_guard`."""
     n_robots = x.shape[0]
-    reach = _reach(d_safe, decel, gamma, a_max, v_max)
+    reach = pair_reach(d_safe, decel, gamma, a_max, v_max)
     i, j = np.nonzero(heard & ~np.eye(n_robots, dtype=bool))
     dp = x[i] - kx[i, j]
     near = np.einsum("pd,pd->p", dp, dp) < reach * reach
