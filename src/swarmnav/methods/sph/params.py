@@ -136,9 +136,10 @@ class SphParams:
     pair_gamma: float = param(2.0, "1/s", "(0, inf)", "ours (Wang et al.'s class-K function, linear)",
         "pair_guard: how fast a pair may use up its braking margin (dh/dt >= -pair_gamma h)")
     pair_obstacles: bool = param(False, "", None, "ours (Wang, Ames & Egerstedt, T-RO 2017, obstacles as static agents)",
-        "pair_guard: each robot's QP also keeps the barrier against its nearest obstacle (ESDF value and "
-        "gradient; stop body radius + pair_margin from its surface, the robot keeping the whole bound), "
-        "so that the command the guard moves never drives a robot into a trunk")
+        "pair_guard: each robot's QP also keeps the barrier against every obstacle near it (2-D: one row "
+        "per obstacle from the exact geometry; 3-D: the nearest, from the ESDF; stop body radius + "
+        "pair_margin from its surface, the robot keeping the whole bound), so that the command the guard "
+        "moves never drives a robot into a trunk")
     pair_bound: bool = param(False, "", None, "ours",
         "pair_guard: each robot's QP also keeps its command within the dynamics' a_max (the box of "
         "clip=axis exactly, the disc of clip=norm as an inscribed 16-gon, 2 % short of it), so the "
