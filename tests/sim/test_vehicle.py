@@ -198,3 +198,42 @@ def test_a_damaged_thrust_axis_is_one_line(tmp_path):
     r.save(tmp_path)
     with pytest.raises(swarmnav.SwarmnavError, match="thrust_axis"):
         swarmnav.RunResult.load(tmp_path)
+
+
+class _Recorded:
+    """A registered method whose commands are kept, step by step (for a plain reference)."""
+
+    def __init__(self, inner):
+        self.inner = inner
+        self.cmds = []
+
+    def __getattr__(self, key):
+        return getattr(self.inner, key)
+
+    def act(self, obs, rng):
+        cmd, info = self.inner.act(obs, rng)
+        self.cmds.append(np.array(cmd, dtype=float))
+        return cmd, info
+
+
+def test_the_tracking_error_counts_only_the_robots_still_flying():
+    m = _Recorded(registry.make("apf"))
+    r = swarmnav.run(m, "default_corridor", seed=1, steps=120, **QUAD)
+    crash = {e["agent"]: e["step"] for e in r.events if e.get("action") == "crash"}
+    assert 0 < len(crash) < r.positions.shape[1] and r.metrics["vehicle_flips"] == 0.0  # some, not all, crashed
+    # plain reference: the step from recorded state k to k + 1 against the point model's step from
+    # state k under the same command, over the robots not crashed at state k
+    P, V, dt = r.positions, r.velocities, m.dt
+    crashed_at = np.array([crash.get(i, np.inf) for i in range(P.shape[1])])
+    means, worst, every = [], 0.0, []
+    for k, cmd in enumerate(m.cmds):
+        p_pt, _ = m.dynamics.step(P[k].copy(), V[k].copy(), cmd, dt)
+        err = np.linalg.norm(P[k + 1] - p_pt, axis=1)
+        flying = crashed_at > k
+        means.append(err[flying].mean())
+        worst = max(worst, err[flying].max())
+        every.append(err.mean())
+    assert r.metrics["vehicle_track_err_mean"] == pytest.approx(np.mean(means), rel=1e-9)
+    assert r.metrics["vehicle_track_err_max"] == pytest.approx(worst, rel=1e-12)
+    # the held wrecks would have moved the figure: the test tells the two apart
+    assert abs(np.mean(every) - np.mean(means)) > 1e-3 * np.mean(means)

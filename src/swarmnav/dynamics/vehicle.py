@@ -20,7 +20,7 @@ On a 2-D scene the vehicles fly at one altitude, which the controller holds (the
 plane; the altitude error is a metric). The reference restarts from the actual state every step:
 the method closes the loop at its own rate, as it does on the point model, and the vehicle's lag
 shows as the distance between where the point model would have put it and where it went
-(``vehicle_track_err_*``). A vehicle that flips (tilt beyond 90 deg) or diverges is frozen, finite,
+(``vehicle_track_err_*``, over the vehicles still flying: not those flipped or crashed). A vehicle that flips (tilt beyond 90 deg) or diverges is frozen, finite,
 and crashed by the referee with the reason ``"flipped"``: a counted failure, never NaN.
 
 Every vehicle option is the run's, not a method's (``--set vehicle=quadrotor --set wind.speed=6``),
@@ -161,8 +161,11 @@ class Quadrotors:
     def _lift(self, x: np.ndarray, z: np.ndarray) -> np.ndarray:
         return np.column_stack([x, z]) if self.d == 2 else np.array(x, dtype=np.float64)
 
-    def step(self, pos: np.ndarray, vel: np.ndarray, cmd: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """One method step of every vehicle: the method's command through the flight stack."""
+    def step(self, pos: np.ndarray, vel: np.ndarray, cmd: np.ndarray, dt: float,
+             crashed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """One method step of every vehicle: the method's command through the flight stack.
+        ``crashed`` (N,) bool: the vehicles the run's referee has crashed before this step; they
+        are held where they hit, so their tracking error is not the vehicle's and is not counted."""
         p_pt, v_pt = self.point.step(pos, vel, cmd, dt)
         a = (np.asarray(v_pt, dtype=np.float64) - vel) / dt
         horizontal = a[:, :2]
@@ -199,11 +202,12 @@ class Quadrotors:
         miss = pos1 - p_pt
         if self.period is not None:  # the point model may have wrapped its position
             miss -= self.period * np.round(miss / self.period)
-        err = np.sqrt(np.einsum("ij,ij->i", miss, miss))[~flipped]
-        if err.size:
+        flying = ~flipped if crashed is None else ~(flipped | crashed)
+        err = np.sqrt(np.einsum("ij,ij->i", miss, miss))[flying]
+        if err.size:  # the step's mean over the vehicles that flew it; the run's mean over such steps
             self.err_sum += float(err.mean())
             self.err_max = max(self.err_max, float(err.max()))
-        self.steps += 1
+            self.steps += 1
         return pos1, vel1
 
     @property

@@ -137,7 +137,6 @@ def run(
     if not vehicle.point:
         quads = Quadrotors(vehicle, wind, m.dynamics, pos, vel, dt, seed,
                            period=world.bounds[2] - world.bounds[0] if world.periodic else None)
-        step = quads.step
     N = scn.n
     d = scn.dim
     P = np.empty((steps + 1, N, d))
@@ -196,7 +195,10 @@ def run(
                 cmd, info = m.act(Observation(k, k * dt, opos, ovel, view, perception), rng)
             if network is not None and "publish" in info:  # what the agents send from now on
                 network.publish(info["publish"])
-            pos, vel = step(pos, vel, cmd, dt)
+            if quads is None:
+                pos, vel = step(pos, vel, cmd, dt)
+            else:  # the referee's wrecks are held, not flown: no tracking error of theirs counts
+                pos, vel = quads.step(pos, vel, cmd, dt, None if referee is None else referee.crashed)
             if referee is not None:
                 if quads is not None and quads.new_flips.any():  # a flipped quadrotor has crashed
                     events += referee.fail(k + 1, quads.new_flips, pos, "flipped")
