@@ -237,3 +237,51 @@ def test_the_tracking_error_counts_only_the_robots_still_flying():
     assert r.metrics["vehicle_track_err_max"] == pytest.approx(worst, rel=1e-12)
     # the held wrecks would have moved the figure: the test tells the two apart
     assert abs(np.mean(every) - np.mean(means)) > 1e-3 * np.mean(means)
+
+
+class _Descend(_Hover):
+    """Every agent of a 3-D scene asks to go down at 1.5 m/s^2 (at most 1 m/s) and drift along +x."""
+
+    name = "descend"
+    dims = (3,)
+
+    def act(self, obs: Observation, rng):
+        a = np.zeros((self.n, self.d))
+        a[:, 0], a[:, 2] = 0.3, -1.5
+        return a, {}
+
+
+def _room(boundary):
+    from swarmnav.world.scenario import from_dict
+
+    return from_dict({"name": "room", "world": {"bounds": [0.0, 0.0, 0.0, 20.0, 10.0, 6.0], "boundary": boundary},
+                      "swarm": {"n": 4, "spawn": [2.0, 2.0, 1.0, 8.0, 8.0, 2.0]}, "goal": {"position": [18.0, 5.0, 1.5]}})
+
+
+@pytest.mark.parametrize("boundary", ["open", "wall"])
+def test_a_quadrotor_that_comes_down_to_the_floor_crashes_there(boundary):
+    r = swarmnav.run(_Descend(), _room(boundary), seed=1, steps=80, **QUAD)  # 4 s: down from 1-2 m at <= 1 m/s
+    crashes = [e for e in r.events if e.get("action") == "crash"]
+    assert len(crashes) == 4 and {e["reason"] for e in crashes} == {"ground"}
+    assert r.metrics["crashes"] == 4.0 and np.isfinite(r.positions).all()
+    z = r.positions[..., 2]
+    assert z.min() >= 0.0  # nobody below the floor, at any recorded step
+    for e in crashes:  # held where it came down, at rest
+        i, k = e["agent"], e["step"]
+        assert np.all(r.positions[k:, i] == r.positions[k, i]) and np.all(r.velocities[k + 1:, i] == 0.0)
+    if boundary == "open":  # only the ground stops them: each is on it, at z = 0
+        assert np.all(r.positions[-1, :, 2] == 0.0) and r.metrics["vehicle_grounded"] == 4.0
+    else:  # the floor is a wall too: the referee's contact rule stops each a body radius above it
+        assert np.all(r.positions[-1, :, 2] < r.config["rules"]["body_radius"])
+
+
+def test_there_is_no_ground_under_a_2d_scene_or_a_planar_method_at_its_altitude():
+    flat = swarmnav.run(_Hover(), "default_corridor", seed=1, steps=20, **QUAD)  # held at the plane's altitude
+    planar_method = _Push(40)
+    planar_method.dims = (2,)  # a planar method: it flies the 3-D scene's slice at z_fly, over its floor at z = 0
+    planar = swarmnav.run(planar_method, "sph_cluttered_3d", seed=1, steps=40, **QUAD)
+    for r in (flat, planar):
+        assert r.metrics["vehicle_grounded"] == 0.0
+        assert not [e for e in r.events if e.get("reason") == "ground"]
+    assert planar.config["plane"]["z_fly"] > 0.5 and np.all(planar.positions[..., 2] == planar.config["plane"]["z_fly"])
+    assert planar.metrics["crashes"] == 0.0 and planar.metrics["vehicle_alt_err_max"] < 0.01

@@ -44,7 +44,10 @@ integrated with Simpson's rule on the exact rotor speeds at those stage times.
 
 A vehicle whose tilt exceeds 90 deg, or whose state stops being finite, is *flipped*: its state
 is frozen at its last finite value (the position and velocity passed in are returned
-unchanged from then on) and it stays flagged until :meth:`QuadrotorFleet.reset`.
+unchanged from then on) and it stays flagged until :meth:`QuadrotorFleet.reset`. A fleet given a
+floor (``QuadrotorFleet(..., floor=z0)``) checks it after every inner step: a vehicle whose z has
+fallen to ``z0`` or below is put on it (z = z0) at rest and is *grounded*, frozen likewise: it
+stops in the inner step in which it reached the floor, never flies through it.
 
 Determinism: compiled without fastmath, the vehicles in a fixed order, one thread; identical
 inputs give identical outputs, and a vehicle's result does not depend on the others in the batch.
@@ -233,11 +236,12 @@ def _control(s, pr, vr, ar, P, G, A, R, cmd):
 
 
 @njit(cache=True)
-def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, energy,
+def _advance(pos, vel, quat, omega, rotor, flipped, grounded, floor, cos_tilt_min, sat_steps, energy,
              controlled, p_ref, v_ref, a_ref, rotor_cmd, air, h, n_inner, P, rpos, rdir, G, A,
              pos_out, vel_out):
     """Advance every vehicle by n_inner inner steps of h [s], in place on the fleet state
-    (quat, omega, rotor, flipped, cos_tilt_min, sat_steps, energy); new p, v into pos_out, vel_out."""
+    (quat, omega, rotor, flipped, grounded, cos_tilt_min, sat_steps, energy); new p, v into
+    pos_out, vel_out. A vehicle whose z falls to ``floor`` [m] stops there, at rest, grounded."""
     s = np.empty(13)
     s0 = np.empty(13)
     st = np.empty(13)
@@ -267,7 +271,7 @@ def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, ene
         for c in range(3):
             pos_out[i, c] = pos[i, c]
             vel_out[i, c] = vel[i, c]
-        if flipped[i]:
+        if flipped[i] or grounded[i]:
             continue
         for c in range(3):
             s[c] = pos[i, c]
@@ -340,6 +344,13 @@ def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, ene
             energy[i] += k_m * h / 6.0 * e
             for c in range(4):
                 w0[c] = we[c]
+            if s[2] <= floor:  # it reached the ground within this inner step: it stops on it
+                s[2] = floor
+                s[3] = 0.0
+                s[4] = 0.0
+                s[5] = 0.0
+                grounded[i] = True
+                break
             ct = 1.0 - 2.0 * (s[7] * s[7] + s[8] * s[8])
             if ct < cos_tilt_min[i]:
                 cos_tilt_min[i] = ct
@@ -363,8 +374,12 @@ class QuadrotorFleet:
     (a periodic world may wrap them), and are passed in and returned by every step.
     """
 
-    def __init__(self, airframe: Airframe, n: int, inner_hz: float = 500.0, gains: Gains | None = None):
+    def __init__(self, airframe: Airframe, n: int, inner_hz: float = 500.0, gains: Gains | None = None,
+                 floor: float = -math.inf):
         self.airframe = check(airframe)
+        if math.isnan(floor) or floor == math.inf:
+            raise ConfigError(f"the floor must be a height [m] or -inf (none), got {floor!r}")
+        self.floor = float(floor)
         if int(n) != n or n < 1:
             raise ConfigError(f"a fleet needs n >= 1 vehicles, got {n!r}")
         if not (math.isfinite(inner_hz) and inner_hz > 0):
@@ -382,6 +397,7 @@ class QuadrotorFleet:
         self._omega = np.zeros((self.n, 3))
         self._rotor = np.zeros((self.n, 4))
         self._flipped = np.zeros(self.n, dtype=np.bool_)
+        self._grounded = np.zeros(self.n, dtype=np.bool_)
         self._cos_tilt_min = np.ones(self.n)
         self._sat = np.zeros(self.n, dtype=np.int64)
         self._steps = 0
@@ -397,6 +413,7 @@ class QuadrotorFleet:
         self._omega[:] = 0.0
         self._rotor[:] = self.airframe.hover_speed
         self._flipped[:] = False
+        self._grounded[:] = False
         self._cos_tilt_min[:] = 1.0
         self._sat[:] = 0
         self._steps = 0
@@ -424,7 +441,8 @@ class QuadrotorFleet:
         n_inner = self.substeps(dt)
         a = np.zeros((self.n, 3)) if air is None else self._array(air, "air")
         p_out, v_out = np.empty((self.n, 3)), np.empty((self.n, 3))
-        _advance(p, v, self._quat, self._omega, self._rotor, self._flipped, self._cos_tilt_min, self._sat,
+        _advance(p, v, self._quat, self._omega, self._rotor, self._flipped, self._grounded, self.floor,
+                 self._cos_tilt_min, self._sat,
                  self._energy, controlled, p_ref, v_ref, a_ref, cmd, a, float(dt) / n_inner, n_inner,
                  self._P, self._rpos, self._rdir, self._G, self._A, p_out, v_out)
         self._steps += n_inner
@@ -508,3 +526,8 @@ class QuadrotorFleet:
     def flipped(self) -> np.ndarray:
         """(N,) bool: tilted past 90 deg or non-finite since reset (state frozen since)."""
         return self._flipped.copy()
+
+    @property
+    def grounded(self) -> np.ndarray:
+        """(N,) bool: came down to the floor since reset (stopped there, at rest, frozen since)."""
+        return self._grounded.copy()

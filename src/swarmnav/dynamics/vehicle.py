@@ -20,8 +20,11 @@ On a 2-D scene the vehicles fly at one altitude, which the controller holds (the
 plane; the altitude error is a metric). The reference restarts from the actual state every step:
 the method closes the loop at its own rate, as it does on the point model, and the vehicle's lag
 shows as the distance between where the point model would have put it and where it went
-(``vehicle_track_err_*``, over the vehicles still flying: not those flipped or crashed). A vehicle that flips (tilt beyond 90 deg) or diverges is frozen, finite,
-and crashed by the referee with the reason ``"flipped"``: a counted failure, never NaN.
+(``vehicle_track_err_*``, over the vehicles still flying: not those flipped, grounded or crashed).
+A vehicle that flips (tilt beyond 90 deg) or diverges is frozen, finite, and crashed by the
+referee with the reason ``"flipped"``: a counted failure, never NaN. In a 3-D world a vehicle that
+comes down to the floor (the world's lowest z) stops on it and is crashed with the reason
+``"ground"``; a 2-D scene has no ground (its altitude is held, not modelled).
 
 Every vehicle option is the run's, not a method's (``--set vehicle=quadrotor --set wind.speed=6``),
 and the point vehicle with its defaults is no vehicle model at all: the rollout calls the method's
@@ -130,10 +133,13 @@ class Quadrotors:
         dt: the method's step [s].
         seed: the run's seed (the wind's gusts draw from a stream of their own).
         period: side of a periodic world [m], or None.
+        floor: the ground's height [m] in the vehicles' vertical (on a 2-D state: relative to the
+            held altitude), or None for no ground (a 2-D scene). A vehicle that comes down to it
+            stops there and is *grounded* (:attr:`new_grounded`).
     """
 
     def __init__(self, p: VehicleParams, wind: WindParams, point: Any, pos: np.ndarray, vel: np.ndarray,
-                 dt: float, seed: int, period: float | None = None):
+                 dt: float, seed: int, period: float | None = None, floor: float | None = None):
         n, d = pos.shape
         if dt * p.inner_hz < 1.0 - 1e-9:
             raise ConfigError(f"vehicle.inner_hz = {p.inner_hz:g} Hz is slower than the method's step "
@@ -141,7 +147,8 @@ class Quadrotors:
         self.p, self.point, self.d, self.dt, self.period = p, point, d, float(dt), period
         self.frame = airframe(p.airframe, p.mass or None)
         gains = dataclasses.replace(default_gains(self.frame), drag_ff=p.drag_ff)
-        self.fleet = QuadrotorFleet(self.frame, n, inner_hz=p.inner_hz, gains=gains)
+        self.fleet = QuadrotorFleet(self.frame, n, inner_hz=p.inner_hz, gains=gains,
+                                    floor=-math.inf if floor is None else float(floor))
         self.altitude = np.zeros(n)  # [m] the held altitude of a 2-D scene's vehicles (its z is not recorded)
         self.z = np.zeros(n)
         self.vz = np.zeros(n)
@@ -153,6 +160,8 @@ class Quadrotors:
         self.t = 0.0
         self.flipped = np.zeros(n, dtype=bool)
         self.new_flips = np.zeros(n, dtype=bool)
+        self.grounded = np.zeros(n, dtype=bool)
+        self.new_grounded = np.zeros(n, dtype=bool)
         self.err_sum = 0.0
         self.err_max = 0.0
         self.alt_err_max = 0.0
@@ -195,6 +204,9 @@ class Quadrotors:
         flipped = np.asarray(self.fleet.flipped, dtype=bool)
         self.new_flips = flipped & ~self.flipped
         self.flipped = flipped
+        grounded = np.asarray(self.fleet.grounded, dtype=bool)
+        self.new_grounded = grounded & ~self.grounded
+        self.grounded = grounded
         if self.d == 2:
             self.z, self.vz = P1[:, 2].copy(), V1[:, 2].copy()
             self.alt_err_max = max(self.alt_err_max, float(np.max(np.abs(self.z - self.altitude), initial=0.0)))
@@ -202,7 +214,8 @@ class Quadrotors:
         miss = pos1 - p_pt
         if self.period is not None:  # the point model may have wrapped its position
             miss -= self.period * np.round(miss / self.period)
-        flying = ~flipped if crashed is None else ~(flipped | crashed)
+        down = flipped | grounded
+        flying = ~down if crashed is None else ~(down | crashed)
         err = np.sqrt(np.einsum("ij,ij->i", miss, miss))[flying]
         if err.size:  # the step's mean over the vehicles that flew it; the run's mean over such steps
             self.err_sum += float(err.mean())
@@ -228,4 +241,5 @@ class Quadrotors:
             **({"vehicle_alt_err_max": self.alt_err_max} if self.d == 2 else {}),  # [m]
             "vehicle_energy_mean": float(np.mean(f.energy_J)),  # [J] per vehicle
             "vehicle_flips": float(self.flipped.sum()),
+            "vehicle_grounded": float(self.grounded.sum()),
         }
