@@ -113,6 +113,9 @@ def test_wind_pushes_a_quadrotor_that_no_one_steers():
     ({"downwash": True}, "vehicle=quadrotor"),
     ({"vehicle.airframe": "hummingbird"}, "vehicle=quadrotor"),
     ({"vehicle": "quadrotor", "wind.speed": -1.0}, "speed"),
+    ({"vehicle": "quadrotor", "vehicle.yaw": "spin"}, "yaw"),
+    ({"vehicle": "quadrotor", "vehicle.yaw": "velocity", "vehicle.yaw_rate_max": 0.0}, "yaw_rate_max"),
+    ({"vehicle": "quadrotor", "vehicle.yaw_rate_max": 90.0}, "vehicle.yaw=velocity"),  # no effect with yaw held
 ])
 def test_bad_vehicle_options_are_one_line(options, words):
     with pytest.raises(ConfigError) as e:
@@ -285,3 +288,45 @@ def test_there_is_no_ground_under_a_2d_scene_or_a_planar_method_at_its_altitude(
         assert not [e for e in r.events if e.get("reason") == "ground"]
     assert planar.config["plane"]["z_fly"] > 0.5 and np.all(planar.positions[..., 2] == planar.config["plane"]["z_fly"])
     assert planar.metrics["crashes"] == 0.0 and planar.metrics["vehicle_alt_err_max"] < 0.01
+
+
+def _heading_run(yaw):
+    """Two quadrotors of a 2-D scene asked to accelerate along +y and along (-1, -1) for 4 s,
+    through the vehicle layer itself; their headings [deg] after every step and final positions."""
+    from swarmnav.dynamics import SaturatedDoubleIntegrator
+    from swarmnav.dynamics.vehicle import Quadrotors, vehicle_params
+
+    p, w = vehicle_params({"vehicle": "quadrotor", "vehicle.yaw": yaw})
+    q = Quadrotors(p, w, SaturatedDoubleIntegrator(1.0, 1.5), np.zeros((2, 2)), np.zeros((2, 2)), 0.05, 1)
+    pos, vel, cmd = np.zeros((2, 2)), np.zeros((2, 2)), np.array([[0.0, 1.0], [-1.0, -1.0]])
+    headings = []
+    for _ in range(80):
+        pos, vel = q.step(pos, vel, cmd, 0.05)
+        headings.append(np.degrees(q.heading))
+    return np.array(headings), pos, q.summary()
+
+
+def test_yaw_velocity_turns_each_heading_toward_its_velocity_at_the_rate_limit():
+    held, p_held, _ = _heading_run("hold")
+    turned, p_turned, m = _heading_run("velocity")
+    assert np.abs(held).max() < 1.0  # yaw held at 0 (the rotor drag couples a fraction of a degree in)
+    # 45 deg/s (PX4's MPC_YAWRAUTO_MAX) from the first step with a velocity: 45 deg at ~1 s, the
+    # one along +y at 90 deg from ~2 s on, the other the shorter way round, to -135 deg at ~3 s
+    assert abs(turned[20, 0] - 45.0) < 3.0 and abs(turned[20, 1] + 45.0) < 3.0
+    assert abs(turned[40, 0] - 90.0) < 3.0 and abs(turned[40, 1] + 90.0) < 3.0
+    np.testing.assert_allclose(turned[-1], [90.0, -135.0], atol=0.5)
+    t = 0.05 * np.arange(1, 81)
+    assert np.all(turned[:, 0] <= 45.0 * t + 3.0) and np.all(turned[:, 1] >= -45.0 * t - 3.0)  # never ahead of the limit
+    assert turned[:, 0].max() < 92.0 and turned[:, 1].min() > -137.0  # nor past the velocity's direction by > 2 deg
+    # the heading is not the translation: the vehicles go where they went with the yaw held, to 1 cm
+    assert np.abs(p_turned - p_held).max() < 0.01 and m["vehicle_flips"] == 0.0
+
+
+def test_yaw_hold_is_the_run_as_before_and_velocity_is_recorded():
+    a = swarmnav.run("apf", "default_corridor", seed=2, steps=30, **QUAD)
+    b = swarmnav.run("apf", "default_corridor", seed=2, steps=30, **QUAD, **{"vehicle.yaw": "hold"})
+    assert np.array_equal(a.positions, b.positions) and np.array_equal(a.thrust_axis, b.thrust_axis)
+    assert "yaw" not in a.config["vehicle"] and a.config == {**b.config}  # a run's key as before the option
+    c = swarmnav.run("apf", "default_corridor", seed=2, steps=30, **QUAD, **{"vehicle.yaw": "velocity"})
+    assert c.config["vehicle"]["yaw"] == "velocity" and c.config["vehicle"]["yaw_rate_max"] == 45.0
+    assert np.isfinite(c.positions).all() and not np.array_equal(a.thrust_axis, c.thrust_axis)

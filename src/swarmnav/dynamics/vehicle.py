@@ -54,6 +54,11 @@ WIND_PREFIX = "wind."
 DOWNWASH = "downwash"
 
 
+#: [m/s] below this horizontal speed of its velocity reference a vehicle under vehicle.yaw=velocity
+#: keeps its heading (ours: the direction of a velocity this small is noise)
+YAW_MIN_SPEED = 0.05
+
+
 def is_vehicle_option(key: str) -> bool:
     """A run option of the vehicle (module docstring)."""
     return key in (VEHICLE, DOWNWASH) or key.startswith((PREFIX, WIND_PREFIX))
@@ -78,6 +83,12 @@ class VehicleParams:
                           "the controller cancels the airframe's own aerodynamic drag (in still air: the wind "
                           "stays unknown to it); false: RotorPy's SE3Control as it is")
     downwash: bool = param(False, "", None, "ours", "the downwash of each quadrotor acts on those below it")
+    yaw: Literal["hold", "velocity"] = param(
+        "hold", "", None, "ours",
+        "the heading the controller flies: held at 0 deg, or turned toward the direction of the vehicle's "
+        "horizontal velocity reference (a sensor's field of view is relative to the heading)")
+    yaw_rate_max: float = param(45.0, "deg/s", "(0, 3600]", "PX4 MPC_YAWRAUTO_MAX",
+                                "how fast vehicle.yaw=velocity turns the heading reference")
 
     @property
     def point(self) -> bool:
@@ -112,6 +123,9 @@ def vehicle_params(options: dict[str, Any]) -> tuple[VehicleParams, WindParams]:
                               "neither; set vehicle=quadrotor")
     else:
         airframe(p.airframe, p.mass or None)  # an unknown or non-physical airframe fails here, before the run
+        if p.yaw == "hold" and p.yaw_rate_max != VehicleParams().yaw_rate_max:
+            raise ConfigError(f"{PREFIX}yaw_rate_max: the rate at which {PREFIX}yaw=velocity turns; "
+                              f"with the yaw held it does nothing; set {PREFIX}yaw=velocity")
     return p, w
 
 
@@ -119,7 +133,10 @@ def record(p: VehicleParams, w: WindParams) -> dict:
     """The vehicle of a run as its config records it (the point vehicle: nothing)."""
     if p.point:
         return {}
-    return {"vehicle": as_dict(p), **({"wind": as_dict(w)} if w != WindParams() else {})}
+    own = as_dict(p)
+    if p.yaw == "hold":  # the yaw held, as before the option existed: the record (and a run's key) as then
+        del own["yaw"], own["yaw_rate_max"]
+    return {"vehicle": own, **({"wind": as_dict(w)} if w != WindParams() else {})}
 
 
 class Quadrotors:
@@ -158,6 +175,10 @@ class Quadrotors:
         self.a_xy = G * math.tan(math.radians(p.max_tilt))
         self.a_up = self.frame.max_thrust / self.frame.mass - G
         self.t = 0.0
+        # [rad] each vehicle's heading reference (vehicle.yaw=velocity), and its turn rate limit [rad/s]
+        self.yaw_on = p.yaw == "velocity"
+        self.yaw_ref = np.zeros(n)
+        self.yaw_rate_max = math.radians(p.yaw_rate_max)
         self.flipped = np.zeros(n, dtype=bool)
         self.new_flips = np.zeros(n, dtype=bool)
         self.grounded = np.zeros(n, dtype=bool)
@@ -199,7 +220,10 @@ class Quadrotors:
             carry = (0.0 if air is None else air) - V  # the air past each source carries its wake
             wash = downwash_air(P, self.fleet.thrust, self.frame.rotor_radius, carry=carry)
             air = wash if air is None else air + wash
-        P1, V1 = self.fleet.fly(P, V, p_ref, v_ref, a_ref, dt, air)
+        heading = {}
+        if self.yaw_on:
+            heading = self._heading(v_ref[:, :2] + a_ref[:, :2] * dt, dt)
+        P1, V1 = self.fleet.fly(P, V, p_ref, v_ref, a_ref, dt, air, **heading)
         self.t += dt
         flipped = np.asarray(self.fleet.flipped, dtype=bool)
         self.new_flips = flipped & ~self.flipped
@@ -222,6 +246,24 @@ class Quadrotors:
             self.err_max = max(self.err_max, float(err.max()))
             self.steps += 1
         return pos1, vel1
+
+    def _heading(self, v_end: np.ndarray, dt: float) -> dict[str, np.ndarray]:
+        """The heading ramp of this step (vehicle.yaw=velocity): from the current reference toward
+        the direction of the horizontal velocity reference at the step's end ``v_end`` (N, 2)
+        [m/s], by the shorter way, at most ``yaw_rate_max``; held where that velocity is below
+        :data:`YAW_MIN_SPEED` (at rest it has no direction)."""
+        speed = np.sqrt(np.einsum("ij,ij->i", v_end, v_end))
+        target = np.where(speed > YAW_MIN_SPEED, np.arctan2(v_end[:, 1], v_end[:, 0]), self.yaw_ref)
+        turn = np.mod(target - self.yaw_ref + math.pi, 2.0 * math.pi) - math.pi
+        rate = np.clip(turn / dt, -self.yaw_rate_max, self.yaw_rate_max)
+        out = {"yaw": self.yaw_ref.copy(), "yaw_rate": rate}
+        self.yaw_ref = np.mod(self.yaw_ref + rate * dt + math.pi, 2.0 * math.pi) - math.pi
+        return out
+
+    @property
+    def heading(self) -> np.ndarray:
+        """(N,) each vehicle's heading [rad] in (-pi, pi], from world x (its body x axis, projected)."""
+        return self.fleet.yaw
 
     @property
     def thrust_axis(self) -> np.ndarray:
