@@ -275,7 +275,8 @@ def test_a_quadrotor_that_comes_down_to_the_floor_crashes_there(boundary):
     if boundary == "open":  # only the ground stops them: each is on it, at z = 0
         assert np.all(r.positions[-1, :, 2] == 0.0) and r.metrics["vehicle_grounded"] == 4.0
     else:  # the floor is a wall too: the referee's contact rule stops each a body radius above it
-        assert np.all(r.positions[-1, :, 2] < r.config["rules"]["body_radius"])
+        z_end = r.positions[-1, :, 2]
+        assert np.all((z_end > 0.0) & (z_end < r.config["rules"]["body_radius"])) and r.metrics["vehicle_grounded"] == 0.0
 
 
 def test_there_is_no_ground_under_a_2d_scene_or_a_planar_method_at_its_altitude():
