@@ -46,7 +46,10 @@ REFERENCES = {
     "hover": lambda t: (np.array([0.0, 0.0, 1.0]), np.zeros(3), np.zeros(3)),
     "step_1m": lambda t: (np.array([1.0, 0.0, 1.0]), np.zeros(3), np.zeros(3)),
     "figure_eight": figure_eight,
+    "figure_eight_yaw": figure_eight,
 }
+#: [rad/s] the heading ramp psi(t) = rate t of a reference (the others hold yaw 0): 2.4 rad in 3 s
+YAW_RATE = {"figure_eight_yaw": 0.8}
 
 
 def open_loop_command(af: Airframe, k: int) -> np.ndarray:
@@ -109,12 +112,14 @@ def _compute() -> dict[str, np.ndarray]:
             ctrl.kp_pos, ctrl.kd_pos = np.array(gains.kp_pos), np.array(gains.kd_pos)
             st = rotorpy_state([0.0, 0.0, 1.0], [0.0, 0.0, 0.0], CLOSED_WIND, af)
             states = []
+            rate = YAW_RATE.get(ref, 0.0)
             for j in range(60):
                 pr, vr, ar = REFERENCES[ref](j * 0.05)
                 for k in range(25):
                     tau = k * H
                     flat = {"x": pr + vr * tau + 0.5 * ar * tau * tau, "x_dot": vr + ar * tau, "x_ddot": ar,
-                            "x_dddot": np.zeros(3), "x_ddddot": np.zeros(3), "yaw": 0.0, "yaw_dot": 0.0}
+                            "x_dddot": np.zeros(3), "x_ddddot": np.zeros(3), "yaw": rate * (j * 0.05 + tau),
+                            "yaw_dot": rate}
                     st = vehicle.step(st, ctrl.update(j * 0.05 + tau, st, flat), H)
                 states.append(st)
             _record(out, f"closed/{name}/{ref}", states)

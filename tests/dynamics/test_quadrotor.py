@@ -237,3 +237,29 @@ def test_drag_compensation_holds_the_commanded_acceleration(name):
     assert _steady_acceleration(name, False) < 0.7
     # with it the vehicle holds the command but for the lag of its rotors (the last 4 %)
     assert _steady_acceleration(name, True) == pytest.approx(1.0, abs=0.06)
+
+
+def test_a_falling_vehicle_stops_on_the_floor_and_never_passes_it():
+    af = airframe("crazyflie")
+    p0, v0 = np.array([[0.0, 0.0, 1.0], [3.0, 0.0, 20.0]]), np.array([[0.5, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    floored, free = QuadrotorFleet(af, 2, floor=0.0), QuadrotorFleet(af, 2)
+    off = np.zeros((2, 4))  # rotors off: both fall
+    out = {}
+    for name, f in (("floored", floored), ("free", free)):
+        f.reset(p0, v0)
+        p, v, zs = p0.copy(), v0.copy(), []
+        for _ in range(20):  # 1 s: from 1 m a free fall lands after 0.45 s; from 20 m it is still falling
+            p, v = f.fly_rotors(p, v, off, 0.05)
+            zs.append(p[:, 2].copy())
+        out[name] = (p, v, np.array(zs))
+    p, v, zs = out["floored"]
+    assert floored.grounded.tolist() == [True, False] and not floored.flipped.any()
+    assert zs[:, 0].min() == 0.0 and p[0, 2] == 0.0 and np.array_equal(v[0], [0.0, 0.0, 0.0])  # on it, at rest
+    assert np.isfinite(p).all() and p[0, 0] > 0.1  # it landed where its drift took it, not at its start
+    # the one still in the air flies as it does without a floor, bit for bit
+    assert np.array_equal(p[1], out["free"][0][1]) and np.array_equal(v[1], out["free"][1][1])
+    assert out["free"][0][0, 2] < -2.0 and not free.grounded.any()  # without a floor: through z = 0
+    floored.reset(p0, v0)
+    assert not floored.grounded.any()
+    with pytest.raises(ConfigError, match="floor"):
+        QuadrotorFleet(af, 1, floor=float("nan"))

@@ -6,8 +6,8 @@ initial state and the same commands, and the two trajectories are compared over 
 
 What is on and off in RotorPy: its full aerodynamic model is on (``aero=True``: parasitic drag,
 rotor H-force drag with k_d and k_z, translational lift k_h, blade flapping k_flap), as ours
-implements all four; ground contact is off (``enable_ground=False``; our vehicles have no
-ground) and motor noise is zero (``motor_noise_std = 0``). RotorPy integrates with SciPy's
+implements all four; ground contact is off (``enable_ground=False``; these fleets are given no
+floor) and motor noise is zero (``motor_noise_std = 0``). RotorPy integrates with SciPy's
 ``solve_ivp``; it is run here with DOP853 at rtol 1e-10 / atol 1e-12, so that its own error is
 negligible and the comparison measures ours. RotorPy runs in a process of its own
 (``_helpers/rotorpy_side.py``): importing it would change the numerical kernels of the swarmnav
@@ -34,7 +34,7 @@ import importlib.util
 import numpy as np
 import pytest
 
-from _helpers.rotorpy_side import (CLOSED_AIRFRAMES, CLOSED_WIND, H, OPEN_LOOP, OPEN_WIND, REFERENCES,
+from _helpers.rotorpy_side import (CLOSED_AIRFRAMES, CLOSED_WIND, H, OPEN_LOOP, OPEN_WIND, REFERENCES, YAW_RATE,
                                    open_loop_command, reference)
 from swarmnav.dynamics.airframes import AIRFRAMES, check
 from swarmnav.dynamics.quadrotor import QuadrotorFleet, default_gains
@@ -92,18 +92,23 @@ def test_closed_loop_matches_rotorpys_se3_controller(name, ref, rotorpy):
     """Our fleet flying a 0.05 s method step (25 inner steps of 2 ms) and RotorPy's Multirotor
     under its SE3Control with our gains, stepped at 2 ms, follow the same reference for 3 s:
     the method's reference (p, v, a) sampled every 0.05 s and extrapolated at constant
-    acceleration in between, as :meth:`QuadrotorFleet.fly` defines it. A 1 m/s wind blows."""
+    acceleration in between, as :meth:`QuadrotorFleet.fly` defines it; with a yaw ramp, the
+    heading reference ramps the same way on both sides. A 1 m/s wind blows."""
     af = AIRFRAMES[name]
     fleet = QuadrotorFleet(af, 1, inner_hz=500.0, gains=default_gains(af))
     p, v = np.array([[0.0, 0.0, 1.0]]), np.zeros((1, 3))
     fleet.reset(p, v)
     dt = 0.05
     worst = {}
+    rate = YAW_RATE.get(ref)
     for j in range(60):  # 3 s
         pr, vr, ar = REFERENCES[ref](j * dt)
-        p, v = fleet.fly(p, v, pr[None], vr[None], ar[None], dt, air=np.array([CLOSED_WIND]))
+        heading = {} if rate is None else {"yaw": np.array([rate * j * dt]), "yaw_rate": np.array([rate])}
+        p, v = fleet.fly(p, v, pr[None], vr[None], ar[None], dt, air=np.array([CLOSED_WIND]), **heading)
         e = assert_same(fleet, p, v, rotorpy, f"closed/{name}/{ref}", j, f"{ref}, t = {(j + 1) * dt:.2f} s")
         worst = {key: max(worst.get(key, 0), e[key]) for key in e}
     assert worst["pos"] > 0
     if ref == "step_1m":  # the comparison covers a real manoeuvre: most of the step is done
         assert p[0, 0] > 0.9 and fleet.tilt_max_deg[0] > 5
+    if rate is not None:  # the heading turned with its ramp (2.4 rad at 3 s), not held at 0
+        assert abs(fleet.yaw[0] - rate * 3.0) < 0.05

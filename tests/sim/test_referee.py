@@ -8,6 +8,7 @@ import pytest
 import swarmnav
 from swarmnav.errors import ConfigError, ScenarioError
 from swarmnav.sensing import lidar_ring, signed_distance
+from swarmnav.sim.referee import Referee
 from swarmnav.world.scenario import WALL_THICKNESS, from_dict, loads
 
 SCENE = """
@@ -182,3 +183,12 @@ def test_generated_scene_label_rebuilds_the_scene():
     assert swarmnav.load_scenario(scn.name).to_dict() == scn.to_dict()
     resized = swarmnav.load_scenario("random_forest:density=0.2,seed=1", n=7)
     assert resized.name.endswith(",n=7") and swarmnav.load_scenario(resized.name).n == 7
+
+
+def test_a_contact_at_a_3d_worlds_floor_is_named_ground():
+    """In a walled 3-D world the floor is a wall too; a contact there is reported as the ground,
+    one at a side wall as a wall, one in the open air as an obstacle."""
+    ref = Referee(3, 0.2, bounds=(0.0, 0.0, 0.0, 10.0, 10.0, 4.0))
+    pos = np.array([[5.0, 5.0, 0.1], [0.1, 5.0, 2.0], [5.0, 5.0, 2.0]])
+    events = ref.judge(4, pos, np.array([0.1, 0.1, 0.05]))
+    assert [(e["agent"], e["reason"]) for e in events] == [(0, "ground"), (1, "wall"), (2, "obstacle")]

@@ -113,6 +113,9 @@ def test_wind_pushes_a_quadrotor_that_no_one_steers():
     ({"downwash": True}, "vehicle=quadrotor"),
     ({"vehicle.airframe": "hummingbird"}, "vehicle=quadrotor"),
     ({"vehicle": "quadrotor", "wind.speed": -1.0}, "speed"),
+    ({"vehicle": "quadrotor", "vehicle.yaw": "spin"}, "yaw"),
+    ({"vehicle": "quadrotor", "vehicle.yaw": "velocity", "vehicle.yaw_rate_max": 0.0}, "yaw_rate_max"),
+    ({"vehicle": "quadrotor", "vehicle.yaw_rate_max": 90.0}, "vehicle.yaw=velocity"),  # no effect with yaw held
 ])
 def test_bad_vehicle_options_are_one_line(options, words):
     with pytest.raises(ConfigError) as e:
@@ -198,3 +201,133 @@ def test_a_damaged_thrust_axis_is_one_line(tmp_path):
     r.save(tmp_path)
     with pytest.raises(swarmnav.SwarmnavError, match="thrust_axis"):
         swarmnav.RunResult.load(tmp_path)
+
+
+class _Recorded:
+    """A registered method whose commands are kept, step by step (for a plain reference)."""
+
+    def __init__(self, inner):
+        self.inner = inner
+        self.cmds = []
+
+    def __getattr__(self, key):
+        return getattr(self.inner, key)
+
+    def act(self, obs, rng):
+        cmd, info = self.inner.act(obs, rng)
+        self.cmds.append(np.array(cmd, dtype=float))
+        return cmd, info
+
+
+def test_the_tracking_error_counts_only_the_robots_still_flying():
+    m = _Recorded(registry.make("apf"))
+    r = swarmnav.run(m, "default_corridor", seed=1, steps=120, **QUAD)
+    crash = {e["agent"]: e["step"] for e in r.events if e.get("action") == "crash"}
+    assert 0 < len(crash) < r.positions.shape[1] and r.metrics["vehicle_flips"] == 0.0  # some, not all, crashed
+    # plain reference: the step from recorded state k to k + 1 against the point model's step from
+    # state k under the same command, over the robots not crashed at state k
+    P, V, dt = r.positions, r.velocities, m.dt
+    crashed_at = np.array([crash.get(i, np.inf) for i in range(P.shape[1])])
+    means, worst, every = [], 0.0, []
+    for k, cmd in enumerate(m.cmds):
+        p_pt, _ = m.dynamics.step(P[k].copy(), V[k].copy(), cmd, dt)
+        err = np.linalg.norm(P[k + 1] - p_pt, axis=1)
+        flying = crashed_at > k
+        means.append(err[flying].mean())
+        worst = max(worst, err[flying].max())
+        every.append(err.mean())
+    assert r.metrics["vehicle_track_err_mean"] == pytest.approx(np.mean(means), rel=1e-9)
+    assert r.metrics["vehicle_track_err_max"] == pytest.approx(worst, rel=1e-12)
+    # the held wrecks would have moved the figure: the test tells the two apart
+    assert abs(np.mean(every) - np.mean(means)) > 1e-3 * np.mean(means)
+
+
+class _Descend(_Hover):
+    """Every agent of a 3-D scene asks to go down at 1.5 m/s^2 (at most 1 m/s) and drift along +x."""
+
+    name = "descend"
+    dims = (3,)
+
+    def act(self, obs: Observation, rng):
+        a = np.zeros((self.n, self.d))
+        a[:, 0], a[:, 2] = 0.3, -1.5
+        return a, {}
+
+
+def _room(boundary):
+    from swarmnav.world.scenario import from_dict
+
+    return from_dict({"name": "room", "world": {"bounds": [0.0, 0.0, 0.0, 20.0, 10.0, 6.0], "boundary": boundary},
+                      "swarm": {"n": 4, "spawn": [2.0, 2.0, 1.0, 8.0, 8.0, 2.0]}, "goal": {"position": [18.0, 5.0, 1.5]}})
+
+
+@pytest.mark.parametrize("boundary", ["open", "wall"])
+def test_a_quadrotor_that_comes_down_to_the_floor_crashes_there(boundary):
+    r = swarmnav.run(_Descend(), _room(boundary), seed=1, steps=80, **QUAD)  # 4 s: down from 1-2 m at <= 1 m/s
+    crashes = [e for e in r.events if e.get("action") == "crash"]
+    assert len(crashes) == 4 and {e["reason"] for e in crashes} == {"ground"}
+    assert r.metrics["crashes"] == 4.0 and np.isfinite(r.positions).all()
+    z = r.positions[..., 2]
+    assert z.min() >= 0.0  # nobody below the floor, at any recorded step
+    for e in crashes:  # held where it came down, at rest
+        i, k = e["agent"], e["step"]
+        assert np.all(r.positions[k:, i] == r.positions[k, i]) and np.all(r.velocities[k + 1:, i] == 0.0)
+    if boundary == "open":  # only the ground stops them: each is on it, at z = 0
+        assert np.all(r.positions[-1, :, 2] == 0.0) and r.metrics["vehicle_grounded"] == 4.0
+    else:  # the floor is a wall too: the referee's contact rule stops each a body radius above it
+        z_end = r.positions[-1, :, 2]
+        assert np.all((z_end > 0.0) & (z_end < r.config["rules"]["body_radius"])) and r.metrics["vehicle_grounded"] == 0.0
+
+
+def test_there_is_no_ground_under_a_2d_scene_or_a_planar_method_at_its_altitude():
+    flat = swarmnav.run(_Hover(), "default_corridor", seed=1, steps=20, **QUAD)  # held at the plane's altitude
+    planar_method = _Push(40)
+    planar_method.dims = (2,)  # a planar method: it flies the 3-D scene's slice at z_fly, over its floor at z = 0
+    planar = swarmnav.run(planar_method, "sph_cluttered_3d", seed=1, steps=40, **QUAD)
+    for r in (flat, planar):
+        assert r.metrics["vehicle_grounded"] == 0.0
+        assert not [e for e in r.events if e.get("reason") == "ground"]
+    assert planar.config["plane"]["z_fly"] > 0.5 and np.all(planar.positions[..., 2] == planar.config["plane"]["z_fly"])
+    assert planar.metrics["crashes"] == 0.0 and planar.metrics["vehicle_alt_err_max"] < 0.01
+
+
+def _heading_run(yaw):
+    """Two quadrotors of a 2-D scene asked to accelerate along +y and along (-1, -1) for 4 s,
+    through the vehicle layer itself; their headings [deg] after every step and final positions."""
+    from swarmnav.dynamics import SaturatedDoubleIntegrator
+    from swarmnav.dynamics.vehicle import Quadrotors, vehicle_params
+
+    p, w = vehicle_params({"vehicle": "quadrotor", "vehicle.yaw": yaw})
+    q = Quadrotors(p, w, SaturatedDoubleIntegrator(1.0, 1.5), np.zeros((2, 2)), np.zeros((2, 2)), 0.05, 1)
+    pos, vel, cmd = np.zeros((2, 2)), np.zeros((2, 2)), np.array([[0.0, 1.0], [-1.0, -1.0]])
+    headings = []
+    for _ in range(80):
+        pos, vel = q.step(pos, vel, cmd, 0.05)
+        headings.append(np.degrees(q.heading))
+    return np.array(headings), pos, q.summary()
+
+
+def test_yaw_velocity_turns_each_heading_toward_its_velocity_at_the_rate_limit():
+    held, p_held, _ = _heading_run("hold")
+    turned, p_turned, m = _heading_run("velocity")
+    assert np.abs(held).max() < 1.0  # yaw held at 0 (the rotor drag couples a fraction of a degree in)
+    # 45 deg/s (PX4's MPC_YAWRAUTO_MAX) from the first step with a velocity: 45 deg at ~1 s, the
+    # one along +y at 90 deg from ~2 s on, the other the shorter way round, to -135 deg at ~3 s
+    assert abs(turned[20, 0] - 45.0) < 3.0 and abs(turned[20, 1] + 45.0) < 3.0
+    assert abs(turned[40, 0] - 90.0) < 3.0 and abs(turned[40, 1] + 90.0) < 3.0
+    np.testing.assert_allclose(turned[-1], [90.0, -135.0], atol=0.5)
+    t = 0.05 * np.arange(1, 81)
+    assert np.all(turned[:, 0] <= 45.0 * t + 3.0) and np.all(turned[:, 1] >= -45.0 * t - 3.0)  # never ahead of the limit
+    assert turned[:, 0].max() < 92.0 and turned[:, 1].min() > -137.0  # nor past the velocity's direction by > 2 deg
+    # the heading is not the translation: the vehicles go where they went with the yaw held, to 1 cm
+    assert np.abs(p_turned - p_held).max() < 0.01 and m["vehicle_flips"] == 0.0
+
+
+def test_yaw_hold_is_the_run_as_before_and_velocity_is_recorded():
+    a = swarmnav.run("apf", "default_corridor", seed=2, steps=30, **QUAD)
+    b = swarmnav.run("apf", "default_corridor", seed=2, steps=30, **QUAD, **{"vehicle.yaw": "hold"})
+    assert np.array_equal(a.positions, b.positions) and np.array_equal(a.thrust_axis, b.thrust_axis)
+    assert "yaw" not in a.config["vehicle"] and a.config == {**b.config}  # a run's key as before the option
+    c = swarmnav.run("apf", "default_corridor", seed=2, steps=30, **QUAD, **{"vehicle.yaw": "velocity"})
+    assert c.config["vehicle"]["yaw"] == "velocity" and c.config["vehicle"]["yaw_rate_max"] == 45.0
+    assert np.isfinite(c.positions).all() and not np.array_equal(a.thrust_axis, c.thrust_axis)

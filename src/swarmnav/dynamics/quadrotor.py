@@ -23,10 +23,12 @@ The controller (Lee, Leok, McClamroch 2010, "Geometric tracking control of a qua
 SE(3)", eqs. (11)-(16), in the mass- and inertia-normalised form RotorPy's ``SE3Control`` uses):
 ``F = m (-k_p e_p - k_v e_v + a_r + g e3)`` with per-axis gains; collective thrust ``u1 = F . R e3``;
 desired axes ``b3d = F / |F|``, ``b2d = b3d x c1 / |b3d x c1|`` with ``c1 = (cos psi, sin psi, 0)``
-and yaw psi = 0, ``b1d = b2d x b3d``; attitude error ``e_R = vee(Rd^T R - R^T Rd) / 2`` and rate
-error ``e_w = omega`` (the desired body rate, which Lee et al. differentiate from Rd, is taken
-as zero, as RotorPy does: the references here are piecewise-constant accelerations with
-zero jerk); moment ``M = J (-k_R e_R - k_w e_w) + omega x J omega``. The wrench
+and the heading psi (0, or a ramp ``psi_r(tau) = psi_0 + psi_dot tau`` over the step when
+:meth:`QuadrotorFleet.fly` is given one), ``b1d = b2d x b3d``; attitude error
+``e_R = vee(Rd^T R - R^T Rd) / 2`` and rate error ``e_w = omega - (0, 0, psi_dot)`` (the desired
+body rate, which Lee et al. differentiate from Rd, is taken as the yaw rate alone, as RotorPy's
+``SE3Control`` takes it: the references here are piecewise-constant accelerations with zero
+jerk); moment ``M = J (-k_R e_R - k_w e_w) + omega x J omega``. The wrench
 ``(u1, M)`` goes through the inverse of the mixer (the linear map from the four rotor thrusts to
 collective thrust and the three moments) to rotor thrusts f_i, then to speeds
 ``sign(f_i) sqrt(|f_i| / k_eta)``, clipped to ``[w_min, w_max]``. The controller runs once per
@@ -44,7 +46,10 @@ integrated with Simpson's rule on the exact rotor speeds at those stage times.
 
 A vehicle whose tilt exceeds 90 deg, or whose state stops being finite, is *flipped*: its state
 is frozen at its last finite value (the position and velocity passed in are returned
-unchanged from then on) and it stays flagged until :meth:`QuadrotorFleet.reset`.
+unchanged from then on) and it stays flagged until :meth:`QuadrotorFleet.reset`. A fleet given a
+floor (``QuadrotorFleet(..., floor=z0)``) checks it after every inner step: a vehicle whose z has
+fallen to ``z0`` or below is put on it (z = z0) at rest and is *grounded*, frozen likewise: it
+stops in the inner step in which it reached the floor, never flies through it.
 
 Determinism: compiled without fastmath, the vehicles in a fixed order, one thread; identical
 inputs give identical outputs, and a vehicle's result does not depend on the others in the batch.
@@ -183,8 +188,9 @@ def _derivative(s, wr, air, P, rpos, rdir, R, out):
 
 
 @njit(cache=True)
-def _control(s, pr, vr, ar, P, G, A, R, cmd):
-    """SE(3) controller: rotor speed commands cmd (4,) [rad/s], unclipped, for the state s."""
+def _control(s, pr, vr, ar, P, G, A, R, cmd, yaw_on, psi, psi_dot):
+    """SE(3) controller: rotor speed commands cmd (4,) [rad/s], unclipped, for the state s; yaw 0,
+    or with ``yaw_on`` the heading psi [rad] turning at psi_dot [rad/s]."""
     m, g = P[_MASS], P[_G]
     Fx = m * (-G[0] * (s[0] - pr[0]) - G[3] * (s[3] - vr[0]) + ar[0])
     Fy = m * (-G[1] * (s[1] - pr[1]) - G[4] * (s[4] - vr[1]) + ar[1])
@@ -196,13 +202,21 @@ def _control(s, pr, vr, ar, P, G, A, R, cmd):
         b3x, b3y, b3z = Fx / nF, Fy / nF, Fz / nF
     else:
         b3x, b3y, b3z = 0.0, 0.0, 1.0
-    # b2d = b3d x c1 with c1 = (1, 0, 0) (yaw 0)
-    c2x, c2y, c2z = 0.0, b3z, -b3y
-    n2 = math.sqrt(c2y * c2y + c2z * c2z)
-    if n2 > 1e-12:
-        b2x, b2y, b2z = c2x, c2y / n2, c2z / n2
-    else:
-        b2x, b2y, b2z = 0.0, 1.0, 0.0
+    if yaw_on:  # b2d = b3d x c1 with c1 = (cos psi, sin psi, 0)
+        c1x, c1y = math.cos(psi), math.sin(psi)
+        c2x, c2y, c2z = -b3z * c1y, b3z * c1x, b3x * c1y - b3y * c1x
+        n2 = math.sqrt(c2x * c2x + c2y * c2y + c2z * c2z)
+        if n2 > 1e-12:
+            b2x, b2y, b2z = c2x / n2, c2y / n2, c2z / n2
+        else:
+            b2x, b2y, b2z = -c1y, c1x, 0.0
+    else:  # b2d = b3d x c1 with c1 = (1, 0, 0) (yaw 0)
+        c2x, c2y, c2z = 0.0, b3z, -b3y
+        n2 = math.sqrt(c2y * c2y + c2z * c2z)
+        if n2 > 1e-12:
+            b2x, b2y, b2z = c2x, c2y / n2, c2z / n2
+        else:
+            b2x, b2y, b2z = 0.0, 1.0, 0.0
     b1x = b2y * b3z - b2z * b3y
     b1y = b2z * b3x - b2x * b3z
     b1z = b2x * b3y - b2y * b3x
@@ -222,7 +236,8 @@ def _control(s, pr, vr, ar, P, G, A, R, cmd):
     kR, kW = G[6], G[7]
     Mx = Ix * (-kR * erx - kW * wx) + (wy * Iz * wz - wz * Iy * wy)
     My = Iy * (-kR * ery - kW * wy) + (wz * Ix * wx - wx * Iz * wz)
-    Mz = Iz * (-kR * erz - kW * wz) + (wx * Iy * wy - wy * Ix * wx)
+    # the desired body rate is (0, 0, psi_dot), as RotorPy's SE3Control takes it (zero with yaw held)
+    Mz = Iz * (-kR * erz - kW * (wz - psi_dot)) + (wx * Iy * wy - wy * Ix * wx)
     k_eta = P[_KETA]
     for j in range(4):
         f = A[j, 0] * u1 + A[j, 1] * Mx + A[j, 2] * My + A[j, 3] * Mz
@@ -233,11 +248,13 @@ def _control(s, pr, vr, ar, P, G, A, R, cmd):
 
 
 @njit(cache=True)
-def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, energy,
+def _advance(pos, vel, quat, omega, rotor, flipped, grounded, floor, cos_tilt_min, sat_steps, energy,
              controlled, p_ref, v_ref, a_ref, rotor_cmd, air, h, n_inner, P, rpos, rdir, G, A,
-             pos_out, vel_out):
+             pos_out, vel_out, yaw_on, yaw0, yaw_rate):
     """Advance every vehicle by n_inner inner steps of h [s], in place on the fleet state
-    (quat, omega, rotor, flipped, cos_tilt_min, sat_steps, energy); new p, v into pos_out, vel_out."""
+    (quat, omega, rotor, flipped, grounded, cos_tilt_min, sat_steps, energy); new p, v into
+    pos_out, vel_out. A vehicle whose z falls to ``floor`` [m] stops there, at rest, grounded.
+    With ``yaw_on`` vehicle i's heading reference is yaw0[i] + yaw_rate[i] tau [rad], else 0."""
     s = np.empty(13)
     s0 = np.empty(13)
     st = np.empty(13)
@@ -267,7 +284,7 @@ def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, ene
         for c in range(3):
             pos_out[i, c] = pos[i, c]
             vel_out[i, c] = vel[i, c]
-        if flipped[i]:
+        if flipped[i] or grounded[i]:
             continue
         for c in range(3):
             s[c] = pos[i, c]
@@ -290,7 +307,10 @@ def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, ene
                     ar[0] -= kff[3] - R[0, 2] * lift
                     ar[1] -= kff[4] - R[1, 2] * lift
                     ar[2] -= kff[5] + P[_G] - R[2, 2] * lift
-                _control(s, pr, vr, ar, P, G, A, R, cmd)
+                if yaw_on:
+                    _control(s, pr, vr, ar, P, G, A, R, cmd, True, yaw0[i] + yaw_rate[i] * tk, yaw_rate[i])
+                else:
+                    _control(s, pr, vr, ar, P, G, A, R, cmd, False, 0.0, 0.0)
             else:
                 for c in range(4):
                     cmd[c] = rotor_cmd[i, c]
@@ -340,6 +360,13 @@ def _advance(pos, vel, quat, omega, rotor, flipped, cos_tilt_min, sat_steps, ene
             energy[i] += k_m * h / 6.0 * e
             for c in range(4):
                 w0[c] = we[c]
+            if s[2] <= floor:  # it reached the ground within this inner step: it stops on it
+                s[2] = floor
+                s[3] = 0.0
+                s[4] = 0.0
+                s[5] = 0.0
+                grounded[i] = True
+                break
             ct = 1.0 - 2.0 * (s[7] * s[7] + s[8] * s[8])
             if ct < cos_tilt_min[i]:
                 cos_tilt_min[i] = ct
@@ -363,8 +390,12 @@ class QuadrotorFleet:
     (a periodic world may wrap them), and are passed in and returned by every step.
     """
 
-    def __init__(self, airframe: Airframe, n: int, inner_hz: float = 500.0, gains: Gains | None = None):
+    def __init__(self, airframe: Airframe, n: int, inner_hz: float = 500.0, gains: Gains | None = None,
+                 floor: float = -math.inf):
         self.airframe = check(airframe)
+        if math.isnan(floor) or floor == math.inf:
+            raise ConfigError(f"the floor must be a height [m] or -inf (none), got {floor!r}")
+        self.floor = float(floor)
         if int(n) != n or n < 1:
             raise ConfigError(f"a fleet needs n >= 1 vehicles, got {n!r}")
         if not (math.isfinite(inner_hz) and inner_hz > 0):
@@ -382,10 +413,12 @@ class QuadrotorFleet:
         self._omega = np.zeros((self.n, 3))
         self._rotor = np.zeros((self.n, 4))
         self._flipped = np.zeros(self.n, dtype=np.bool_)
+        self._grounded = np.zeros(self.n, dtype=np.bool_)
         self._cos_tilt_min = np.ones(self.n)
         self._sat = np.zeros(self.n, dtype=np.int64)
         self._steps = 0
         self._energy = np.zeros(self.n)
+        self._no_yaw = np.zeros(self.n)
         self.reset(np.zeros((self.n, 3)), np.zeros((self.n, 3)))
 
     # ------------------------------------------------------------------ state
@@ -397,20 +430,26 @@ class QuadrotorFleet:
         self._omega[:] = 0.0
         self._rotor[:] = self.airframe.hover_speed
         self._flipped[:] = False
+        self._grounded[:] = False
         self._cos_tilt_min[:] = 1.0
         self._sat[:] = 0
         self._steps = 0
         self._energy[:] = 0.0
 
-    def fly(self, pos, vel, p_ref, v_ref, a_ref, dt, air=None) -> tuple[np.ndarray, np.ndarray]:
+    def fly(self, pos, vel, p_ref, v_ref, a_ref, dt, air=None, yaw=None, yaw_rate=None) -> tuple[np.ndarray, np.ndarray]:
         """Advance every vehicle by dt [s] (one method step) at the inner rate, tracking the
         reference p_r(tau) = p_ref + v_ref tau + a_ref tau^2/2, v_r = v_ref + a_ref tau, a_r = a_ref,
-        yaw 0, tau in [0, dt]. pos, vel (N, 3) are the translational state the run holds; air
-        (N, 3) [m/s] is the air's velocity at each vehicle (wind + downwash), constant over the
-        step; None = still air. Returns new (pos, vel), (N, 3) float64."""
+        tau in [0, dt], and the heading psi_r(tau) = yaw + yaw_rate tau (yaw, yaw_rate (N,) [rad],
+        [rad/s]; None: yaw 0, the controller as RotorPy's with yaw held). pos, vel (N, 3) are the
+        translational state the run holds; air (N, 3) [m/s] is the air's velocity at each vehicle
+        (wind + downwash), constant over the step; None = still air. Returns new (pos, vel),
+        (N, 3) float64."""
         p, v = self._state_arrays(pos, vel)
         refs = [self._array(x, name) for x, name in ((p_ref, "p_ref"), (v_ref, "v_ref"), (a_ref, "a_ref"))]
-        return self._run(p, v, True, *refs, np.zeros((self.n, 4)), air, dt)
+        if (yaw is None) != (yaw_rate is None):
+            raise ValueError("give both yaw and yaw_rate, or neither")
+        heading = None if yaw is None else (self._array(yaw, "yaw", None), self._array(yaw_rate, "yaw_rate", None))
+        return self._run(p, v, True, *refs, np.zeros((self.n, 4)), air, dt, heading)
 
     def fly_rotors(self, pos, vel, rotor_cmd, dt, air=None) -> tuple[np.ndarray, np.ndarray]:
         """Like :meth:`fly` with the controller bypassed: rotor_cmd (N, 4) [rad/s] are the
@@ -420,13 +459,15 @@ class QuadrotorFleet:
         z = np.zeros((self.n, 3))
         return self._run(p, v, False, z, z, z, cmd, air, dt)
 
-    def _run(self, p, v, controlled, p_ref, v_ref, a_ref, cmd, air, dt):
+    def _run(self, p, v, controlled, p_ref, v_ref, a_ref, cmd, air, dt, heading=None):
         n_inner = self.substeps(dt)
+        yaw0, yaw_rate = (self._no_yaw, self._no_yaw) if heading is None else heading
         a = np.zeros((self.n, 3)) if air is None else self._array(air, "air")
         p_out, v_out = np.empty((self.n, 3)), np.empty((self.n, 3))
-        _advance(p, v, self._quat, self._omega, self._rotor, self._flipped, self._cos_tilt_min, self._sat,
+        _advance(p, v, self._quat, self._omega, self._rotor, self._flipped, self._grounded, self.floor,
+                 self._cos_tilt_min, self._sat,
                  self._energy, controlled, p_ref, v_ref, a_ref, cmd, a, float(dt) / n_inner, n_inner,
-                 self._P, self._rpos, self._rdir, self._G, self._A, p_out, v_out)
+                 self._P, self._rpos, self._rdir, self._G, self._A, p_out, v_out, heading is not None, yaw0, yaw_rate)
         self._steps += n_inner
         return p_out, v_out
 
@@ -441,10 +482,12 @@ class QuadrotorFleet:
                               f"dt = {dt:g} s (need inner_hz >= {1.0 / dt:g} Hz)")
         return max(1, math.ceil(x - 1e-9))
 
-    def _array(self, x, name: str, cols: int = 3) -> np.ndarray:
+    def _array(self, x, name: str, cols: int | None = 3) -> np.ndarray:
+        """``x`` as a contiguous float64 (N, cols) array, or (N,) for cols None; checked finite."""
         a = np.ascontiguousarray(x, dtype=np.float64)
-        if a.shape != (self.n, cols):
-            raise ValueError(f"{name} must have shape ({self.n}, {cols}), got {a.shape}")
+        shape = (self.n,) if cols is None else (self.n, cols)
+        if a.shape != shape:
+            raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
         if not np.isfinite(a).all():
             raise ValueError(f"{name} must be finite")
         return a
@@ -473,6 +516,13 @@ class QuadrotorFleet:
         R[:, 2, 1] = 2 * (y * z + x * w)
         R[:, 2, 2] = 1 - 2 * (x * x + y * y)
         return R
+
+    @property
+    def yaw(self) -> np.ndarray:
+        """(N,) heading [rad] in (-pi, pi]: the angle of the body x axis's horizontal projection
+        from world x, atan2(R[1, 0], R[0, 0])."""
+        w, x, y, z = self._quat.T
+        return np.arctan2(2 * (x * y + z * w), 1 - 2 * (y * y + z * z))
 
     @property
     def body_rates(self) -> np.ndarray:
@@ -508,3 +558,8 @@ class QuadrotorFleet:
     def flipped(self) -> np.ndarray:
         """(N,) bool: tilted past 90 deg or non-finite since reset (state frozen since)."""
         return self._flipped.copy()
+
+    @property
+    def grounded(self) -> np.ndarray:
+        """(N,) bool: came down to the floor since reset (stopped there, at rest, frozen since)."""
+        return self._grounded.copy()

@@ -20,8 +20,11 @@ On a 2-D scene the vehicles fly at one altitude, which the controller holds (the
 plane; the altitude error is a metric). The reference restarts from the actual state every step:
 the method closes the loop at its own rate, as it does on the point model, and the vehicle's lag
 shows as the distance between where the point model would have put it and where it went
-(``vehicle_track_err_*``). A vehicle that flips (tilt beyond 90 deg) or diverges is frozen, finite,
-and crashed by the referee with the reason ``"flipped"``: a counted failure, never NaN.
+(``vehicle_track_err_*``, over the vehicles still flying: not those flipped, grounded or crashed).
+A vehicle that flips (tilt beyond 90 deg) or diverges is frozen, finite, and crashed by the
+referee with the reason ``"flipped"``: a counted failure, never NaN. In a 3-D world a vehicle that
+comes down to the floor (the world's lowest z) stops on it and is crashed with the reason
+``"ground"``; a 2-D scene has no ground (its altitude is held, not modelled).
 
 Every vehicle option is the run's, not a method's (``--set vehicle=quadrotor --set wind.speed=6``),
 and the point vehicle with its defaults is no vehicle model at all: the rollout calls the method's
@@ -51,6 +54,11 @@ WIND_PREFIX = "wind."
 DOWNWASH = "downwash"
 
 
+#: [m/s] below this horizontal speed of its velocity reference a vehicle under vehicle.yaw=velocity
+#: keeps its heading (ours: the direction of a velocity this small is noise)
+YAW_MIN_SPEED = 0.05
+
+
 def is_vehicle_option(key: str) -> bool:
     """A run option of the vehicle (module docstring)."""
     return key in (VEHICLE, DOWNWASH) or key.startswith((PREFIX, WIND_PREFIX))
@@ -75,6 +83,12 @@ class VehicleParams:
                           "the controller cancels the airframe's own aerodynamic drag (in still air: the wind "
                           "stays unknown to it); false: RotorPy's SE3Control as it is")
     downwash: bool = param(False, "", None, "ours", "the downwash of each quadrotor acts on those below it")
+    yaw: Literal["hold", "velocity"] = param(
+        "hold", "", None, "ours",
+        "the heading the controller flies: held at 0 deg, or turned toward the direction of the vehicle's "
+        "horizontal velocity reference (a sensor's field of view is relative to the heading)")
+    yaw_rate_max: float = param(45.0, "deg/s", "(0, 3600]", "PX4 MPC_YAWRAUTO_MAX",
+                                "how fast vehicle.yaw=velocity turns the heading reference")
 
     @property
     def point(self) -> bool:
@@ -109,6 +123,9 @@ def vehicle_params(options: dict[str, Any]) -> tuple[VehicleParams, WindParams]:
                               "neither; set vehicle=quadrotor")
     else:
         airframe(p.airframe, p.mass or None)  # an unknown or non-physical airframe fails here, before the run
+        if p.yaw == "hold" and p.yaw_rate_max != VehicleParams().yaw_rate_max:
+            raise ConfigError(f"{PREFIX}yaw_rate_max: the rate at which {PREFIX}yaw=velocity turns; "
+                              f"with the yaw held it does nothing; set {PREFIX}yaw=velocity")
     return p, w
 
 
@@ -116,7 +133,10 @@ def record(p: VehicleParams, w: WindParams) -> dict:
     """The vehicle of a run as its config records it (the point vehicle: nothing)."""
     if p.point:
         return {}
-    return {"vehicle": as_dict(p), **({"wind": as_dict(w)} if w != WindParams() else {})}
+    own = as_dict(p)
+    if p.yaw == "hold":  # the yaw held, as before the option existed: the record (and a run's key) as then
+        del own["yaw"], own["yaw_rate_max"]
+    return {"vehicle": own, **({"wind": as_dict(w)} if w != WindParams() else {})}
 
 
 class Quadrotors:
@@ -130,10 +150,13 @@ class Quadrotors:
         dt: the method's step [s].
         seed: the run's seed (the wind's gusts draw from a stream of their own).
         period: side of a periodic world [m], or None.
+        floor: the ground's height [m] in the vehicles' vertical (on a 2-D state: relative to the
+            held altitude), or None for no ground (a 2-D scene). A vehicle that comes down to it
+            stops there and is *grounded* (:attr:`new_grounded`).
     """
 
     def __init__(self, p: VehicleParams, wind: WindParams, point: Any, pos: np.ndarray, vel: np.ndarray,
-                 dt: float, seed: int, period: float | None = None):
+                 dt: float, seed: int, period: float | None = None, floor: float | None = None):
         n, d = pos.shape
         if dt * p.inner_hz < 1.0 - 1e-9:
             raise ConfigError(f"vehicle.inner_hz = {p.inner_hz:g} Hz is slower than the method's step "
@@ -141,7 +164,8 @@ class Quadrotors:
         self.p, self.point, self.d, self.dt, self.period = p, point, d, float(dt), period
         self.frame = airframe(p.airframe, p.mass or None)
         gains = dataclasses.replace(default_gains(self.frame), drag_ff=p.drag_ff)
-        self.fleet = QuadrotorFleet(self.frame, n, inner_hz=p.inner_hz, gains=gains)
+        self.fleet = QuadrotorFleet(self.frame, n, inner_hz=p.inner_hz, gains=gains,
+                                    floor=-math.inf if floor is None else float(floor))
         self.altitude = np.zeros(n)  # [m] the held altitude of a 2-D scene's vehicles (its z is not recorded)
         self.z = np.zeros(n)
         self.vz = np.zeros(n)
@@ -151,8 +175,14 @@ class Quadrotors:
         self.a_xy = G * math.tan(math.radians(p.max_tilt))
         self.a_up = self.frame.max_thrust / self.frame.mass - G
         self.t = 0.0
+        # [rad] each vehicle's heading reference (vehicle.yaw=velocity), and its turn rate limit [rad/s]
+        self.yaw_on = p.yaw == "velocity"
+        self.yaw_ref = np.zeros(n)
+        self.yaw_rate_max = math.radians(p.yaw_rate_max)
         self.flipped = np.zeros(n, dtype=bool)
         self.new_flips = np.zeros(n, dtype=bool)
+        self.grounded = np.zeros(n, dtype=bool)
+        self.new_grounded = np.zeros(n, dtype=bool)
         self.err_sum = 0.0
         self.err_max = 0.0
         self.alt_err_max = 0.0
@@ -161,8 +191,11 @@ class Quadrotors:
     def _lift(self, x: np.ndarray, z: np.ndarray) -> np.ndarray:
         return np.column_stack([x, z]) if self.d == 2 else np.array(x, dtype=np.float64)
 
-    def step(self, pos: np.ndarray, vel: np.ndarray, cmd: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """One method step of every vehicle: the method's command through the flight stack."""
+    def step(self, pos: np.ndarray, vel: np.ndarray, cmd: np.ndarray, dt: float,
+             crashed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """One method step of every vehicle: the method's command through the flight stack.
+        ``crashed`` (N,) bool: the vehicles the run's referee has crashed before this step; they
+        are held where they hit, so their tracking error is not the vehicle's and is not counted."""
         p_pt, v_pt = self.point.step(pos, vel, cmd, dt)
         a = (np.asarray(v_pt, dtype=np.float64) - vel) / dt
         horizontal = a[:, :2]
@@ -187,11 +220,17 @@ class Quadrotors:
             carry = (0.0 if air is None else air) - V  # the air past each source carries its wake
             wash = downwash_air(P, self.fleet.thrust, self.frame.rotor_radius, carry=carry)
             air = wash if air is None else air + wash
-        P1, V1 = self.fleet.fly(P, V, p_ref, v_ref, a_ref, dt, air)
+        heading = {}
+        if self.yaw_on:
+            heading = self._heading(v_ref[:, :2] + a_ref[:, :2] * dt, dt)
+        P1, V1 = self.fleet.fly(P, V, p_ref, v_ref, a_ref, dt, air, **heading)
         self.t += dt
         flipped = np.asarray(self.fleet.flipped, dtype=bool)
         self.new_flips = flipped & ~self.flipped
         self.flipped = flipped
+        grounded = np.asarray(self.fleet.grounded, dtype=bool)
+        self.new_grounded = grounded & ~self.grounded
+        self.grounded = grounded
         if self.d == 2:
             self.z, self.vz = P1[:, 2].copy(), V1[:, 2].copy()
             self.alt_err_max = max(self.alt_err_max, float(np.max(np.abs(self.z - self.altitude), initial=0.0)))
@@ -199,12 +238,32 @@ class Quadrotors:
         miss = pos1 - p_pt
         if self.period is not None:  # the point model may have wrapped its position
             miss -= self.period * np.round(miss / self.period)
-        err = np.sqrt(np.einsum("ij,ij->i", miss, miss))[~flipped]
-        if err.size:
+        down = flipped | grounded
+        flying = ~down if crashed is None else ~(down | crashed)
+        err = np.sqrt(np.einsum("ij,ij->i", miss, miss))[flying]
+        if err.size:  # the step's mean over the vehicles that flew it; the run's mean over such steps
             self.err_sum += float(err.mean())
             self.err_max = max(self.err_max, float(err.max()))
-        self.steps += 1
+            self.steps += 1
         return pos1, vel1
+
+    def _heading(self, v_end: np.ndarray, dt: float) -> dict[str, np.ndarray]:
+        """The heading ramp of this step (vehicle.yaw=velocity): from the current reference toward
+        the direction of the horizontal velocity reference at the step's end ``v_end`` (N, 2)
+        [m/s], by the shorter way, at most ``yaw_rate_max``; held where that velocity is below
+        :data:`YAW_MIN_SPEED` (at rest it has no direction)."""
+        speed = np.sqrt(np.einsum("ij,ij->i", v_end, v_end))
+        target = np.where(speed > YAW_MIN_SPEED, np.arctan2(v_end[:, 1], v_end[:, 0]), self.yaw_ref)
+        turn = np.mod(target - self.yaw_ref + math.pi, 2.0 * math.pi) - math.pi
+        rate = np.clip(turn / dt, -self.yaw_rate_max, self.yaw_rate_max)
+        out = {"yaw": self.yaw_ref.copy(), "yaw_rate": rate}
+        self.yaw_ref = np.mod(self.yaw_ref + rate * dt + math.pi, 2.0 * math.pi) - math.pi
+        return out
+
+    @property
+    def heading(self) -> np.ndarray:
+        """(N,) each vehicle's heading [rad] in (-pi, pi], from world x (its body x axis, projected)."""
+        return self.fleet.yaw
 
     @property
     def thrust_axis(self) -> np.ndarray:
@@ -224,4 +283,5 @@ class Quadrotors:
             **({"vehicle_alt_err_max": self.alt_err_max} if self.d == 2 else {}),  # [m]
             "vehicle_energy_mean": float(np.mean(f.energy_J)),  # [J] per vehicle
             "vehicle_flips": float(self.flipped.sum()),
+            "vehicle_grounded": float(self.grounded.sum()),
         }

@@ -120,8 +120,11 @@ def execute(job: Job, keep_trajectory: bool = True) -> dict[str, Any]:
         res = run(v.method, load_scenario(row["scenario"], n=v.n), seed=job.seed, steps=v.steps, **v.params)
         if keep_trajectory:
             buf = io.BytesIO()
+            extra = {}  # a quadrotor run's attitude: the thrust axes its report viewer draws (docs/vehicle.md)
+            if res.thrust_axis is not None:
+                extra["thrust_axis"] = np.asarray(res.thrust_axis, dtype=np.float32)
             np.savez_compressed(buf, positions=res.positions.astype(np.float32), labels=res.labels,
-                                min_clearance=res.min_clearance.astype(np.float32))
+                                min_clearance=res.min_clearance.astype(np.float32), **extra)
             row["_npz"] = buf.getvalue()
         if res.artifacts:  # e.g. the LLM transcript: kept beside the trajectory
             row["_artifacts"] = dict(res.artifacts)

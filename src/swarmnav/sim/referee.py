@@ -134,7 +134,8 @@ class Referee:
 
     def fail(self, k: int, agents: np.ndarray, state: np.ndarray, reason: str) -> list[dict]:
         """Crash the agents flagged in ``agents`` (N,) bool that are still flying, at recorded step
-        ``k``, for a reason other than a contact (a quadrotor that flipped: ``"flipped"``);
+        ``k``, for a reason other than a contact (a quadrotor that flipped: ``"flipped"``; one that
+        came down to a 3-D world's floor: ``"ground"``);
         ``state`` as in :meth:`judge`. Returns one event per new crash."""
         new = np.asarray(agents, dtype=bool) & ~self.crashed
         if not new.any():
@@ -148,10 +149,13 @@ class Referee:
                 for i in np.flatnonzero(new)]
 
     def _what(self, p: np.ndarray) -> str:
-        """What an agent at ``p`` touched: the boundary wall if it is within a body radius of the
+        """What an agent at ``p`` touched: the ground if it is within a body radius of a 3-D
+        world's floor (or below it), else the boundary wall if it is within a body radius of the
         bounds (or beyond them), else an obstacle."""
         if self.bounds is not None and p.shape[0] == self.bounds.shape[1]:
             r = self.body_radius
+            if p.shape[0] == 3 and p[2] - self.bounds[0, 2] < r:
+                return "ground"
             if np.any(p - self.bounds[0] < r) or np.any(self.bounds[1] - p < r):
                 return "wall"
         return "obstacle"

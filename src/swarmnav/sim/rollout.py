@@ -136,8 +136,8 @@ def run(
     quads = None
     if not vehicle.point:
         quads = Quadrotors(vehicle, wind, m.dynamics, pos, vel, dt, seed,
-                           period=world.bounds[2] - world.bounds[0] if world.periodic else None)
-        step = quads.step
+                           period=world.bounds[2] - world.bounds[0] if world.periodic else None,
+                           floor=_floor(scn, plane_z))
     N = scn.n
     d = scn.dim
     P = np.empty((steps + 1, N, d))
@@ -196,10 +196,15 @@ def run(
                 cmd, info = m.act(Observation(k, k * dt, opos, ovel, view, perception), rng)
             if network is not None and "publish" in info:  # what the agents send from now on
                 network.publish(info["publish"])
-            pos, vel = step(pos, vel, cmd, dt)
+            if quads is None:
+                pos, vel = step(pos, vel, cmd, dt)
+            else:  # the referee's wrecks are held, not flown: no tracking error of theirs counts
+                pos, vel = quads.step(pos, vel, cmd, dt, None if referee is None else referee.crashed)
             if referee is not None:
                 if quads is not None and quads.new_flips.any():  # a flipped quadrotor has crashed
                     events += referee.fail(k + 1, quads.new_flips, pos, "flipped")
+                if quads is not None and quads.new_grounded.any():  # so has one that came down to the floor
+                    events += referee.fail(k + 1, quads.new_grounded, pos, "ground")
                 referee.hold(pos, vel)
             if direct and _plain(pos, vel, d):
                 finite = _finite_into(pos, vel, P[k + 1], V[k + 1])
@@ -306,6 +311,14 @@ def run(
         except ValueError as e:  # a method's defect, not the user's input
             raise ValueError(f"{m.name}.plans() broke its contract (docs/methods/contract.md): {e}") from None
     return result
+
+
+def _floor(scn: Scenario, plane_z: float | None) -> float | None:
+    """The ground under a quadrotor run, in its vehicles' vertical: a 3-D world's lowest z [m]
+    (``bounds``; relative to the slice's altitude for a planar method), None in a 2-D scene."""
+    if scn.dim != 3 or scn.periodic:
+        return None
+    return scn.bounds[2] - (plane_z if plane_z is not None else 0.0)
 
 
 def _lookahead(m: Method, scn: Scenario, steps: int, plane_z: float | None, network: Any, perception: Any,

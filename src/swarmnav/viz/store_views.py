@@ -1,8 +1,10 @@
 """Replay viewers of the runs of a results store, linked from ``swarmnav report``.
 
 A store keeps, per finished run, ``trajectories/kk/KEY.npz`` with positions (float32),
-sub-swarm labels and the minimum clearance per step (docs/experiments.md), not the whole run
-directory. The viewer of such a run rebuilds the rest from what is stored, and says so on the
+sub-swarm labels and the minimum clearance per step, and for a quadrotor run each vehicle's
+thrust axis (float32, drawn as the run's own viewer draws it; docs/experiments.md), not the
+whole run directory. A store written before the thrust axes were kept opens as before, its
+quadrotor runs' viewers without attitude. The viewer of such a run rebuilds the rest from what is stored, and says so on the
 page: velocities are central differences of the positions over the method's dt; each agent's
 clearance is the signed distance of its stored position to the scene (the simulator's own
 function); split and merge marks are the steps where the sub-swarm count rises or falls; an
@@ -50,6 +52,7 @@ def _run_of(root: Path, row: dict, dt_of, scene_of) -> object:
     with np.load(root / row["trajectory"]) as z:
         P = z["positions"].astype(float)
         labels = z["labels"]
+        axis = z["thrust_axis"] if "thrust_axis" in z.files else None  # a quadrotor run stored since they are kept
     scn = scene_of(row)
     dt = dt_of(row)
     V = np.gradient(P, dt, axis=0) if len(P) > 1 else np.zeros_like(P)
@@ -58,7 +61,7 @@ def _run_of(root: Path, row: dict, dt_of, scene_of) -> object:
         signed_distance(geom, P.reshape(-1, P.shape[2])).reshape(P.shape[:2])
     config = {"method": row["method"], "seed": row["seed"], "steps": len(P) - 1, "dt": dt,
               "scenario": scn.to_dict(), "params": row["params"]}
-    return RunResult(config=config, positions=P, velocities=V, clearance=C, labels=labels,
+    return RunResult(config=config, positions=P, velocities=V, clearance=C, labels=labels, thrust_axis=axis,
                      events=derived_events(labels), metrics=row["metrics"])
 
 
@@ -136,7 +139,8 @@ def write_store_viewers(directory: str | Path, experiment: str | None = None,
                     problems.append(f"{row['variant']} seed {row['seed']}: no LLM marks ({e})")
             data["title"] += f" ({row['variant']})"
             data["note"] = ("from the results store: speeds are differences of stored positions, split / merge "
-                            "marks come from the sub-swarm labels")
+                            "marks come from the sub-swarm labels"
+                            + ("; thrust axes as flown" if "thrust" in data else ""))
             tmp = out.with_name(out.name + ".tmp")
             tmp.write_text(page(data, shared="."), encoding="utf-8")
             tmp.replace(out)
