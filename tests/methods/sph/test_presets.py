@@ -42,12 +42,13 @@ def test_swarmnav_is_the_default_build_and_released_has_the_launch_file_values()
     d = registry.make("sph").params
     assert d.by_dim and not any(registry.make("sph", preset=k).params.by_dim
                                 for k in ("paper", "headroom", "queue", "guard", "retime", "released"))
-    # ... and, on 2-D swarms of 30 robots or more, the crowd parts (rep_cutoff, crowd_guard, pair_guard)
-    assert (d.rep_cutoff, d.crowd_guard, d.pair_guard, d.crowd_size) == (3.0, True, True, 30)
+    # ... and, on 2-D swarms of 30 robots or more, the crowd parts (rep_cutoff, crowd_guard, pair_guard
+    # with its obstacle rows)
+    assert (d.rep_cutoff, d.crowd_guard, d.pair_guard, d.pair_obstacles, d.crowd_size) == (3.0, True, True, True, 30)
     for k in ("paper", "headroom", "queue", "guard", "retime", "released"):
         e = registry.make("sph", preset=k).params
         assert not (e.rep_cutoff or e.crowd_guard or e.pair_guard), k
-    no_crowd = dataclasses.replace(d, rep_cutoff=0.0, crowd_guard=False, pair_guard=False)
+    no_crowd = dataclasses.replace(d, rep_cutoff=0.0, crowd_guard=False, pair_guard=False, pair_obstacles=False)
     assert dataclasses.replace(no_crowd, retime=0.0, by_dim=False) == g
     assert dataclasses.replace(no_crowd, goal_reset=0.0, band_guard=False, by_dim=False) == r
     # the released 3-D controller has no SPH term in z; the paper's Algorithm 1 acts in every axis

@@ -12,7 +12,8 @@ from swarmnav.params import param
 #: (``swarmnav``); every other preset starts from it.
 PAPER: dict[str, Any] = {"plan_v_max": 0.0, "ref_reset": 0.5, "yield_range": 0.0, "goal_reset": 0.0,
                          "band_guard": False, "retime": 0.0, "by_dim": False,
-                         "rep_cutoff": 0.0, "crowd_guard": False, "pair_guard": False}
+                         "rep_cutoff": 0.0, "crowd_guard": False, "pair_guard": False,
+                         "pair_obstacles": False}
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,7 +136,7 @@ class SphParams:
         "to the other terms)")
     pair_gamma: float = param(2.0, "1/s", "(0, inf)", "ours (Wang et al.'s class-K function, linear)",
         "pair_guard: how fast a pair may use up its braking margin (dh/dt >= -pair_gamma h)")
-    pair_obstacles: bool = param(False, "", None, "ours (Wang, Ames & Egerstedt, T-RO 2017, obstacles as static agents)",
+    pair_obstacles: bool = param(True, "", None, "ours (Wang, Ames & Egerstedt, T-RO 2017, obstacles as static agents)",
         "pair_guard: each robot's QP also keeps the barrier against every obstacle near it (2-D: one row "
         "per obstacle from the exact geometry; 3-D: the nearest, from the ESDF; stop body radius + "
         "pair_margin from its surface, the robot keeping the whole bound), so that the command the guard "
