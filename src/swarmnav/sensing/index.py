@@ -148,6 +148,7 @@ def lidar_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bb
     inv = 1.0 / cell
     orient = polygon_orientations(seg_a, seg_b, poly_offsets)
     seen = np.full(n_poly, -1, dtype=np.int64)
+    open_limit = n_rays // 8  # our choice: rings while more rays than this reach past them
     for i in range(positions.shape[0]):
         px = positions[i, 0]
         py = positions[i, 1]
@@ -183,11 +184,54 @@ def lidar_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bb
             if bound == np.inf:
                 break
             longest = 0.0
+            n_open = 0
             for r in range(n_rays):
                 longest = max(longest, row[r])
+                if row[r] > bound:
+                    n_open += 1
             if longest <= bound:
                 break
+            if n_open <= open_limit:
+                # a few rays reach on (through gaps, on a map of scattered cells): walk the
+                # cells along each of them instead of whole rings
+                _walk_open_rays(row, px, py, bound, slack, seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi, orient,
+                                x0, y0, cell, inv, nx, ny, start, items, seen, i, cos_t, sin_t, r2max, inv_dth)
+                break
             ring += 1
+
+
+@njit(cache=True)
+def _walk_open_rays(row, px, py, bound, slack, seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi, orient,
+                    x0, y0, cell, inv, nx, ny, start, items, seen, i, cos_t, sin_t, r2max, inv_dth):
+    """Every ray longer than ``bound`` [m] (all polygons nearer than that are handled): the
+    polygons listed in the cells under each piece, a cell long, of the ray from ``bound`` to its
+    current end, handled as the ring handles them, until the ray ends before the next piece.
+
+    A polygon that shortens ray r meets it at some point q with |q - p| < row[r]; q lies in the
+    piece's box (grown by ``slack``) and in the polygon's bounding box, so the cell holding q is
+    in both cell ranges and lists the polygon: no hit is missed, and each polygon lowers the rays
+    exactly as the plain scan does.
+    """
+    for r in range(cos_t.shape[0]):
+        t = max(bound, 0.0)
+        while t < row[r]:
+            t1 = min(t + cell, row[r])
+            ax = px + t * cos_t[r]
+            ay = py + t * sin_t[r]
+            bx = px + t1 * cos_t[r]
+            by = py + t1 * sin_t[r]
+            ix0, ix1 = _cell_range(min(ax, bx) - slack, max(ax, bx) + slack, x0, inv, nx)
+            iy0, iy1 = _cell_range(min(ay, by) - slack, max(ay, by) + slack, y0, inv, ny)
+            for iy in range(iy0, iy1 + 1):
+                for ix in range(ix0, ix1 + 1):
+                    for k in range(start[iy * nx + ix], start[iy * nx + ix + 1]):
+                        p = items[k]
+                        if seen[p] == i:
+                            continue
+                        seen[p] = i
+                        polygon_rays(row, p, px, py, orient[p], seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi,
+                                     cos_t, sin_t, r2max, inv_dth)
+            t = t1
 
 
 #: The signed distance over the index: the plain scan's kernel, walking the index's cells.
