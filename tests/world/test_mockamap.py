@@ -111,6 +111,16 @@ def test_same_seed_same_world_and_another_seed_another():
         assert np.array_equal(g1.occupied, g2.occupied) and not np.array_equal(g1.occupied, g3.occupied)
 
 
+@pytest.mark.parametrize("dim", [3, 2])
+def test_scene_round_trips_through_a_toml_scene(dim):
+    from swarmnav.world import loads
+
+    scn = load_scenario(f"mockamap:type=2,seed=4,{SMALL_SPEC},obstacle_number=12,dim={dim}")
+    back = loads(scn.to_toml(), source="back.toml")
+    assert back.obstacles == scn.obstacles and back.bounds == scn.bounds and back.boundary == scn.boundary
+    assert back.goal == scn.goal and back.swarm == scn.swarm
+
+
 def test_the_name_rebuilds_the_scene():
     spec = f"mockamap:type=4,seed=3,{SMALL_SPEC},numNodes=12,dim=2"
     scn = load_scenario(spec)
