@@ -3,7 +3,8 @@
 Run: ``python scripts/make_map_examples.py``. ``warehouse.map`` is a 48 x 32 MovingAI grid
 (shelves ``@``, a few trees ``T``, a swamp patch ``S``); ``warehouse.map.scen`` holds start/goal
 rows whose optimal lengths this script computes (octile, diagonal sqrt 2, no corner cutting, as
-MovingAI's); ``office.yaml`` + ``office.pgm`` is a ROS map_server map of 0.25 m pixels.
+MovingAI's); ``office.yaml`` + ``office.pgm`` is a ROS map_server map of 0.25 m pixels;
+``hall.ply`` and ``hall.pcd`` are one point cloud (a scanned hall) in both formats.
 """
 
 from __future__ import annotations
@@ -77,6 +78,36 @@ def office() -> np.ndarray:
     return img
 
 
+def hall() -> np.ndarray:
+    """Points [m] a laser scan of an 8 m x 6 m x 2.5 m hall might give, one per 0.1 m of surface
+    (a little noise, every point inside its 0.1 m voxel): a wall across x = 4 m with a 1.6 m
+    doorway at y = 2.2-3.8 m, two 0.6 m wide square pillars and a 0.1 m post in each corner
+    (the scene is walled at the cloud's extent, so floor, ceiling and outer walls need no points)."""
+    rng = np.random.default_rng(40)
+    c = (np.arange(80) + 0.5) * 0.1  # voxel centres along x [m]
+    pts = [np.array([[x, y, z] for x in (0.05, 7.95) for y in (0.05, 5.95) for z in c[:25]])]  # corner posts
+    wall = [[4.05, y, z] for y in c[:60] for z in c[:25] if not 2.2 < y < 3.8]
+    pts.append(np.array(wall))
+    for px, py in ((2.0, 1.5), (6.0, 4.5)):  # pillars: the four faces of [p - 0.3, p + 0.3]^2
+        side = (np.arange(6) + 0.5) * 0.1 - 0.3
+        for z in c[:25]:
+            for s in side:
+                pts.append(np.array([[px + s, py - 0.25, z], [px + s, py + 0.25, z],
+                                     [px - 0.25, py + s, z], [px + 0.25, py + s, z]]))
+    p = np.vstack(pts)
+    return (p + rng.uniform(-0.02, 0.02, p.shape)).astype(np.float32)
+
+
+def write_hall(points: np.ndarray) -> None:
+    from plyfile import PlyData, PlyElement
+    from pypcd4 import Encoding, PointCloud
+
+    vertex = np.empty(len(points), dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
+    vertex["x"], vertex["y"], vertex["z"] = points.T
+    PlyData([PlyElement.describe(vertex, "vertex")]).write(str(OUT / "hall.ply"))  # binary little endian
+    PointCloud.from_xyz_points(points).save(OUT / "hall.pcd", encoding=Encoding.BINARY_COMPRESSED)
+
+
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     g = warehouse()
@@ -90,6 +121,7 @@ def main() -> None:
     (OUT / "office.yaml").write_text(
         "image: office.pgm\nresolution: 0.25\norigin: [-2.0, -1.0, 0.0]\nnegate: 0\n"
         "occupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n")
+    write_hall(hall())
 
 
 if __name__ == "__main__":

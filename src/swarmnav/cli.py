@@ -133,7 +133,7 @@ def _cmd_scenarios(args) -> int:
             print(f"{name:28s} N={s.n:<4d} goal=({s.goal[0]:g}, {s.goal[1]:g}) m  {s.description}")
         print("generators: " + ", ".join(f"{g}:key=value,..." for g in GENERATORS))
         print("map files (docs/maps.md): X.map.scen#ROW, X.map#start=x:y,goal=x:y, X.yaml#start=x:y,goal=x:y, "
-              "X.3dmap#start=x:y:z,goal=x:y:z")
+              "X.3dmap#start=x:y:z,goal=x:y:z, X.ply#start=x:y:z,goal=x:y:z,cell=0.1 (or X.pcd)")
         return 0
     if args.action != "show" or not args.name:
         raise ConfigError("usage: swarmnav scenarios [show NAME [--plot PNG]]")

@@ -78,3 +78,23 @@ def test_prepared_geometry_and_esdf_use_the_index_with_the_same_results():
         np.testing.assert_array_equal(dist, signed_distance(geom, pts))
         np.testing.assert_array_equal(sight, segments_blocked(geom, pts, ends))
         np.testing.assert_array_equal(esdf.values, Esdf.build(geom, (-45.0, -45.0, 45.0, 45.0), 0.5).values)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_lidar_on_scattered_cells_equals_the_plain_scan(seed):
+    """A map of scattered single cells (as MovingAI's random maps): most rays stop within a few
+    cells and a few escape through gaps to the range, so the ring walks its nearest cells and
+    then the cells along the escaping rays only; the ranges equal the plain scan's bit for bit."""
+    rng = np.random.default_rng(seed)
+    cells = np.argwhere(rng.random((90, 90)) < 0.25)
+    geom = Geometry.from_obstacles([Box((float(x), float(y)), (x + 1.0, y + 1.0)) for y, x in cells])
+    occupied = {(int(x), int(y)) for y, x in cells}
+    free = [(x + 0.5, y + 0.5) for x, y in rng.integers(0, 90, (400, 2)).tolist() if (x, y) not in occupied]
+    pts = np.array(free[:120] + [(-3.0, 45.0), (95.0, -2.0)])  # and two outside the map
+    assert index.polygon_index(geom) is not None
+    got = lidar_ring(geom, pts, 360, 20.0)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(index, "INDEX_MIN_POLYGONS", 10**9)
+        want = lidar_ring(geom, pts, 360, 20.0)
+    assert np.array_equal(got, want)
+    assert (got > 5.0).mean() > 0.01 and (got < 3.0).mean() > 0.5  # a few long rays among many short

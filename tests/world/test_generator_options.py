@@ -130,7 +130,7 @@ JUNK_KEYS = ["bogus", "", "N", "max_tries", "dens ity", "Density"]
 @st.composite
 def specs(draw):
     name = draw(st.sampled_from(sorted(GENERATORS) * 4 + ["volcano", ""]))
-    own = [k for k in OPTIONS.get(name, {}) if k != "max_forests"]  # see below
+    own = [k for k in OPTIONS.get(name, {}) if k not in ("max_forests", "resolution")]  # see below
     keys = st.sampled_from(own * 4 + JUNK_KEYS + sorted({k for o in OPTIONS.values() for k in o} - set(own)))
     items = [f"{draw(keys)}={draw(VALUES)}" for _ in range(draw(st.integers(0, 3)))]
     if draw(st.integers(0, 3)) == 0:
@@ -139,6 +139,10 @@ def specs(draw):
         # min_passage redraws the forest up to max_forests times (200 by default, ~0.1 s each);
         # two draws keep an example short (max_forests itself is checked in the named cases)
         items.append("max_forests=2")
+    if name == "mockamap":
+        # a 1 m voxel keeps every map small (at most 100 x 100 x 40 voxels; the default 0.1 m world
+        # of 1.6 M voxels takes seconds); resolution itself is checked in tests/world/test_mockamap.py
+        items.append("resolution=1")
     return f"{name}:{','.join(items)}" if items or draw(st.booleans()) else name
 
 

@@ -1,5 +1,5 @@
-"""HES, SPH and APF fly every example map (MovingAI scenario, ROS map, TOML scene with [map])
-for a few simulated seconds: finite, moving, and toward the goal on the open scenario."""
+"""HES, SPH and APF fly every example map (MovingAI scenario, ROS map, TOML scene with [map],
+point cloud) for a few simulated seconds: finite, moving, and toward the goal on the open scenario."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ SCENES = {
     "scen": f"{EXAMPLES}/warehouse.map.scen#2",
     "ros": f"{EXAMPLES}/office.yaml#start=1:2,goal=24:14",
     "toml": str(EXAMPLES / "warehouse_flight.toml"),
+    "cloud": f"{EXAMPLES}/hall.ply#start=1:3:1.2,goal=7:3:1.2",
 }
 
 

@@ -378,64 +378,111 @@ def polygon_nearest(px, py, seg_a, seg_b, k0, k1):
 
 
 @njit(cache=True)
-def nearest_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, points,
-                   out_d, out_dir, want_dir):
-    """Signed distance [m] to the obstacles and unit direction toward the nearest boundary point.
+def _beyond(px, py, x0, y0, cell, nx, ny, cx, cy, ring):
+    """Distance from (px, py) to the nearest side of the block of cells within ``ring`` of
+    (cx, cy) beyond which the grid goes on (inf when the block covers the grid)."""
+    bound = np.inf
+    if cx - ring > 0:
+        bound = min(bound, px - (x0 + (cx - ring) * cell))
+    if cx + ring < nx - 1:
+        bound = min(bound, x0 + (cx + ring + 1) * cell - px)
+    if cy - ring > 0:
+        bound = min(bound, py - (y0 + (cy - ring) * cell))
+    if cy + ring < ny - 1:
+        bound = min(bound, y0 + (cy + ring + 1) * cell - py)
+    return bound
 
-    Outside every obstacle: distance to the nearest boundary (the exact distance to the union).
-    Inside: minus the depth in the deepest containing obstacle (its own boundary distance);
-    identical to the union's signed distance when obstacles do not overlap.
+
+@njit(cache=True)
+def nearest_cells_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi,
+                         x0, y0, cell, nx, ny, start, items, points, out_d, out_dir, want_dir):
+    """Signed distance [m] to the obstacles and unit direction toward the nearest boundary point
+    (:func:`nearest_kernel`), visiting the polygons a grid of cells lists.
+
+    The grid is ``nx x ny`` cells of side ``cell`` from (x0, y0); cell ``c`` lists the polygons
+    ``items[start[c]:start[c + 1]]`` (``swarmnav.sensing.index``). Cells are visited in square
+    rings of growing size around the point's, until the best boundary distance found is no
+    farther than any polygon not yet visited; each polygon is handled once, as the plain scan
+    handles it. The plain scan is this kernel on a grid of one cell listing every polygon.
     """
     n_poly = poly_offsets.shape[0] - 1
     n_circ = circ_r.shape[0]
+    inv = 1.0 / cell
+    dedupe = nx * ny > 1  # a polygon listed in several cells is handled once
+    seen = np.full(n_poly if dedupe else 0, -1, dtype=np.int64)
     for i in range(points.shape[0]):
         px = points[i, 0]
         py = points[i, 1]
-        best_out2 = np.inf  # squared distance to the nearest boundary, from outside
+        slack = 1e-9 * (abs(px) + abs(py) + abs(x0) + abs(y0) + (nx + ny) * cell)
+        best_out2 = np.inf
         bo_x = 0.0
         bo_y = 0.0
-        best_in = -1.0  # deepest penetration among containing obstacles
+        best_in = -1.0
         bi_x = 0.0
         bi_y = 0.0
-        for p in range(n_poly):
-            in_box = not (px < bbox_lo[p, 0] or px > bbox_hi[p, 0]
-                          or py < bbox_lo[p, 1] or py > bbox_hi[p, 1])
-            if not in_box and best_in < 0.0:
-                # A point outside the box is outside the polygon: skip it when its box is
-                # already farther than the best boundary found.
-                dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
-                dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
-                if dx * dx + dy * dy >= best_out2:
-                    continue
-            elif not in_box:
-                continue
-            dmin2, inside, qx, qy = polygon_nearest(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1])
-            if inside:
-                depth = math.sqrt(dmin2)
-                if depth > best_in:
-                    best_in = depth
-                    bi_x = qx
-                    bi_y = qy
-            elif dmin2 < best_out2:
-                best_out2 = dmin2
-                bo_x = qx
-                bo_y = qy
+        cx = min(max(int(math.floor((px - x0) * inv)), 0), nx - 1)
+        cy = min(max(int(math.floor((py - y0) * inv)), 0), ny - 1)
+        ring = 0
+        while True:
+            # the cells at Chebyshev distance `ring` from (cx, cy), inside the grid
+            for iy in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
+                step = 1 if (iy == cy - ring or iy == cy + ring or ring == 0) else 2 * ring
+                for ix in range(cx - ring, cx + ring + 1, step):
+                    if 0 <= ix < nx:
+                        for k in range(start[iy * nx + ix], start[iy * nx + ix + 1]):
+                            p = items[k]
+                            if dedupe:
+                                if seen[p] == i:
+                                    continue
+                                seen[p] = i
+                            in_box = not (px < bbox_lo[p, 0] or px > bbox_hi[p, 0]
+                                          or py < bbox_lo[p, 1] or py > bbox_hi[p, 1])
+                            if not in_box and best_in < 0.0:
+                                dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
+                                dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
+                                if dx * dx + dy * dy >= best_out2:
+                                    continue
+                            elif not in_box:
+                                continue
+                            dmin2, inside, qx, qy = polygon_nearest(px, py, seg_a, seg_b, poly_offsets[p],
+                                                                    poly_offsets[p + 1])
+                            if inside:
+                                depth = math.sqrt(dmin2)
+                                if depth > best_in:
+                                    best_in = depth
+                                    bi_x = qx
+                                    bi_y = qy
+                            elif dmin2 < best_out2:
+                                best_out2 = dmin2
+                                bo_x = qx
+                                bo_y = qy
+            # every polygon whose bounding box holds the point lists the point's cell (ring 0):
+            # inside one, the deepest is known
+            if best_in >= 0.0:
+                break
+            # unvisited polygons lie beyond the block of cells visited, past one of its sides
+            # that is not the grid's edge (less a slack: the cells' edges are rounded)
+            bound = _beyond(px, py, x0, y0, cell, nx, ny, cx, cy, ring) - slack
+            if bound == np.inf:
+                break  # the whole grid is visited
+            if bound > 0.0 and bound * bound >= best_out2:
+                break
+            ring += 1
         for c in range(n_circ):
-            cx = circ_c[c, 0] - px
-            cy = circ_c[c, 1] - py
+            ccx = circ_c[c, 0] - px
+            ccy = circ_c[c, 1] - py
             rc = circ_r[c]
-            dc = math.sqrt(cx * cx + cy * cy)
+            dc = math.sqrt(ccx * ccx + ccy * ccy)
             d = dc - rc
             if dc > 0.0:
-                ux = cx / dc
-                uy = cy / dc
+                ux = ccx / dc
+                uy = ccy / dc
             else:
-                ux = -1.0  # at the centre every boundary point is nearest: pick +x
+                ux = -1.0
                 uy = 0.0
             if d < 0.0:
                 if -d > best_in:
                     best_in = -d
-                    # nearest boundary point c + r (p - c)/|p - c|, relative to p
                     bi_x = -ux * (-d)
                     bi_y = -uy * (-d)
             elif d * d < best_out2:
@@ -460,6 +507,23 @@ def nearest_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi,
             else:
                 out_dir[i, 0] = 0.0
                 out_dir[i, 1] = 0.0
+
+
+@njit(cache=True)
+def nearest_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi, points,
+                   out_d, out_dir, want_dir):
+    """Signed distance [m] to the obstacles and unit direction toward the nearest boundary point.
+
+    Outside every obstacle: distance to the nearest boundary (the exact distance to the union).
+    Inside: minus the depth in the deepest containing obstacle (its own boundary distance);
+    identical to the union's signed distance when obstacles do not overlap. Every polygon, in
+    order, then every circle: :func:`nearest_cells_kernel` on one cell that lists them all.
+    """
+    n_poly = poly_offsets.shape[0] - 1
+    start = np.array([0, n_poly], dtype=np.int64)
+    items = np.arange(n_poly, dtype=np.int64)
+    nearest_cells_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi,
+                         0.0, 0.0, 1.0, 1, 1, start, items, points, out_d, out_dir, want_dir)
 
 
 @njit(cache=True)

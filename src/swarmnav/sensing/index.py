@@ -22,8 +22,9 @@ from numba import njit
 from swarmnav.sensing._kernels import (
     OUTSIDE,
     _polygon_status,
+    _beyond,
     circles_rays,
-    polygon_nearest,
+    nearest_cells_kernel,
     polygon_orientations,
     polygon_rays,
     segment_meets_disc,
@@ -147,6 +148,7 @@ def lidar_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bb
     inv = 1.0 / cell
     orient = polygon_orientations(seg_a, seg_b, poly_offsets)
     seen = np.full(n_poly, -1, dtype=np.int64)
+    open_limit = n_rays // 8  # our choice: rings while more rays than this reach past them
     for i in range(positions.shape[0]):
         px = positions[i, 0]
         py = positions[i, 1]
@@ -182,134 +184,58 @@ def lidar_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bb
             if bound == np.inf:
                 break
             longest = 0.0
+            n_open = 0
             for r in range(n_rays):
                 longest = max(longest, row[r])
+                if row[r] > bound:
+                    n_open += 1
             if longest <= bound:
                 break
+            if n_open <= open_limit:
+                # a few rays reach on (through gaps, on a map of scattered cells): walk the
+                # cells along each of them instead of whole rings
+                _walk_open_rays(row, px, py, bound, slack, seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi, orient,
+                                x0, y0, cell, inv, nx, ny, start, items, seen, i, cos_t, sin_t, r2max, inv_dth)
+                break
             ring += 1
 
 
 @njit(cache=True)
-def _beyond(px, py, x0, y0, cell, nx, ny, cx, cy, ring):
-    """Distance from (px, py) to the nearest side of the block of cells within ``ring`` of
-    (cx, cy) beyond which the grid goes on (inf when the block covers the grid)."""
-    bound = np.inf
-    if cx - ring > 0:
-        bound = min(bound, px - (x0 + (cx - ring) * cell))
-    if cx + ring < nx - 1:
-        bound = min(bound, x0 + (cx + ring + 1) * cell - px)
-    if cy - ring > 0:
-        bound = min(bound, py - (y0 + (cy - ring) * cell))
-    if cy + ring < ny - 1:
-        bound = min(bound, y0 + (cy + ring + 1) * cell - py)
-    return bound
+def _walk_open_rays(row, px, py, bound, slack, seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi, orient,
+                    x0, y0, cell, inv, nx, ny, start, items, seen, i, cos_t, sin_t, r2max, inv_dth):
+    """Every ray longer than ``bound`` [m] (all polygons nearer than that are handled): the
+    polygons listed in the cells under each piece, a cell long, of the ray from ``bound`` to its
+    current end, handled as the ring handles them, until the ray ends before the next piece.
+
+    A polygon that shortens ray r meets it at some point q with |q - p| < row[r]; q lies in the
+    piece's box (grown by ``slack``) and in the polygon's bounding box, so the cell holding q is
+    in both cell ranges and lists the polygon: no hit is missed, and each polygon lowers the rays
+    exactly as the plain scan does.
+    """
+    for r in range(cos_t.shape[0]):
+        t = max(bound, 0.0)
+        while t < row[r]:
+            t1 = min(t + cell, row[r])
+            ax = px + t * cos_t[r]
+            ay = py + t * sin_t[r]
+            bx = px + t1 * cos_t[r]
+            by = py + t1 * sin_t[r]
+            ix0, ix1 = _cell_range(min(ax, bx) - slack, max(ax, bx) + slack, x0, inv, nx)
+            iy0, iy1 = _cell_range(min(ay, by) - slack, max(ay, by) + slack, y0, inv, ny)
+            for iy in range(iy0, iy1 + 1):
+                for ix in range(ix0, ix1 + 1):
+                    for k in range(start[iy * nx + ix], start[iy * nx + ix + 1]):
+                        p = items[k]
+                        if seen[p] == i:
+                            continue
+                        seen[p] = i
+                        polygon_rays(row, p, px, py, orient[p], seg_a, seg_b, poly_offsets, bbox_lo, bbox_hi,
+                                     cos_t, sin_t, r2max, inv_dth)
+            t = t1
 
 
-@njit(cache=True)
-def nearest_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, bbox_lo, bbox_hi,
-                           x0, y0, cell, nx, ny, start, items, points, out_d, out_dir, want_dir):
-    """As ``nearest_kernel``: cells in square rings of growing size around the point, until the
-    best boundary distance found is no farther than any polygon not yet visited."""
-    n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
-    inv = 1.0 / cell
-    seen = np.full(n_poly, -1, dtype=np.int64)
-    for i in range(points.shape[0]):
-        px = points[i, 0]
-        py = points[i, 1]
-        slack = 1e-9 * (abs(px) + abs(py) + abs(x0) + abs(y0) + (nx + ny) * cell)
-        best_out2 = np.inf
-        bo_x = 0.0
-        bo_y = 0.0
-        best_in = -1.0
-        bi_x = 0.0
-        bi_y = 0.0
-        cx = min(max(int(math.floor((px - x0) * inv)), 0), nx - 1)
-        cy = min(max(int(math.floor((py - y0) * inv)), 0), ny - 1)
-        ring = 0
-        while True:
-            # the cells at Chebyshev distance `ring` from (cx, cy), inside the grid
-            for iy in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
-                step = 1 if (iy == cy - ring or iy == cy + ring or ring == 0) else 2 * ring
-                for ix in range(cx - ring, cx + ring + 1, step):
-                    if 0 <= ix < nx:
-                        for k in range(start[iy * nx + ix], start[iy * nx + ix + 1]):
-                            p = items[k]
-                            if seen[p] == i:
-                                continue
-                            seen[p] = i
-                            in_box = not (px < bbox_lo[p, 0] or px > bbox_hi[p, 0]
-                                          or py < bbox_lo[p, 1] or py > bbox_hi[p, 1])
-                            if not in_box and best_in < 0.0:
-                                dx = max(bbox_lo[p, 0] - px, 0.0, px - bbox_hi[p, 0])
-                                dy = max(bbox_lo[p, 1] - py, 0.0, py - bbox_hi[p, 1])
-                                if dx * dx + dy * dy >= best_out2:
-                                    continue
-                            elif not in_box:
-                                continue
-                            dmin2, inside, qx, qy = polygon_nearest(px, py, seg_a, seg_b, poly_offsets[p],
-                                                                    poly_offsets[p + 1])
-                            if inside:
-                                depth = math.sqrt(dmin2)
-                                if depth > best_in:
-                                    best_in = depth
-                                    bi_x = qx
-                                    bi_y = qy
-                            elif dmin2 < best_out2:
-                                best_out2 = dmin2
-                                bo_x = qx
-                                bo_y = qy
-            # every polygon whose bounding box holds the point lists the point's cell (ring 0):
-            # inside one, the deepest is known
-            if best_in >= 0.0:
-                break
-            # unvisited polygons lie beyond the block of cells visited, past one of its sides
-            # that is not the grid's edge (less a slack: the cells' edges are rounded)
-            bound = _beyond(px, py, x0, y0, cell, nx, ny, cx, cy, ring) - slack
-            if bound == np.inf:
-                break  # the whole grid is visited
-            if bound > 0.0 and bound * bound >= best_out2:
-                break
-            ring += 1
-        for c in range(n_circ):
-            ccx = circ_c[c, 0] - px
-            ccy = circ_c[c, 1] - py
-            rc = circ_r[c]
-            dc = math.sqrt(ccx * ccx + ccy * ccy)
-            d = dc - rc
-            if dc > 0.0:
-                ux = ccx / dc
-                uy = ccy / dc
-            else:
-                ux = -1.0
-                uy = 0.0
-            if d < 0.0:
-                if -d > best_in:
-                    best_in = -d
-                    bi_x = -ux * (-d)
-                    bi_y = -uy * (-d)
-            elif d * d < best_out2:
-                best_out2 = d * d
-                bo_x = ux * d
-                bo_y = uy * d
-        if best_in >= 0.0:
-            dist = -best_in
-            vx = bi_x
-            vy = bi_y
-            norm = best_in
-        else:
-            norm = math.sqrt(best_out2)
-            dist = norm
-            vx = bo_x
-            vy = bo_y
-        out_d[i] = dist
-        if want_dir:
-            if norm > 0.0 and norm < np.inf:
-                out_dir[i, 0] = vx / norm
-                out_dir[i, 1] = vy / norm
-            else:
-                out_dir[i, 0] = 0.0
-                out_dir[i, 1] = 0.0
+#: The signed distance over the index: the plain scan's kernel, walking the index's cells.
+nearest_indexed_kernel = nearest_cells_kernel
 
 
 @njit(cache=True)

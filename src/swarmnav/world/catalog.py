@@ -97,11 +97,11 @@ def map_scene(spec: str, n: int | None = None, **unknown_overrides: Any) -> Scen
       cells of the map ``X.map`` (beside the scenario, else the row's map name, relative to the
       scenario file or by its base name there); the swarm spawns around the start cell's centre
       and flies to the goal cell's centre.
-    * ``X.map``, ``X.yaml``/``X.yml`` (ROS), ``X.3dmap``: ``start=x:y`` and ``goal=x:y`` [m]
-      (``x:y:z`` for a voxel map) are required.
+    * ``X.map``, ``X.yaml``/``X.yml`` (ROS), ``X.3dmap``, ``X.ply``/``X.pcd`` (point clouds):
+      ``start=x:y`` and ``goal=x:y`` [m] (``x:y:z`` for a voxel map or point cloud) are required.
 
     Other options: ``n`` agents (default :data:`MAP_DEFAULT_N`), ``cell`` [m] (MovingAI grids and
-    voxel maps, default 1 m), ``spread`` [m] the half side of the spawn square (default
+    voxel maps, default 1 m; point clouds' voxel, default ``maps.CLOUD_CELL``), ``spread`` [m] the half side of the spawn square (default
     ``max(sqrt(n) m, cell)``; clipped to the map), ``unknown`` (ROS maps: ``occupied`` or
     ``free``). The scene is walled at the map's extent.
     """

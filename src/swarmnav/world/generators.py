@@ -440,11 +440,114 @@ def hwvem_mission_family(tiny_offset: float = 1.45, rect_offset: float = 1.3, pa
     return from_dict(data, source=spec)
 
 
+def mockamap(
+    type: int = 1,
+    seed: int = 511,
+    resolution: float = 0.1,
+    x_length: float = 20.0,
+    y_length: float = 20.0,
+    z_length: float = 4.0,
+    complexity: float = 0.03,
+    fill: float = 0.15,
+    fractal: int = 1,
+    attenuation: float = 0.1,
+    width_min: float = 0.6,
+    width_max: float = 1.5,
+    obstacle_number: int = 10,
+    road_width: float = 1.0,
+    add_wall_x: int = 0,
+    add_wall_y: int = 0,
+    maze_type: int = 1,
+    numNodes: int = 10,
+    connectivity: float = 0.5,
+    roadRad: int = 2,
+    n: int = 15,
+    dim: int = 3,
+    altitude: float = 1.5,
+    min_passage: float = 0.0,
+) -> Scenario:
+    """A mockamap world (the released simulators of SPH and EGO-Swarm) for the swarm to cross.
+
+    The map (:func:`swarmnav.world.mockamap.generate`; mockamap's parameter names, SPH's launch
+    file's values as defaults: type 1 Perlin noise, 20 m x 20 m x 4 m at 0.1 m, seed 511,
+    complexity 0.03, fill 0.15, fractal 1, attenuation 0.1) fills ``x in [-X/2, X/2]``,
+    ``y in [-Y/2, Y/2]``, ``z in [0, Z]``; its voxels are merged exactly into boxes. The world
+    extends 8 m before and 6 m past the map along x and is walled at the map's sides (and floor
+    and ceiling in 3-D), so the swarm crosses the map: ``n`` robots spawn in a free 6 m x 6 m
+    area 1-7 m before it (in 3-D a 1 m layer centred at ``altitude``) and fly to the goal 4 m
+    past it at ``altitude``. ``dim = 2`` reads the voxel layer that holds ``altitude`` as a
+    planar map (the 2-D maze's every layer is the maze). A map whose free voxels (those at least
+    ``min_passage / 2`` m from every occupied voxel) join no way from the spawn side to the goal
+    side is refused (another seed, or a lower fill).
+    """
+    from swarmnav.world import mockamap as mk
+    from swarmnav.world.maps import OccupancyGrid
+
+    _check_options("mockamap", locals())
+    if width_min > width_max:
+        raise ScenarioError(f"mockamap: need width_min <= width_max, got {width_min:g}, {width_max:g}")
+    if not 1.0 <= altitude <= z_length - 1.0:
+        raise ScenarioError(f"mockamap: altitude must be in [1, z_length - 1] = [1, {z_length - 1:g}] m (the 1 m "
+                            f"spawn layer keeps 0.5 m from floor and ceiling), got {altitude:g}")
+    grid = mk.generate(type=type, seed=seed, resolution=resolution, x_length=x_length, y_length=y_length,
+                       z_length=z_length, complexity=complexity, fill=fill, fractal=fractal,
+                       attenuation=attenuation, width_min=width_min, width_max=width_max,
+                       obstacle_number=obstacle_number, road_width=road_width, add_wall_x=add_wall_x,
+                       add_wall_y=add_wall_y, numNodes=numNodes, connectivity=connectivity, roadRad=roadRad)
+    occ = grid.occupied
+    if dim == 2:
+        layer = min(int(math.floor(altitude / resolution + 1e-9)), occ.shape[0] - 1)
+        occ = np.ascontiguousarray(occ[layer])
+        occ.setflags(write=False)
+        grid = OccupancyGrid(occ, grid.origin[:2], grid.cell, grid.source)
+    spec = f"mockamap:type={type},seed={seed}"
+    if not _crosses(occ, resolution, min_passage):
+        raise ScenarioError(f"{spec}: no way across the map for free space {min_passage:g} m wide "
+                            "(another seed, a lower fill or a smaller min_passage)")
+    x_lo, y_lo = grid.origin[:2]
+    x_hi, y_hi = grid.bounds[dim], grid.bounds[dim + 1]
+    spawn_xy = (x_lo - 7.0, -3.0, x_lo - 1.0, 3.0)  # [m]: 6 m x 6 m, 1-7 m before the map
+    if dim == 3:
+        bounds = (x_lo - 8.0, y_lo, 0.0, x_hi + 6.0, y_hi, grid.bounds[5])
+        spawn = (spawn_xy[0], spawn_xy[1], altitude - 0.5, spawn_xy[2], spawn_xy[3], altitude + 0.5)
+        goal: tuple[float, ...] = (x_hi + 4.0, 0.0, altitude)
+    else:
+        bounds = (x_lo - 8.0, y_lo, x_hi + 6.0, y_hi)
+        spawn, goal = spawn_xy, (x_hi + 4.0, 0.0)
+    kind = mk.TYPES[type]
+    scn = Scenario(
+        name=spec,
+        bounds=bounds,
+        swarm=Swarm(n=n, spawn=spawn),
+        goal=goal,
+        obstacles=grid.boxes(),
+        description=f"mockamap {kind} map (type {type}), seed {seed}, "
+                    f"{int(occ.sum())} of {occ.size} {'voxels' if dim == 3 else 'cells'} occupied"
+                    + ("" if dim == 3 else f" (the layer at {altitude:g} m)"),
+        source=spec,
+    )
+    return validate(scn)
+
+
+def _crosses(occ: np.ndarray, cell: float, passage: float) -> bool:
+    """Whether free cells (at least ``passage / 2`` [m] from every occupied cell: the distance
+    between centres less half a cell diagonal) join the map's x = min face to its x = max face,
+    face-connected; the approach areas beyond both faces are free."""
+    free = ~occ
+    if passage > 0.0 and occ.any():
+        dist = ndimage.distance_transform_edt(free) * cell - cell * math.sqrt(occ.ndim) / 2
+        free = dist >= passage / 2
+    pad = [(0, 0)] * (occ.ndim - 1) + [(1, 1)]
+    labels, _ = ndimage.label(np.pad(free, pad, constant_values=True))
+    return bool(labels[..., 0].flat[0] == labels[..., -1].flat[0])
+
+
 GENERATORS: dict[str, Callable[..., Scenario]] = {
     "random_forest": random_forest,
     "random_forest_3d": random_forest_3d,
     "periodic_box": periodic_box,
     "hwvem_mission_family": hwvem_mission_family,
+    "mockamap": mockamap,
 }
 
 
@@ -499,6 +602,32 @@ OPTIONS: dict[str, dict[str, tuple[type, Range | None, str, str]]] = {
                           "the second passage's triangle keeps its apex, y = -(w + 0.2) / 2, above its base at -3.5 m"),
         "turn_scale": (float, Range.parse("[0, 10]"), "", ""),
         "n": (int, Range.parse(f"[1, {MAX_AGENTS}]"), "", ""),
+    },
+    "mockamap": {  # mockamap's parameters (docs/maps-generators.md), then ours (n, dim, altitude, min_passage)
+        "type": (int, Range.parse("[1, 4]"), "", "1 Perlin 3-D, 2 random posts, 3 2-D maze, 4 3-D maze"),
+        "seed": (int, Range.parse("[0, inf)"), "", ""),
+        "resolution": (float, Range.parse("[0.02, 2]"), "m", "the voxel side"),
+        "x_length": (float, Range.parse("(0, 100]"), "m", ""),
+        "y_length": (float, Range.parse("[6, 100]"), "m", "the 6 m wide spawn area lies between the side walls"),
+        "z_length": (float, Range.parse("[2, 40]"), "m", "the 1 m spawn layer keeps 0.5 m from floor and ceiling"),
+        "complexity": (float, Range.parse("(0, 10]"), "1/voxel", "noise frequency per voxel index"),
+        "fill": (float, Range.parse("(0, 1)"), "", "the occupied fraction of the Perlin map"),
+        "fractal": (int, Range.parse("[1, 8]"), "", "noise octaves"),
+        "attenuation": (float, Range.parse("(0, inf)"), "", ""),
+        "width_min": (float, Range.parse("(0, 100]"), "m", ""),
+        "width_max": (float, Range.parse("(0, 100]"), "m", ""),
+        "obstacle_number": (int, Range.parse("[0, 100000]"), "", ""),
+        "road_width": (float, Range.parse("(0, 100]"), "m", "a whole number of voxels"),
+        "add_wall_x": (int, Range.parse("[0, 1]"), "", "1: walls along the maze's y edges"),
+        "add_wall_y": (int, Range.parse("[0, 1]"), "", "1: walls along the maze's x edges"),
+        "maze_type": (int, Range.parse("[1, 1]"), "", "mockamap has one: recursive division"),
+        "numNodes": (int, Range.parse("[2, 1000]"), "", "cores of the 3-D maze"),
+        "connectivity": (float, Range.parse("[0, 1]"), "", ""),
+        "roadRad": (int, Range.parse("[0, 1000]"), "voxel/3", "hole radius of the 3-D maze's walls"),
+        "n": (int, Range.parse(f"[1, {MAX_AGENTS}]"), "", ""),
+        "dim": (int, Range.parse("[2, 3]"), "", "2: the voxel layer at altitude as a planar map"),
+        "altitude": (float, Range.parse("[1, 39]"), "m", "the 1 m spawn layer keeps 0.5 m from floor and ceiling"),
+        "min_passage": (float, Range.parse("[0, 100]"), "m", ""),
     },
 }
 

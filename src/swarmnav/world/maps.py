@@ -10,6 +10,8 @@ Formats (``docs/maps.md``):
   ``occupied_thresh``, ``free_thresh``, ``mode``) and its PGM/PNG image.
 * MovingAI 3-D voxel maps (``.3dmap``): ``voxel W H D``, then one ``x y z`` line per occupied
   voxel of ``cell`` metres.
+* Point clouds (``.ply`` read with plyfile, ``.pcd`` with pypcd4): the ``x y z`` of each point
+  [m]; the voxels of ``cell`` metres that hold a point are occupied.
 
 Axes: world x grows with the column, world y upward. A grid's row 0 is the *top* of the
 picture in both MovingAI and ROS files, so file row ``r`` of an ``H``-row map is world row
@@ -48,7 +50,10 @@ ROS_MODES = ("trinary", "scale", "raw")
 #: plans through space nobody has seen) or free space.
 UNKNOWN_AS = ("occupied", "free")
 #: Suffixes of the map files a scene may name.
-MAP_SUFFIXES = (".map", ".scen", ".yaml", ".yml", ".3dmap")
+MAP_SUFFIXES = (".map", ".scen", ".yaml", ".yml", ".3dmap", ".ply", ".pcd")
+#: Voxel side of a point cloud when none is given [m] (our choice: the 0.1 m occupancy grids of
+#: SPH's and EGO-Swarm's planners and of mockamap's worlds).
+CLOUD_CELL = 0.1
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -450,8 +455,97 @@ def read_voxel_map(path: str | Path, cell: float = 1.0) -> OccupancyGrid:
     return OccupancyGrid(grid, (0.0, 0.0, 0.0), cell, src)
 
 
+def read_point_cloud(path: str | Path, cell: float = CLOUD_CELL) -> OccupancyGrid:
+    """Read a point cloud (``.ply`` or ``.pcd``) as 3-D occupancy: every voxel of side ``cell`` [m]
+    that holds a point is occupied.
+
+    Points are ``x y z`` in metres in the file's own frame (a PCD ``VIEWPOINT`` is the sensor's
+    pose, not a transform of the points, as in PCL). Voxels lie on the lattice of multiples of
+    ``cell`` from the world origin: point ``p`` is in voxel ``floor(p / cell)``, as an occupancy
+    grid map with that resolution indexes it; the grid spans the voxels from the lowest to the
+    highest point. PLY: the ``vertex`` element's ``x``, ``y``, ``z`` properties (ASCII or binary;
+    plyfile). PCD: the ``x``, ``y``, ``z`` fields (ASCII, binary or binary_compressed; pypcd4),
+    with ``POINTS`` = ``WIDTH`` x ``HEIGHT`` points. A point that is not finite (PCL marks
+    invalid returns with NaN) is an error: give a cloud of valid points.
+    """
+    p = Path(path)
+    src = str(p)
+    cell = _cell(cell, src)
+    if not p.is_file():
+        raise ScenarioError(f"{src}: no such point cloud file")
+    xyz = _ply_points(p, src) if p.suffix.lower() == ".ply" else _pcd_points(p, src)
+    if len(xyz) == 0:
+        raise ScenarioError(f"{src}: the cloud has no points")
+    bad = ~np.isfinite(xyz).all(axis=1)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise ScenarioError(f"{src}: point {k} is not finite ({', '.join(f'{v:g}' for v in xyz[k])}); "
+                            f"{int(bad.sum())} of {len(xyz)} points are NaN or infinite")
+    with np.errstate(over="ignore", invalid="ignore"):
+        idx_f = np.floor(xyz / cell)
+    if not (np.abs(idx_f) < 2.0**52).all():
+        raise ScenarioError(f"{src}: points lie too far from the origin for {cell:g} m voxels")
+    idx = idx_f.astype(np.int64)
+    lo, hi = idx.min(axis=0), idx.max(axis=0)
+    shape = hi - lo + 1  # x, y, z
+    if float(np.prod(shape.astype(float))) > MAX_CELLS:
+        raise ScenarioError(f"{src}: {' x '.join(map(str, shape.tolist()))} voxels of {cell:g} m is more than "
+                            f"{MAX_CELLS} cells (raise cell)")
+    grid = np.zeros(tuple(shape[::-1].tolist()), dtype=bool)
+    rel = idx - lo
+    grid[rel[:, 2], rel[:, 1], rel[:, 0]] = True
+    grid.setflags(write=False)
+    return OccupancyGrid(grid, tuple(float(v) for v in lo * cell), cell, src)
+
+
+def _ply_points(p: Path, src: str) -> np.ndarray:
+    from plyfile import PlyData, PlyParseError  # plyfile: the PLY reader
+
+    try:
+        ply = PlyData.read(str(p))
+        names = [e.name for e in ply.elements]
+        if "vertex" not in names:
+            raise ScenarioError(f"{src}: no 'vertex' element (elements: {', '.join(names) or 'none'})")
+        v = ply["vertex"].data
+        missing = [a for a in "xyz" if a not in (v.dtype.names or ())]
+        if missing:
+            raise ScenarioError(f"{src}: the vertices have no {', '.join(missing)} property")
+        return np.column_stack([np.asarray(v[a], dtype=np.float64) for a in "xyz"])
+    except ScenarioError:
+        raise
+    except (PlyParseError, ValueError, TypeError, KeyError, IndexError, EOFError, OSError, UnicodeError,
+            MemoryError, OverflowError) as e:
+        raise ScenarioError(f"{src}: not a readable PLY file: {_one_line(e)[:200]}") from None
+
+
+def _pcd_points(p: Path, src: str) -> np.ndarray:
+    from pydantic import ValidationError
+    from pypcd4 import PointCloud  # pypcd4: the PCD reader
+
+    try:
+        pc = PointCloud.from_path(p)
+        meta = pc.metadata
+        data = np.atleast_1d(pc.pc_data)
+        if meta.points != meta.width * meta.height:
+            raise ScenarioError(f"{src}: the header says POINTS {meta.points} but WIDTH x HEIGHT = "
+                                f"{meta.width} x {meta.height}")
+        if len(data) != meta.points:
+            raise ScenarioError(f"{src}: the header says POINTS {meta.points} but the data holds {len(data)} "
+                                "(a truncated file?)")
+        missing = [a for a in "xyz" if a not in (data.dtype.names or ())]
+        if missing:
+            raise ScenarioError(f"{src}: no {', '.join(missing)} field (fields: {', '.join(meta.fields)})")
+        return np.column_stack([np.asarray(data[a], dtype=np.float64) for a in "xyz"])
+    except ScenarioError:
+        raise
+    except (ValidationError, ValueError, TypeError, KeyError, IndexError, EOFError, OSError, UnicodeError,
+            RuntimeError, MemoryError, OverflowError, AttributeError, __import__("struct").error) as e:
+        raise ScenarioError(f"{src}: not a readable PCD file: {_one_line(e)[:200]}") from None
+
+
 def map_kind(path: str | Path) -> str | None:
-    """``"movingai"``, ``"scen"``, ``"ros"`` or ``"voxel"`` for a map file's name; None otherwise."""
+    """``"movingai"``, ``"scen"``, ``"ros"``, ``"voxel"`` or ``"cloud"`` for a map file's name;
+    None otherwise."""
     name = str(path).lower()
     if name.endswith(".scen"):
         return "scen"
@@ -461,6 +555,8 @@ def map_kind(path: str | Path) -> str | None:
         return "ros"
     if name.endswith(".3dmap"):
         return "voxel"
+    if name.endswith((".ply", ".pcd")):
+        return "cloud"
     return None
 
 
@@ -479,10 +575,12 @@ def load_grid(path: str | Path, cell: float | None = None, unknown: str = "occup
         if cell is not None:
             raise ScenarioError(f"{p}: a ROS map has its own resolution: cell is for MovingAI grids and voxel maps")
         key = (str(p.resolve()), (_stamp(p), _stamp(_ros_image(p))), None, unknown)
-    elif kind in ("movingai", "voxel"):
+    elif kind in ("movingai", "voxel", "cloud"):
         if unknown != "occupied":
-            raise ScenarioError(f"{p}: unknown is for ROS maps (a MovingAI map has no unknown cells)")
-        key = (str(p.resolve()), _stamp(p), 1.0 if cell is None else cell, unknown)
+            raise ScenarioError(f"{p}: unknown is for ROS maps (a {'point cloud' if kind == 'cloud' else 'MovingAI map'} "
+                                "has no unknown cells)")
+        default = CLOUD_CELL if kind == "cloud" else 1.0
+        key = (str(p.resolve()), _stamp(p), default if cell is None else cell, unknown)
     else:
         raise ScenarioError(f"{p}: not a map file (map files: {', '.join(s for s in MAP_SUFFIXES if s != '.scen')})")
     return _cached_grid(kind, str(p), *key)
@@ -513,4 +611,6 @@ def _cached_grid(kind: str, path: str, _resolved: str, _stamp: tuple, cell, unkn
         return read_ros_map(path, unknown)
     if kind == "voxel":
         return read_voxel_map(path, cell)
+    if kind == "cloud":
+        return read_point_cloud(path, cell)
     return read_movingai_map(path, cell)

@@ -435,10 +435,10 @@ def _map_grid(ctx: _Ctx, data: dict):
         raise ctx.err("map.file", f"must be the map file's path, got {f!r}" if "file" in t else "is required")
     kind = maps.map_kind(f)
     if kind is None or kind == "scen":
-        raise ctx.err("map.file", f"must be a .map, .yaml/.yml (ROS) or .3dmap file, got {f!r}")
+        raise ctx.err("map.file", f"must be a .map, .yaml/.yml (ROS), .3dmap, .ply or .pcd file, got {f!r}")
     cell = ctx.positive(t["cell"], "map.cell") if "cell" in t else None
     if cell is not None and kind == "ros":
-        raise ctx.err("map.cell", "is for MovingAI grids and voxel maps: a ROS map has its own resolution")
+        raise ctx.err("map.cell", "is for MovingAI grids, voxel maps and point clouds: a ROS map has its own resolution")
     unknown = t.get("unknown", "occupied")
     if unknown not in maps.UNKNOWN_AS or kind != "ros" and "unknown" in t:
         raise ctx.err("map.unknown", f"must be one of {', '.join(maps.UNKNOWN_AS)} (ROS maps only), got {unknown!r}")
@@ -719,7 +719,7 @@ def load_file(path: str | Path) -> Scenario:
     if p.suffix.lower() == ".json":
         raise ScenarioError(f"{p}: scene files are TOML (.toml), not JSON; "
                             "'swarmnav scenarios show NAME' prints one to start from")
-    if p.suffix.lower() in (".map", ".scen", ".yaml", ".yml", ".3dmap"):
+    if p.suffix.lower() in (".map", ".scen", ".yaml", ".yml", ".3dmap", ".ply", ".pcd"):
         raise ScenarioError(f"{p}: a map file, not a scene file: load_scenario (--scenario-file) reads it "
                             "(docs/maps.md), or a scene's [map] table names it")
     try:
