@@ -149,3 +149,23 @@ def test_a_method_that_cannot_map_from_scans_is_refused_in_one_line(tmp_path):
     assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert "mader cannot build its map from scans" in r.stderr
     assert all(m in r.stderr for m in ("ego-swarm", "lsc", "sph"))
+
+
+def test_the_incremental_field_is_the_distance_transform_of_the_hit_cells():
+    from scipy import ndimage
+
+    from swarmnav.sensing import lidar_ring, ray_table
+
+    obstacles = [Box((1.0, -2.0), (1.2, 2.0)), Circle((-2.0, 1.0), 0.7), Circle((0.5, -3.5), 0.4)]
+    at = np.array([[0.0, 0.0], [-0.5, -1.5]])
+    maps = _scan(obstacles, at)
+    geom = Geometry.from_obstacles(obstacles, dim=2)
+    u = np.column_stack(ray_table(360))
+    for r in range(len(at)):  # oracle: the hit cells of the same rays, then scipy's exact transform
+        ranges = lidar_ring(geom, at[r:r + 1], 360, 20.0)[0]
+        pts = at[r] + ranges[ranges < 20.0, None] * u[ranges < 20.0]
+        idx = np.rint((pts - maps.origin) / RES).astype(int)
+        hits = np.zeros(maps.shape, dtype=bool)
+        hits[idx[:, 1], idx[:, 0]] = True
+        want = np.minimum(ndimage.distance_transform_edt(~hits, sampling=RES), maps.reach)
+        assert np.allclose(maps.esdf(r).values, want, rtol=0, atol=1e-12)

@@ -206,16 +206,27 @@ class OccupancyMaps:
         known obstacles."""
         return self._hits is not None
 
-    def use_scans(self) -> None:
+    def use_scans(self, reach: float = 0.0) -> None:
         """Build every robot's map from its own range scans from now on (``sense.map = scans``;
         docs/sensing.md, Maps from scans): the maps start empty, :meth:`observe` adds nothing,
         and :meth:`integrate` adds the cells the scans hit. Unknown space stays free, as the
-        known map's unseen space (optimistic planning, as EGO-Planner's grid map)."""
+        known map's unseen space (optimistic planning, as EGO-Planner's grid map).
+
+        The distance to the hit cells is kept up to ``reach`` [m] (at least the widest clearance
+        class and one cell more) and is ``reach`` beyond: a truncated distance field, as far as
+        its planner reads it."""
         self.grids[:] = 0
         self._hits = np.zeros(self.grids.shape, dtype=bool)  # (N, *shape) cells a return fell in
         self._version = np.zeros(len(self.grids), dtype=np.int64)  # changes of each robot's map
-        self._dirty = np.zeros(len(self.grids), dtype=bool)  # hits not yet in grids / distances
-        self._distance = np.full(self.grids.shape, np.inf)  # [m] cell centre to the nearest hit cell centre
+        widest = max([self.inflation, *self.levels])
+        self.reach = max(float(reach), widest) + self.resolution  # [m]
+        self._distance = np.full(self.grids.shape, self.reach)  # [m] cell centre to the nearest hit cell centre
+        # the cells within reach of a cell: offsets (S, dim) in grid order and their distances [m]
+        r = int(math.ceil(self.reach / self.resolution))
+        off = np.stack(np.mgrid[(slice(-r, r + 1),) * self.dim], axis=-1).reshape(-1, self.dim)
+        dist = self.resolution * np.sqrt((off * off).sum(axis=1))
+        keep = dist < self.reach
+        self._stencil, self._stencil_distance = off[keep], dist[keep]
         self._searched.clear()
         self._fields.clear()
         self._components.clear()
@@ -223,49 +234,47 @@ class OccupancyMaps:
     def integrate(self, points: np.ndarray, hit: np.ndarray) -> np.ndarray:
         """Add each robot's returns to its map: ``points`` (N, R, dim) [m] where robot n placed
         return r (its pose estimate + range x ray direction), ``hit`` (N, R) bool the returns that
-        met something (not max range). A return outside the bounds is dropped. Returns (N,) bool:
-        the robots whose map gained a cell. The clearance classes and distances follow at the next
-        :meth:`refresh`."""
+        met something (not max range). A return outside the bounds is dropped. Each newly hit cell
+        lowers the distance of the cells within reach to their distance from it, and their
+        clearance classes follow (module docstring): exactly the distance transform of the hit
+        cells, truncated at the reach. Returns (N,) bool: the robots whose map gained a cell."""
         n = len(self.grids)
         counts = np.array(self.shape[::-1])  # nx, ny[, nz]
         cell = np.rint((points - self.origin) / self.resolution).astype(np.int64)  # (N, R, dim), (x, y[, z])
         inside = hit & np.all((cell >= 0) & (cell < counts), axis=2)
         robot = np.broadcast_to(np.arange(n)[:, None], inside.shape)[inside]
-        flat = np.ravel_multi_index(tuple(cell[inside][:, k] for k in reversed(range(self.dim))), self.shape)
+        grid_index = cell[inside][:, ::-1]  # (M, dim) in grid order (iy, ix) / (iz, iy, ix)
+        flat = np.ravel_multi_index(tuple(grid_index.T), self.shape)
         layer = self._hits.reshape(n, -1)
         new = ~layer[robot, flat]
+        # one entry per newly hit (robot, cell)
+        key = np.unique(robot[new] * layer.shape[1] + flat[new])
+        robot, flat = key // layer.shape[1], key % layer.shape[1]
         gained = np.zeros(n, dtype=bool)
-        gained[robot[new]] = True
-        layer[robot[new], flat[new]] = True
-        self._dirty |= gained
+        gained[robot] = True
+        layer[robot, flat] = True
         self._version += gained
+        if len(key):
+            at = np.stack(np.unravel_index(flat, self.shape), axis=1)  # (K, dim)
+            near = at[:, None, :] + self._stencil[None, :, :]  # (K, S, dim)
+            ok = np.all((near >= 0) & (near < np.array(self.shape)), axis=2)
+            rows = np.broadcast_to(robot[:, None], ok.shape)[ok]
+            cells = np.ravel_multi_index(tuple(near[ok].T), self.shape)
+            dist = self._distance.reshape(n, -1)
+            np.minimum.at(dist, (rows, cells), np.broadcast_to(self._stencil_distance, ok.shape)[ok])
+            d = dist[rows, cells]
+            top = len(self.levels) + 1
+            level = np.zeros(len(d), dtype=np.uint8)
+            for m in self.levels:
+                level += d < m
+            level[d < self.inflation] = top
+            self.grids.reshape(n, -1)[rows, cells] = level
         return gained
 
-    def refresh(self) -> None:
-        """Bring the clearance classes and distances of every robot whose map gained a cell up to
-        date: the Euclidean distance transform of its hit cells (scipy.ndimage, exact on the grid:
-        the distance [m] from each cell centre to the nearest hit cell centre), classed as the
-        known map classes the exact distance (module docstring). One transform for all of them:
-        the robots lie along an axis of spacing far above any distance in a map."""
-        rows = np.flatnonzero(self._dirty)
-        if not len(rows):
-            return
-        far = 1e9  # [m] the spacing between robots' maps in the transform
-        dist = ndimage.distance_transform_edt(~self._hits[rows], sampling=(far,) + (self.resolution,) * self.dim)
-        dist[dist >= far] = np.inf  # a robot without a hit yet: nothing anywhere
-        self._distance[rows] = dist
-        top = len(self.levels) + 1
-        level = np.zeros(dist.shape, dtype=np.uint8)
-        for m in self.levels:
-            level += dist < m
-        level[dist < self.inflation] = top
-        self.grids[rows] = level
-        self._dirty[rows] = False
-
     def esdf(self, robot: int) -> Esdf:
-        """``robot``'s distance field from its scans (after :meth:`refresh`): nodes at the cell
-        centres, the distance [m] to the nearest hit cell centre (unsigned: a scan sees a
-        surface, not an inside; +inf before any hit)."""
+        """``robot``'s distance field from its scans: nodes at the cell centres, the distance [m]
+        to the nearest hit cell centre up to the reach (:meth:`use_scans`), unsigned (a scan sees a
+        surface, not an inside)."""
         return Esdf(origin=self.origin, resolution=self.resolution, values=self._distance[robot])
 
     def query(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -10,8 +10,8 @@ the rays leave from the true body. A return that meets something (shorter than t
 placed in the world from the robot's *estimated* pose, ``p_hat + r u``, and the grid cell it falls
 in is marked in that robot's :class:`~swarmnav.planning.maps.OccupancyMaps` grid for good
 (accumulated; no free-space clearing: a cell once hit stays occupied). The clearance classes the
-grid search reads and the distance field the optimisers read follow from the hit cells
-(:meth:`OccupancyMaps.refresh`). Unknown space is free.
+grid search reads and the distance field the optimisers read follow from the hit cells, updated
+around each newly hit cell only (:meth:`OccupancyMaps.integrate`). Unknown space is free.
 """
 
 from __future__ import annotations
@@ -28,7 +28,8 @@ class Scanner:
     """The scans of one run's robots (module docstring): :meth:`sweep` is called every control
     step, scans when one is due, and adds the returns to the maps."""
 
-    def __init__(self, sense: Any, geom: Any, maps: OccupancyMaps, sensing_range: float, dt: float):
+    def __init__(self, sense: Any, geom: Any, maps: OccupancyMaps, sensing_range: float, dt: float,
+                 reach: float = 0.0):
         self.maps = maps
         self.geom = geom
         self.rays = int(sense.scan_rays)
@@ -42,7 +43,7 @@ class Scanner:
         else:
             self.directions = fibonacci_sphere(self.rays)
             self._cast = lambda at: range_scan(geom, at, self.directions, self.max_range)
-        maps.use_scans()
+        maps.use_scans(reach)
         self.scans = 0
         self.returns = 0
 
@@ -57,7 +58,6 @@ class Scanner:
         hit = ranges < self.max_range
         points = x[:, None, :] + ranges[:, :, None] * self.directions[None, :, :]
         gained = self.maps.integrate(points, hit)
-        self.maps.refresh()
         self.scans += 1
         self.returns += int(hit.sum())
         return gained
@@ -68,10 +68,12 @@ class Scanner:
         return {"scan_count": float(self.scans), "scan_hit_cells_fraction": self.maps.hit_fraction()}
 
 
-def scanner(obs: Any, geom: Any, maps: OccupancyMaps, sensing_range: float, dt: float) -> Scanner | None:
+def scanner(obs: Any, geom: Any, maps: OccupancyMaps, sensing_range: float, dt: float,
+            reach: float = 0.0) -> Scanner | None:
     """The run's :class:`Scanner` if its perception builds maps from scans (``sense.map = scans``),
-    else None (the maps stay the known ones)."""
+    else None (the maps stay the known ones). ``reach`` [m]: how far from the obstacles the
+    planner reads their distance (:meth:`OccupancyMaps.use_scans`)."""
     sense = getattr(obs.sensing, "p", None)
     if sense is None or sense.map != "scans":
         return None
-    return Scanner(sense, geom, maps, sensing_range, dt)
+    return Scanner(sense, geom, maps, sensing_range, dt, reach)

@@ -193,7 +193,9 @@ class Sph:
         t0 = time.perf_counter()
         view = obs.view  # None: the ideal network, every robot's true state (docs/network.md)
         if obs.step == 0 and obs.sensing is not None:
-            self._scanner = scanner(obs, self.geom, self.maps, p.R, p.dt)
+            body = self.scenario.rules.body_radius  # the field is read up to the widest band of a term
+            reach = max(p.d_thr, p.env_safe + p.env_inflation, p.start_clearance, body + p.pair_margin)
+            self._scanner = scanner(obs, self.geom, self.maps, p.R, p.dt, reach)
         if self._scanner is not None:  # each robot's map and distance field from its own scans
             self._scanner.sweep(obs, x)
         # Algorithm 2: raycast visibility, sub-swarms, split / merge
