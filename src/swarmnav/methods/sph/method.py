@@ -194,7 +194,8 @@ class Sph:
         view = obs.view  # None: the ideal network, every robot's true state (docs/network.md)
         if obs.step == 0 and obs.sensing is not None:
             body = self.scenario.rules.body_radius  # the field is read up to the widest band of a term
-            reach = max(p.d_thr, p.env_safe + p.env_inflation, p.start_clearance, body + p.pair_margin)
+            reach = max(p.d_thr, p.env_safe + p.env_inflation, p.start_clearance, body + p.pair_margin,
+                        p.yield_clearance if p.yield_range > 0 else 0.0)
             self._scanner = scanner(obs, self.geom, self.maps, p.R, p.dt, reach)
         if self._scanner is not None:  # each robot's map and distance field from its own scans
             self._scanner.sweep(obs, x)
