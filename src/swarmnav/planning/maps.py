@@ -226,7 +226,8 @@ class OccupancyMaps:
         off = np.stack(np.mgrid[(slice(-r, r + 1),) * self.dim], axis=-1).reshape(-1, self.dim)
         dist = self.resolution * np.sqrt((off * off).sum(axis=1))
         keep = dist < self.reach
-        self._stencil, self._stencil_distance = off[keep], dist[keep]
+        self._stencil3 = np.ascontiguousarray(np.pad(off[keep], ((0, 0), (3 - self.dim, 0))))  # (S, 3) (dz, dy, dx)
+        self._stencil_distance = np.ascontiguousarray(dist[keep])
         self._searched.clear()
         self._fields.clear()
         self._components.clear()
@@ -255,20 +256,12 @@ class OccupancyMaps:
         layer[robot, flat] = True
         self._version += gained
         if len(key):
-            at = np.stack(np.unravel_index(flat, self.shape), axis=1)  # (K, dim)
-            near = at[:, None, :] + self._stencil[None, :, :]  # (K, S, dim)
-            ok = np.all((near >= 0) & (near < np.array(self.shape)), axis=2)
-            rows = np.broadcast_to(robot[:, None], ok.shape)[ok]
-            cells = np.ravel_multi_index(tuple(near[ok].T), self.shape)
-            dist = self._distance.reshape(n, -1)
-            np.minimum.at(dist, (rows, cells), np.broadcast_to(self._stencil_distance, ok.shape)[ok])
-            d = dist[rows, cells]
-            top = len(self.levels) + 1
-            level = np.zeros(len(d), dtype=np.uint8)
-            for m in self.levels:
-                level += d < m
-            level[d < self.inflation] = top
-            self.grids.reshape(n, -1)[rows, cells] = level
+            at = np.stack(np.unravel_index(flat, self.shape), axis=1)  # (K, dim) in grid order
+            pad = 3 - self.dim  # a planar map is one layer of voxels
+            vox = (1,) * pad + self.shape
+            _stamp(self._distance.reshape(n, *vox), self.grids.reshape(n, *vox), robot,
+                   np.ascontiguousarray(np.pad(at, ((0, 0), (pad, 0)))), self._stencil3, self._stencil_distance,
+                   np.array(self.levels, dtype=np.float64), self.inflation, len(self.levels) + 1)
         return gained
 
     def esdf(self, robot: int) -> Esdf:
@@ -880,6 +873,34 @@ def _descend3(occ, field, s3, g3, blocked, cost, steps):
         out[count] = (cz * ny + cy) * nx + cx
         count += 1
     return out[:count].copy()
+
+
+@njit(cache=True, nogil=True)
+def _stamp(dist, grids, robots, cells, stencil, sdist, levels, inflation, top):
+    """Lower ``dist[r]`` (N, nz, ny, nx) [m] around each newly hit voxel ``cells[k]`` of robot
+    ``robots[k]`` to the distance ``sdist[s]`` of each ``stencil`` offset, and set the clearance
+    class in ``grids`` of every voxel lowered: the number of ``levels`` above its distance, or
+    ``top`` within ``inflation``."""
+    nz, ny, nx = dist.shape[1], dist.shape[2], dist.shape[3]
+    for k in range(cells.shape[0]):
+        r = robots[k]
+        for s in range(stencil.shape[0]):
+            z = cells[k, 0] + stencil[s, 0]
+            y = cells[k, 1] + stencil[s, 1]
+            x = cells[k, 2] + stencil[s, 2]
+            if z < 0 or z >= nz or y < 0 or y >= ny or x < 0 or x >= nx:
+                continue
+            d = sdist[s]
+            if d < dist[r, z, y, x]:
+                dist[r, z, y, x] = d
+                if d < inflation:
+                    grids[r, z, y, x] = top
+                else:
+                    lv = 0
+                    for m in range(levels.shape[0]):
+                        if d < levels[m]:
+                            lv += 1
+                    grids[r, z, y, x] = lv
 
 
 @njit(cache=True)
