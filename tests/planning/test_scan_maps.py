@@ -169,3 +169,12 @@ def test_the_incremental_field_is_the_distance_transform_of_the_hit_cells():
         hits[idx[:, 1], idx[:, 0]] = True
         want = np.minimum(ndimage.distance_transform_edt(~hits, sampling=RES), maps.reach)
         assert np.allclose(maps.esdf(r).values, want, rtol=0, atol=1e-12)
+
+
+def test_maps_from_scans_past_the_memory_limit_are_refused_in_one_line():
+    with pytest.raises(ConfigError) as e:  # 15 robots on a Table II forest: ~10 MB of scan maps
+        swarmnav.run("sph", "random_forest:density=0.35,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0",
+                     seed=1, steps=2, max_map_bytes=12_000_000, **{"sense.map": "scans"})
+    assert "max_map_bytes" in str(e.value) and "sense.map=known" in str(e.value) and "\n" not in str(e.value)
+    assert swarmnav.run("sph", "random_forest:density=0.35,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0",
+                        seed=1, steps=2, max_map_bytes=12_000_000).positions.shape[0] == 3

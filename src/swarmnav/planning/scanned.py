@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmnav.errors import ConfigError
 from swarmnav.planning.maps import OccupancyMaps
 from swarmnav.sensing import fibonacci_sphere, lidar_ring, range_scan, ray_table
 
@@ -68,12 +69,25 @@ class Scanner:
         return {"scan_count": float(self.scans), "scan_hit_cells_fraction": self.maps.hit_fraction()}
 
 
+#: [B] what maps from scans add per robot per grid cell: the hit flag (1) and the distance (8)
+SCAN_BYTES_PER_CELL = 9
+
+
 def scanner(obs: Any, geom: Any, maps: OccupancyMaps, sensing_range: float, dt: float,
-            reach: float = 0.0) -> Scanner | None:
+            reach: float = 0.0, budget: tuple[str, float, float, str] | None = None) -> Scanner | None:
     """The run's :class:`Scanner` if its perception builds maps from scans (``sense.map = scans``),
     else None (the maps stay the known ones). ``reach`` [m]: how far from the obstacles the
-    planner reads their distance (:meth:`OccupancyMaps.use_scans`)."""
+    planner reads their distance (:meth:`OccupancyMaps.use_scans`). ``budget``: ``(method, bytes
+    its maps take already, its limit, the limit's parameter)``; maps from scans that would pass
+    the limit are refused in one line (ConfigError) before they are allocated."""
     sense = getattr(obs.sensing, "p", None)
     if sense is None or sense.map != "scans":
         return None
+    if budget is not None:
+        method, used, limit, key = budget
+        need = used + SCAN_BYTES_PER_CELL * maps.grids.size
+        if not need <= limit:
+            raise ConfigError(f"{method}: maps from scans (sense.map=scans) need {need / 2**30:.3g} GiB beside the "
+                              f"known maps' own (limit {limit / 2**30:.3g} GiB: {key}); use a coarser grid or a "
+                              "smaller world, or sense.map=known")
     return Scanner(sense, geom, maps, sensing_range, dt, reach)

@@ -105,6 +105,7 @@ class EgoSwarm:
         check_map_bytes("ego-swarm", f"a {format_extent(scenario.lower, scenario.upper)} world at "
                         f"{p.grid_resolution:g} m resolution", need, p.max_map_bytes, "max_map_bytes",
                         "use a coarser grid_resolution or a smaller world")
+        self._map_need = need
         self.maps = OccupancyMaps(scenario.solid_obstacles, scenario.bounds, n, p.grid_resolution, p.inflation,
                                   p.sensing_range)
         self._counts = np.array(self.maps.shape[::-1], dtype=np.int64)
@@ -144,7 +145,8 @@ class EgoSwarm:
         n = x.shape[0]
         heard = self._heard(obs)
         if self._steps == 0 and obs.sensing is not None:
-            self._scanner = scanner(obs, self._geom, self.maps, p.sensing_range, p.dt)
+            self._scanner = scanner(obs, self._geom, self.maps, p.sensing_range, p.dt, budget=(
+                "ego-swarm", self._map_need, p.max_map_bytes, "max_map_bytes"))
         if self._scanner is not None:  # each robot's map from its own scans
             self._fresh |= self._scanner.sweep(obs, x)
         if self._steps == 0:

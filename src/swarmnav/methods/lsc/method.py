@@ -92,9 +92,9 @@ class LscMethod:
               rng: np.random.Generator) -> None:
         p = self.params
         n, dim = scenario.n, scenario.dim
+        self._map_need = grid_cells(scenario.bounds, p.grid_resolution) * bytes_per_cell(dim, n, False, True)
         check_map_bytes("lsc", f"a {format_extent(scenario.lower, scenario.upper)} world at "
-                        f"{p.grid_resolution:g} m", grid_cells(scenario.bounds, p.grid_resolution)
-                        * bytes_per_cell(dim, n, False, True), _MAX_MAP_BYTES, "grid_resolution",
+                        f"{p.grid_resolution:g} m", self._map_need, _MAX_MAP_BYTES, "grid_resolution",
                         "use a coarser grid_resolution")
         self.dim = dim
         self.body = scenario.rules.body_radius
@@ -139,7 +139,8 @@ class LscMethod:
         k = obs.step
         x, v = obs.positions, obs.velocities
         if self._steps == 0 and obs.sensing is not None:
-            self._scanner = scanner(obs, self._geom, self.maps, p.sensing_range, p.dt)
+            self._scanner = scanner(obs, self._geom, self.maps, p.sensing_range, p.dt, budget=(
+                "lsc", self._map_need, _MAX_MAP_BYTES, "grid_resolution"))
         if self._scanner is not None:  # each robot's map from its own scans
             self._scanner.sweep(obs, x)
         if k % self.every == 0:

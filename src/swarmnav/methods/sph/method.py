@@ -196,7 +196,8 @@ class Sph:
             body = self.scenario.rules.body_radius  # the field is read up to the widest band of a term
             reach = max(p.d_thr, p.env_safe + p.env_inflation, p.start_clearance, body + p.pair_margin,
                         p.yield_clearance if p.yield_range > 0 else 0.0)
-            self._scanner = scanner(obs, self.geom, self.maps, p.R, p.dt, reach)
+            self._scanner = scanner(obs, self.geom, self.maps, p.R, p.dt, reach,
+                                    ("sph", map_bytes(self.scenario, p), p.max_map_bytes, "max_map_bytes"))
         if self._scanner is not None:  # each robot's map and distance field from its own scans
             self._scanner.sweep(obs, x)
         # Algorithm 2: raycast visibility, sub-swarms, split / merge
