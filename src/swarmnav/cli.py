@@ -208,13 +208,16 @@ def _print_params(spec, out) -> None:
         print(f"network (--set net.NAME; docs/network.md; defaults: the ideal network): {net}", file=out)
     else:
         print("network: the ideal one only (this method does not read the others through a network yet)", file=out)
-    from swarmnav.sensing.perception import RANGE_OPTIONS, SenseParams
+    from swarmnav.sensing.perception import MAP_OPTIONS, RANGE_OPTIONS, SenseParams
 
     ranged = getattr(spec.factory, "range_sensor", False)
-    sense = ", ".join(f"sense.{i.name} [{i.unit or '-'}] {i.range}" for i in describe(SenseParams)
-                      if ranged or i.name not in RANGE_OPTIONS)
+    mapping = getattr(spec.factory, "map_sensor", False)
+    sense = ", ".join(f"sense.{i.name} [{i.unit or '-'}] {' | '.join(i.choices) if i.choices else i.range}"
+                      for i in describe(SenseParams)
+                      if (ranged or mapping or i.name not in RANGE_OPTIONS) and (mapping or i.name not in MAP_OPTIONS))
     print(f"perception (--set sense.NAME; docs/sensing.md; defaults: perfect perception): {sense}"
-          + ("" if ranged else " (no range sensor: the range options do not apply)"), file=out)
+          + ("" if ranged else " (the range options apply to the scans of sense.map=scans)" if mapping
+             else " (no range sensor: the range options do not apply)"), file=out)
     from swarmnav.dynamics.vehicle import VehicleParams
     from swarmnav.dynamics.wind import WindParams
 

@@ -13,7 +13,7 @@ from swarmnav.errors import ConfigError
 from _helpers.cli import run_cli
 from swarmnav.methods import registry
 from swarmnav.methods.base import Observation
-from swarmnav.sim.network import NetParams, Network, View, net_params
+from swarmnav.sim.network import STATE_BYTES, NetParams, Network, View, net_params
 from swarmnav.world import from_dict
 
 
@@ -170,7 +170,7 @@ def test_an_agent_that_hears_nothing_acts_as_if_alone(method):
 @pytest.mark.parametrize("setting, words", [
     ("net.latency=-0.1", "latency"), ("net.loss=1.5", "loss"), ("net.range=-1", "range"),
     ("net.jitter=nan", "jitter"), ("net.lag=1", "unknown parameter 'lag'"),
-    ("net.burst=0.5", "burst"),
+    ("net.burst=0.5", "burst"), ("net.bandwidth=-1", "bandwidth"),
 ])
 def test_impossible_network_is_one_line_and_exit_2(tmp_path, setting, words):
     extra = ["--set", "net.loss=0.2"] if setting == "net.burst=0.5" else []
@@ -312,3 +312,49 @@ def test_ego_swarm_fed_the_true_plans_replans_as_the_ideal_run_but_after_same_st
             assert np.array_equal(got[r].sampler(tau)[0], want[r].sampler(tau)[0])
             compared += r in committed
     assert compared >= 3  # new plans compared, not only the old ones
+
+
+def test_bandwidth_delays_each_message_by_its_sending_time():
+    bits = 8 * STATE_BYTES  # a state message
+    net, views = _walk(NetParams(bandwidth=bits / 0.05), rate=10.0)  # 0.05 s on the air, a message every 0.1 s
+    s = net.summary()
+    assert s["net_dropped_fraction"] == 0.0 and s["net_queue_delay_mean"] == pytest.approx(0.05, rel=1e-9)
+    assert s["net_delivered_fraction"] > 0.99
+    plain, plain_views = _walk(NetParams(latency=1e-9), rate=10.0)
+    # every state arrives one step later than without the limit (0.05 s, delivered at the next 0.1 s step)
+    off = ~np.eye(6, dtype=bool)
+    assert np.all(views[-1].age[off] >= plain_views[-1].age[off] + 0.1 - 1e-9)
+
+
+def test_an_overloaded_sender_sends_what_its_bandwidth_carries_and_drops_the_rest():
+    bits = 8 * STATE_BYTES
+    period, airtime = 0.1, 0.25  # a message due every 0.1 s takes 0.25 s to send
+    net, views = _walk(NetParams(bandwidth=bits / airtime), rate=1 / period, steps=2000, dt=0.01)
+    s = net.summary()
+    # the radio carries one message per 0.25 s of the 0.1 s it is asked for: 60 % dropped
+    assert s["net_dropped_fraction"] == pytest.approx(1 - period / airtime, abs=0.01)
+    per_sender = s["net_messages"] / (6 * 5)  # messages each of 6 senders put on the air (5 copies each)
+    assert per_sender <= 2000 * 0.01 / airtime + 1  # 20 s at one message per 0.25 s, and the first
+    # a queued message never waits longer than the send period before it leaves
+    assert s["net_queue_delay_mean"] <= period + airtime
+
+
+def test_a_bandwidth_far_above_the_load_flies_exactly_as_no_limit():
+    kw = dict(seed=4, steps=60)
+    plain = swarmnav.run("vasarhelyi", "default_corridor", **kw, **{"net.latency": 0.1})
+    wide = swarmnav.run("vasarhelyi", "default_corridor", **kw, **{"net.latency": 0.1, "net.bandwidth": 1e12})
+    assert np.array_equal(plain.positions, wide.positions)
+    assert wide.metrics["net_dropped_fraction"] == 0.0 and "net_dropped_fraction" not in plain.metrics
+    narrow = swarmnav.run("vasarhelyi", "default_corridor", **kw, **{"net.latency": 0.1, "net.bandwidth": 2000})
+    assert narrow.metrics["net_dropped_fraction"] > 0.5  # 704 bit a message at 10 Hz needs 7 kbit/s
+    assert not np.array_equal(plain.positions, narrow.positions)
+
+
+def test_a_planner_trajectory_counts_its_size_on_the_air():
+    from swarmnav.planning.messages import HEADERS, Broadcast, trajectory_bytes
+
+    net = Network(NetParams(bandwidth=1e6), 3, 2, 0.1, 1)
+    rec = Broadcast(lambda tau: (np.zeros((len(tau), 2)),), 0.0, 1.0, None, trajectory_bytes(10) - HEADERS)
+    net.publish({"trajectory": [rec, None, rec], "heading": np.zeros(3)})
+    assert list(net.message_bytes(np.arange(3))) == [STATE_BYTES + trajectory_bytes(10) - HEADERS + 8,
+                                                     STATE_BYTES + 8, STATE_BYTES + trajectory_bytes(10) - HEADERS + 8]

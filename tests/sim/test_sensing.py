@@ -231,9 +231,14 @@ def test_methods_lists_the_perception_options_a_method_honours(capsys):
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("perception"))
     assert all(f"sense.{k}" in line for k in ("pos_noise", "vel_noise", "drift", "range_noise", "dropout", "fov"))
     assert "sense.fov [deg] (0, 360]" in line and "sense.drift [m/s] [0, 100]" in line
-    main(["methods", "sph"])
+    assert "sense.map" not in line  # no map to build from scans
+    main(["methods", "vem"])
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("perception"))
     assert "sense.pos_noise [m]" in line and "sense.dropout" not in line and "no range sensor" in line
+    main(["methods", "sph"])  # no range sensor of its own, but the scans of its map from scans
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("perception"))
+    assert "sense.map [-] known | scans" in line and "sense.scan_rate [Hz] (0, 1000]" in line
+    assert "sense.dropout" in line and "apply to the scans of sense.map=scans" in line
 
 
 def test_the_network_carries_what_each_agent_believes_of_itself():

@@ -40,6 +40,7 @@ from numba import njit
 from scipy import ndimage
 
 from swarmnav.sensing import signed_distance
+from swarmnav.sensing.esdf import Esdf, esdf3d_query_kernel, esdf_query_kernel
 from swarmnav.world.obstacles import Geometry, Obstacle
 
 _SQRT2 = math.sqrt(2.0)
@@ -140,6 +141,8 @@ class OccupancyMaps:
         # first search; the remembered searches, fields and labels are shared, behind one lock
         self._local = threading.local()
         self._lock = threading.Lock()
+        self.inflation = float(inflation)
+        self._hits: np.ndarray | None = None  # maps from scans (use_scans): the cells the returns hit
 
     def __getstate__(self) -> dict:
         """What a copy (``copy.deepcopy``, pickle) keeps: every member but the per-thread A* work
@@ -195,10 +198,107 @@ class OccupancyMaps:
         flat = np.ravel_multi_index(tuple(a[near] for a in index), self.shape)
         return flat.astype(np.int64), level
 
+    # ------------------------------------------------------------------ maps from scans
+
+    @property
+    def scanned(self) -> bool:
+        """Whether the maps are built from the robots' scans (:meth:`use_scans`), not from the
+        known obstacles."""
+        return self._hits is not None
+
+    def use_scans(self, reach: float = 0.0) -> None:
+        """Build every robot's map from its own range scans from now on (``sense.map = scans``;
+        docs/sensing.md, Maps from scans): the maps start empty, :meth:`observe` adds nothing,
+        and :meth:`integrate` adds the cells the scans hit. Unknown space stays free, as the
+        known map's unseen space (optimistic planning, as EGO-Planner's grid map).
+
+        The distance to the hit cells is kept up to ``reach`` [m] (at least the widest clearance
+        class and one cell more) and is ``reach`` beyond: a truncated distance field, as far as
+        its planner reads it."""
+        self.grids[:] = 0
+        self._hits = np.zeros(self.grids.shape, dtype=bool)  # (N, *shape) cells a return fell in
+        self._version = np.zeros(len(self.grids), dtype=np.int64)  # changes of each robot's map
+        widest = max([self.inflation, *self.levels])
+        self.reach = max(float(reach), widest) + self.resolution  # [m]
+        self._distance = np.full(self.grids.shape, self.reach)  # [m] cell centre to the nearest hit cell centre
+        # the cells within reach of a cell: offsets (S, dim) in grid order and their distances [m]
+        r = int(math.ceil(self.reach / self.resolution))
+        off = np.stack(np.mgrid[(slice(-r, r + 1),) * self.dim], axis=-1).reshape(-1, self.dim)
+        dist = self.resolution * np.sqrt((off * off).sum(axis=1))
+        keep = dist < self.reach
+        self._stencil3 = np.ascontiguousarray(np.pad(off[keep], ((0, 0), (3 - self.dim, 0))))  # (S, 3) (dz, dy, dx)
+        self._stencil_distance = np.ascontiguousarray(dist[keep])
+        self._searched.clear()
+        self._fields.clear()
+        self._components.clear()
+
+    def integrate(self, points: np.ndarray, hit: np.ndarray) -> np.ndarray:
+        """Add each robot's returns to its map: ``points`` (N, R, dim) [m] where robot n placed
+        return r (its pose estimate + range x ray direction), ``hit`` (N, R) bool the returns that
+        met something (not max range). A return outside the bounds is dropped. Each newly hit cell
+        lowers the distance of the cells within reach to their distance from it, and their
+        clearance classes follow (module docstring): exactly the distance transform of the hit
+        cells, truncated at the reach. Returns (N,) bool: the robots whose map gained a cell."""
+        n = len(self.grids)
+        counts = np.array(self.shape[::-1])  # nx, ny[, nz]
+        cell = np.rint((points - self.origin) / self.resolution).astype(np.int64)  # (N, R, dim), (x, y[, z])
+        inside = hit & np.all((cell >= 0) & (cell < counts), axis=2)
+        robot = np.broadcast_to(np.arange(n)[:, None], inside.shape)[inside]
+        grid_index = cell[inside][:, ::-1]  # (M, dim) in grid order (iy, ix) / (iz, iy, ix)
+        flat = np.ravel_multi_index(tuple(grid_index.T), self.shape)
+        layer = self._hits.reshape(n, -1)
+        new = ~layer[robot, flat]
+        # one entry per newly hit (robot, cell)
+        key = np.unique(robot[new] * layer.shape[1] + flat[new])
+        robot, flat = key // layer.shape[1], key % layer.shape[1]
+        gained = np.zeros(n, dtype=bool)
+        gained[robot] = True
+        layer[robot, flat] = True
+        self._version += gained
+        if len(key):
+            at = np.stack(np.unravel_index(flat, self.shape), axis=1)  # (K, dim) in grid order
+            pad = 3 - self.dim  # a planar map is one layer of voxels
+            vox = (1,) * pad + self.shape
+            _stamp(self._distance.reshape(n, *vox), self.grids.reshape(n, *vox), robot,
+                   np.ascontiguousarray(np.pad(at, ((0, 0), (pad, 0)))), self._stencil3, self._stencil_distance,
+                   np.array(self.levels, dtype=np.float64), self.inflation, len(self.levels) + 1)
+        return gained
+
+    def esdf(self, robot: int) -> Esdf:
+        """``robot``'s distance field from its scans: nodes at the cell centres, the distance [m]
+        to the nearest hit cell centre up to the reach (:meth:`use_scans`), unsigned (a scan sees a
+        surface, not an inside)."""
+        return Esdf(origin=self.origin, resolution=self.resolution, values=self._distance[robot])
+
+    def query(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each robot's distance field (:meth:`esdf`) at its own point: ``points`` (N, dim) [m],
+        row n read in robot n's field; ``(value (N,) [m], gradient (N, dim))``, interpolated as
+        :meth:`Esdf.query`."""
+        pts = np.ascontiguousarray(points, dtype=np.float64)
+        val = np.empty(len(pts))
+        grad = np.empty(pts.shape)
+        o = np.asarray(self.origin, dtype=np.float64)
+        if self.dim == 2:
+            _query_each2(self._distance, o[0], o[1], self.resolution, pts, val, grad)
+        else:
+            _query_each3(self._distance, o[0], o[1], o[2], self.resolution, pts, val, grad)
+        return val, grad
+
+    def hit_fraction(self) -> float:
+        """The mean fraction of a robot's grid cells its scans have hit (0 without scans)."""
+        return 0.0 if self._hits is None else float(self._hits.mean())
+
+    def _map_key(self, robot: int) -> tuple:
+        """What a search on ``robot``'s map is a function of, beside its cells: the obstacles it
+        knows, or (maps from scans) the robot and its map's version."""
+        if self._hits is not None:
+            return ("scans", robot, int(self._version[robot]))
+        return (self.known[robot].tobytes(),)
+
     def observe(self, robot: int, position: np.ndarray) -> int:
         """Add to ``robot``'s map every obstacle whose bounding box is within the sensing
-        range of ``position``; returns how many were new."""
-        if not len(self.footprints):
+        range of ``position``; returns how many were new (none with maps from scans)."""
+        if not len(self.footprints) or self._hits is not None:
             return 0
         d = np.maximum(np.maximum(self.bbox_lo - position, position - self.bbox_hi), 0.0)
         near = np.einsum("ij,ij->i", d, d) <= self.sensing_range**2
@@ -238,7 +338,7 @@ class OccupancyMaps:
         sc = self.cell(start)
         key = None
         if self.dim == 2 and not marked:  # a planar search is a function of the map, the cells and the cap
-            key = (self.known[robot].tobytes(), sc, gc, int(max_expand))
+            key = (*self._map_key(robot), sc, gc, int(max_expand))
             with self._lock:
                 found = self._searched.pop(key, None)
                 if found is not None:
@@ -289,7 +389,7 @@ class OccupancyMaps:
         once per map and tier by scipy.ndimage. A search between components expands the start's
         whole component (or its expansion cap) and fails; knowing that beforehand gives the same
         result for a lookup."""
-        key = (self.known[robot].tobytes(), blocked)
+        key = (*self._map_key(robot), blocked)
         with self._lock:
             labels = self._components.pop(key, None)
             if labels is not None:
@@ -310,12 +410,14 @@ class OccupancyMaps:
         as its heuristic (admissible and consistent when the tier's costs do not fall with the
         clearance class: a map that gained obstacles only costs more); else a new field."""
         known = self.known[robot]
-        key = (known.tobytes(), g, blocked)
+        key = (*self._map_key(robot), g, blocked)
         kept = self._fields.pop(key, None)
         if kept is not None:
             self._fields[key] = kept  # most recently used last
             return _descend3(occ, kept[0], s, g, blocked, self.cost, _STEPS3)
-        if np.all(np.diff(self.cost[:blocked]) >= 0):
+        # a kept field guides the search where its map's obstacles are a subset of this one's;
+        # maps from scans are not nested by obstacles, so they build their own
+        if self._hits is None and np.all(np.diff(self.cost[:blocked]) >= 0):
             guides = [(int(k.sum()), f) for (_, kg, kb), (f, k) in self._fields.items()
                       if kg == g and kb == blocked and not np.any(k & ~known)]
             if guides:
@@ -771,6 +873,48 @@ def _descend3(occ, field, s3, g3, blocked, cost, steps):
         out[count] = (cz * ny + cy) * nx + cx
         count += 1
     return out[:count].copy()
+
+
+@njit(cache=True, nogil=True)
+def _stamp(dist, grids, robots, cells, stencil, sdist, levels, inflation, top):
+    """Lower ``dist[r]`` (N, nz, ny, nx) [m] around each newly hit voxel ``cells[k]`` of robot
+    ``robots[k]`` to the distance ``sdist[s]`` of each ``stencil`` offset, and set the clearance
+    class in ``grids`` of every voxel lowered: the number of ``levels`` above its distance, or
+    ``top`` within ``inflation``."""
+    nz, ny, nx = dist.shape[1], dist.shape[2], dist.shape[3]
+    for k in range(cells.shape[0]):
+        r = robots[k]
+        for s in range(stencil.shape[0]):
+            z = cells[k, 0] + stencil[s, 0]
+            y = cells[k, 1] + stencil[s, 1]
+            x = cells[k, 2] + stencil[s, 2]
+            if z < 0 or z >= nz or y < 0 or y >= ny or x < 0 or x >= nx:
+                continue
+            d = sdist[s]
+            if d < dist[r, z, y, x]:
+                dist[r, z, y, x] = d
+                if d < inflation:
+                    grids[r, z, y, x] = top
+                else:
+                    lv = 0
+                    for m in range(levels.shape[0]):
+                        if d < levels[m]:
+                            lv += 1
+                    grids[r, z, y, x] = lv
+
+
+@njit(cache=True)
+def _query_each2(values, ox, oy, res, points, out_v, out_g):
+    """Row n of ``points`` in the planar field ``values[n]`` (bilinear, as Esdf.query)."""
+    for n in range(points.shape[0]):
+        esdf_query_kernel(values[n], ox, oy, res, points[n:n + 1], out_v[n:n + 1], out_g[n:n + 1])
+
+
+@njit(cache=True)
+def _query_each3(values, ox, oy, oz, res, points, out_v, out_g):
+    """Row n of ``points`` in the voxel field ``values[n]`` (trilinear, as Esdf.query)."""
+    for n in range(points.shape[0]):
+        esdf3d_query_kernel(values[n], ox, oy, oz, res, points[n:n + 1], out_v[n:n + 1], out_g[n:n + 1])
 
 
 def resample(path: np.ndarray, spacing: float) -> np.ndarray:

@@ -79,6 +79,7 @@ class Broadcast:
     start: float
     end: float
     data: Any = None
+    nbytes: int = 0  # [B] its size on the air without the UDP/IP headers (module docstring); 0: not counted
 
 
 def sample_broadcasts(plans, times: np.ndarray, dim: int) -> np.ndarray:
@@ -121,7 +122,8 @@ class TrajectoryBoard:
         self.samplers[robot] = sampler
         self.start[robot] = t_start
         self.end[robot] = t_start + duration
-        self.records[robot] = Broadcast(sampler, float(self.start[robot]), float(self.end[robot]), data)
+        self.records[robot] = Broadcast(sampler, float(self.start[robot]), float(self.end[robot]), data,
+                                        trajectory_bytes(n_points) - HEADERS)
         self.log.send(1, trajectory_bytes(n_points))
 
     def sample(self, robots: np.ndarray, times: np.ndarray, dim: int) -> np.ndarray:

@@ -32,10 +32,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Literal
 
 import numpy as np
 
+from swarmnav.errors import ConfigError
 from swarmnav.params import as_dict, build, param
 
 #: The run-option names of the perception parameters (``sense.NAME``).
@@ -44,6 +45,10 @@ PREFIX = "sense."
 TAG = 0x73656E
 #: The options a method honours only if it reads a range sensor (``range_sensor = True``).
 RANGE_OPTIONS = ("range_noise", "dropout", "fov")
+#: The options that shape the scans a map-based planner builds its map from (``sense.map = scans``).
+SCAN_OPTIONS = ("scan_rays", "scan_range", "scan_rate")
+#: The options a method honours only if it can build its map from scans (``map_sensor = True``).
+MAP_OPTIONS = ("map", *SCAN_OPTIONS)
 #: [m/s] below this speed an agent's heading is the one it last had.
 HOVER = 1e-9
 
@@ -70,6 +75,20 @@ class SenseParams:
     fov: float = param(360.0, "deg", "(0, 360]", "ours",
                        "field of view of the range sensor centred on the heading (the direction of flight); "
                        "rays outside read the max range; 360: all round")
+    map: Literal["known", "scans"] = param("known", "", None, "ours",
+                                           "what a map-based planner (sph, ego-swarm, lsc) knows of the obstacles: "
+                                           "known, every obstacle within its sensing range from the world; scans, "
+                                           "the cells its own range scans hit, accumulated as it flies "
+                                           "(planning/scanned.py)")
+    scan_rays: int = param(360, "", "[8, 100000]", "ours (1 deg, a planar 2-D LiDAR such as the RPLIDAR A2's ~1 deg)",
+                           "rays per scan of the map's range sensor (2-D: an evenly spaced ring; 3-D: the "
+                           "Fibonacci sphere); sense.map = scans only")
+    scan_range: float = param(0.0, "m", "[0, 1000]", "ours",
+                              "max range of the map's range sensor; 0: the planner's own sensing range (sph: R, "
+                              "the paper equates the two, Section IV; ego-swarm, lsc: sensing_range); "
+                              "sense.map = scans only")
+    scan_rate: float = param(10.0, "Hz", "(0, 1000]", "ours (10 Hz: a Livox Mid-360 / Velodyne VLP-16 default)",
+                             "scans per second, every robot at once, at most one a control step; sense.map = scans only")
 
     @property
     def perfect(self) -> bool:
@@ -81,11 +100,22 @@ class SenseParams:
         base = SenseParams()
         return [k for k in RANGE_OPTIONS if getattr(self, k) != getattr(base, k)]
 
+    @property
+    def scanning(self) -> list[str]:
+        """The scan options set away from their defaults."""
+        base = SenseParams()
+        return [k for k in SCAN_OPTIONS if getattr(self, k) != getattr(base, k)]
+
 
 def sense_params(options: dict) -> SenseParams:
-    """The perception of a run from its ``sense.*`` options (unknown or out-of-range: ConfigError)."""
-    return build(SenseParams, {k[len(PREFIX):] if k.startswith(PREFIX) else k: v for k, v in options.items()},
-                 context="sense")
+    """The perception of a run from its ``sense.*`` options (unknown or out-of-range: ConfigError;
+    a scan option without ``sense.map = scans``: ConfigError, it would change nothing)."""
+    p = build(SenseParams, {k[len(PREFIX):] if k.startswith(PREFIX) else k: v for k, v in options.items()},
+              context="sense")
+    if p.map != "scans" and p.scanning:
+        raise ConfigError(f"sense: {', '.join('sense.' + k for k in p.scanning)} shape the scans of sense.map=scans; "
+                          f"with sense.map={p.map} they change nothing")
+    return p
 
 
 class Perception:

@@ -13,6 +13,16 @@ existed (bit-identical runs). A network is seeded from the run's seed through it
 a method's random draws are the same with or without it, and the same seed loses the same
 messages.
 
+Bandwidth. With ``net.bandwidth`` [bit/s] each sender's radio sends one message at a time: a
+message of B bytes occupies it 8 B / bandwidth seconds (a broadcast is sent once, whatever the
+number of receivers), starting when it is due or when the sender's previous message has left,
+whichever is later. A message that would have to wait longer than the sender's send period is
+dropped before it is sent (its sender has a newer state to send by then); the others arrive their
+queueing and sending time later than without the limit. A message's size is its UDP/IPv4
+headers (28 B), sender id (4 B), time stamp (8 B), position and velocity (6 floats, 48 B), plus
+what the method published with it: 8 B a float of a float row, and an object's ``nbytes`` (a
+planner's trajectory: its size in planning/messages.py; an object without one counts nothing).
+
 Parameters are the run's, not a method's: ``--set net.latency=0.15`` (docs/network.md).
 """
 
@@ -28,6 +38,9 @@ from swarmnav.params import as_dict, build, param
 
 #: The run-option names of the network parameters (``net.NAME``).
 PREFIX = "net."
+#: [B] a state message's size (module docstring): UDP (8) + IPv4 (20) headers, sender id (4), time stamp
+#: (8), position and velocity (6 x 8), whatever the world's dimension (the robots fly in 3-D)
+STATE_BYTES = 28 + 4 + 8 + 6 * 8
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,6 +58,10 @@ class NetParams:
                          "0: losses independent")
     range: float = param(0.0, "m", "[0, 1000000]", "ours", "no message reaches an agent farther than this "
                          "from its sender; 0: no limit")
+    bandwidth: float = param(0.0, "bit/s", "[0, 1e12]", "ours",
+                             "each sender's radio sends at most this many bits a second, one message at a time; a "
+                             "message that would wait longer than the send period is dropped (docs/network.md); "
+                             "0: no limit")
 
     @property
     def ideal(self) -> bool:
@@ -114,6 +131,10 @@ class Network:
         self.delivered = 0
         self.lost = 0
         self.out_of_range = 0
+        self.busy = np.full(n, -np.inf)  # [s] when each sender's radio is free (net.bandwidth)
+        self.dropped = 0  # copies dropped at their sender's queue (net.bandwidth)
+        self.queued = 0.0  # [s] summed queueing + sending time of the messages sent (net.bandwidth)
+        self.queued_messages = 0
         eye = np.eye(n, dtype=bool)
         self._others = ~eye
 
@@ -123,7 +144,12 @@ class Network:
         senders = np.flatnonzero(self.next_send <= t + 1e-9)
         if senders.size:
             self.next_send[senders] += self.period * np.ceil((t + 1e-9 - self.next_send[senders]) / self.period + 1e-12)
+            wait = None
+            if p.bandwidth > 0:  # each sender's radio: queue, send, or drop (module docstring)
+                senders, wait = self._radio(t, senders)
             recv, send = np.nonzero(self._others[:, senders])  # every other agent, each sender
+            if wait is not None:
+                wait = wait[send]
             send = senders[send]
             self.sent += recv.size
             keep = np.ones(recv.size, dtype=bool)
@@ -148,6 +174,8 @@ class Network:
             delay = np.full(recv.size, p.latency)
             if p.jitter > 0:
                 delay = delay + self.rng.uniform(0.0, p.jitter, recv.size)
+            if wait is not None:
+                delay = delay + wait
             recv, send, delay = recv[keep], send[keep], delay[keep]
             if recv.size:
                 # fancy indexing copies: the message keeps the payload rows as they are when it leaves
@@ -159,6 +187,30 @@ class Network:
         for k, v in self.latest.items():
             self.data[k][own, own] = v
         return View(self.pos.copy(), self.vel.copy(), t - self.stamp, {k: v.copy() for k, v in self.data.items()})
+
+    def message_bytes(self, senders: np.ndarray) -> np.ndarray:
+        """Size [B] of the message each of ``senders`` sends now (module docstring)."""
+        size = np.full(len(senders), float(STATE_BYTES))
+        for rows in self.latest.values():
+            if rows.dtype == object:
+                size += [float(getattr(rows[s], "nbytes", 0) or 0) for s in senders]
+            else:
+                size += 8.0 * (rows[0].size if rows.ndim > 1 else 1)
+        return size
+
+    def _radio(self, t: float, senders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The bandwidth limit at time ``t`` [s] (module docstring): the senders whose message
+        goes out, and its queueing + sending time [s] each; the rest are dropped."""
+        airtime = 8.0 * self.message_bytes(senders) / self.p.bandwidth  # [s]
+        start = np.maximum(t, self.busy[senders])
+        go = start - t <= self.period + 1e-12
+        self.dropped += int((~go).sum()) * (self.n - 1)  # every copy of a dropped message
+        senders, start, airtime = senders[go], start[go], airtime[go]
+        self.busy[senders] = start + airtime
+        wait = start - t + airtime
+        self.queued += float(wait.sum())
+        self.queued_messages += len(senders)
+        return senders, wait
 
     def publish(self, payloads: dict) -> None:
         """A method's publications of this step, ``{name: values}`` with one row per agent (an
@@ -204,9 +256,13 @@ class Network:
         """Run metrics of the network: messages sent (one per receiver), the fractions delivered,
         lost and out of range."""
         sent = max(self.sent, 1)
-        return {"net_rate_hz": self.rate if self.rate > 0 else 1.0 / self.dt,
-                "net_messages": float(self.sent), "net_delivered_fraction": self.delivered / sent,
-                "net_lost_fraction": self.lost / sent, "net_out_of_range_fraction": self.out_of_range / sent}
+        out = {"net_rate_hz": self.rate if self.rate > 0 else 1.0 / self.dt,
+               "net_messages": float(self.sent), "net_delivered_fraction": self.delivered / sent,
+               "net_lost_fraction": self.lost / sent, "net_out_of_range_fraction": self.out_of_range / sent}
+        if self.p.bandwidth > 0:  # the copies dropped at the senders' queues, of those due
+            out["net_dropped_fraction"] = self.dropped / max(self.sent + self.dropped, 1)
+            out["net_queue_delay_mean"] = self.queued / max(self.queued_messages, 1)
+        return out
 
 
 def record(p: NetParams) -> dict:

@@ -99,7 +99,11 @@ def run(
     sense = sense_params({k: params.pop(k) for k in [k for k in params if k.startswith(SENSE_PREFIX)]})
     vehicle, wind = vehicle_params({k: params.pop(k) for k in [k for k in params if is_vehicle_option(k)]})
     m = registry.make(method, **params) if isinstance(method, str) else method
-    if sense.ranged and not getattr(m, "range_sensor", False):
+    scans = sense.map == "scans"
+    if scans and not getattr(m, "map_sensor", False):
+        raise ConfigError(f"{m.name} cannot build its map from scans (it reads the obstacles from the world), so "
+                          f"sense.map=scans cannot apply; methods that can: {', '.join(_mapping()) or 'none'}")
+    if sense.ranged and not getattr(m, "range_sensor", False) and not scans:
         raise ConfigError(f"{m.name} has no range sensor (it reads the obstacles from the world), so "
                           f"{', '.join('sense.' + k for k in sense.ranged)} cannot apply; methods with one: "
                           f"{', '.join(_ranged()) or 'none'}")
@@ -468,6 +472,11 @@ def _progress(progress, steps):
 def _ranged() -> list[str]:
     """Registered methods that read a range sensor through ``Observation.scan`` (a class attribute)."""
     return [n for n in registry.names() if getattr(registry.spec(n).factory, "range_sensor", False)]
+
+
+def _mapping() -> list[str]:
+    """Registered methods that can build their maps from their own scans (``sense.map = scans``)."""
+    return [n for n in registry.names() if getattr(registry.spec(n).factory, "map_sensor", False)]
 
 
 def _networked() -> list[str]:

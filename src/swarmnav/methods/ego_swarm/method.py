@@ -50,6 +50,7 @@ from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard, sample_broadcasts
 from swarmnav.planning.plan_log import PlanLog, sample_rows
+from swarmnav.planning.scanned import scanner
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
 from swarmnav.planning.schedule import plan_time_summary
@@ -82,6 +83,7 @@ class EgoSwarm:
     dims = (2, 3)
     networked = True  # reads the others' plans only through what it received (module docstring)
     periodic = False  # its plans cross the world's edge, where a periodic box wraps: the rollout refuses one
+    map_sensor = True  # can build its maps from its own scans (sense.map = scans; docs/sensing.md)
 
     def __init__(self, **overrides: Any):
         p = build(EgoSwarmParams, overrides, context="ego-swarm")
@@ -103,6 +105,7 @@ class EgoSwarm:
         check_map_bytes("ego-swarm", f"a {format_extent(scenario.lower, scenario.upper)} world at "
                         f"{p.grid_resolution:g} m resolution", need, p.max_map_bytes, "max_map_bytes",
                         "use a coarser grid_resolution or a smaller world")
+        self._map_need = need
         self.maps = OccupancyMaps(scenario.solid_obstacles, scenario.bounds, n, p.grid_resolution, p.inflation,
                                   p.sensing_range)
         self._counts = np.array(self.maps.shape[::-1], dtype=np.int64)
@@ -131,6 +134,9 @@ class EgoSwarm:
         self._plan_ms: list[float] = []
         self._steps = 0
         self._log_plans = PlanLog(dim)
+        self._geom = scenario.geometry
+        self._scanner = None  # maps from scans (sense.map = scans): made at the first step
+        self._fresh = np.zeros(n, dtype=bool)  # robots whose scanned map gained cells since the last check
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.params
@@ -138,6 +144,11 @@ class EgoSwarm:
         k = obs.step
         n = x.shape[0]
         heard = self._heard(obs)
+        if self._steps == 0 and obs.sensing is not None:
+            self._scanner = scanner(obs, self._geom, self.maps, p.sensing_range, p.dt, budget=(
+                "ego-swarm", self._map_need, p.max_map_bytes, "max_map_bytes"))
+        if self._scanner is not None:  # each robot's map from its own scans
+            self._fresh |= self._scanner.sweep(obs, x)
         if self._steps == 0:
             for r in range(n):
                 self.maps.observe(r, x[r])
@@ -171,6 +182,7 @@ class EgoSwarm:
             "ego_replans_period": float(s["trig_period"]),
             "ego_replans_end": float(s["trig_end"]),
             **self._log.summary(self._steps * self.params.dt),
+            **(self._scanner.summary() if self._scanner is not None else {}),
         }
 
     def timings(self) -> dict[str, float]:
@@ -233,7 +245,13 @@ class EgoSwarm:
         trig = np.zeros(n, dtype=bool)
         # (a) newly seen obstacles on the rest of the plan
         m = self.maps
-        if len(m.footprints):
+        if m.scanned:  # maps from scans: a robot whose map gained cells checks the rest of its plan
+            for r in np.flatnonzero(self._fresh):
+                if self._collides(int(r), k) >= 0:
+                    trig[r] = True
+                    self._stats["trig_obstacle"] += 1
+            self._fresh[:] = False
+        elif len(m.footprints):
             d = np.maximum(np.maximum(m.bbox_lo[None] - x[:, None], x[:, None] - m.bbox_hi[None]), 0.0)
             near = np.einsum("nod,nod->no", d, d) <= p.sensing_range ** 2
             fresh = np.flatnonzero(np.any(near & ~m.known, axis=1))

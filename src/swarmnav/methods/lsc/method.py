@@ -53,6 +53,7 @@ from swarmnav.planning.goals import goal_slots
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import CommLog, TrajectoryBoard
 from swarmnav.planning.plan_log import PlanLog, sample_rows
+from swarmnav.planning.scanned import scanner
 from swarmnav.planning.tracker import track
 from swarmnav.world.scenario import Scenario
 from swarmnav.planning.schedule import plan_time_summary
@@ -76,6 +77,7 @@ class LscMethod:
     dims = (2, 3)
     networked = True  # reads the others' plans only through what it received (module docstring)
     periodic = False  # a periodic box has no obstacles to plan around nor a goal: refused in one line
+    map_sensor = True  # can build its maps from its own scans (sense.map = scans; docs/sensing.md)
 
     def __init__(self, **overrides: Any):
         p = build(LscParams, overrides, context="lsc")
@@ -90,9 +92,9 @@ class LscMethod:
               rng: np.random.Generator) -> None:
         p = self.params
         n, dim = scenario.n, scenario.dim
+        self._map_need = grid_cells(scenario.bounds, p.grid_resolution) * bytes_per_cell(dim, n, False, True)
         check_map_bytes("lsc", f"a {format_extent(scenario.lower, scenario.upper)} world at "
-                        f"{p.grid_resolution:g} m", grid_cells(scenario.bounds, p.grid_resolution)
-                        * bytes_per_cell(dim, n, False, True), _MAX_MAP_BYTES, "grid_resolution",
+                        f"{p.grid_resolution:g} m", self._map_need, _MAX_MAP_BYTES, "grid_resolution",
                         "use a coarser grid_resolution")
         self.dim = dim
         self.body = scenario.rules.body_radius
@@ -129,11 +131,18 @@ class LscMethod:
                       "search_failures": 0, "idle": 0, "backoffs": 0}
         self._plan_ms: list[float] = []
         self._steps = 0
+        self._geom = scenario.geometry
+        self._scanner = None  # maps from scans (sense.map = scans): made at the first step
 
     def act(self, obs: Observation, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         p = self.params
         k = obs.step
         x, v = obs.positions, obs.velocities
+        if self._steps == 0 and obs.sensing is not None:
+            self._scanner = scanner(obs, self._geom, self.maps, p.sensing_range, p.dt, budget=(
+                "lsc", self._map_need, _MAX_MAP_BYTES, "grid_resolution"))
+        if self._scanner is not None:  # each robot's map from its own scans
+            self._scanner.sweep(obs, x)
         if k % self.every == 0:
             self._replan(k, x, obs)
         self._steps += 1
@@ -153,6 +162,7 @@ class LscMethod:
             "lsc_iterations_mean": s["iterations"] / max(s["plans"], 1),
             "lsc_planes_mean": s["planes"] / max(s["plans"], 1),
             **self.comm.summary(self._steps * self.params.dt),
+            **(self._scanner.summary() if self._scanner is not None else {}),
         }
 
     def plans(self) -> dict[str, np.ndarray]:

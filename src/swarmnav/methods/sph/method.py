@@ -46,6 +46,7 @@ from swarmnav.planning.bspline import SplineCosts, optimize
 from swarmnav.planning.maps import OccupancyMaps, bytes_per_cell, grid_cells, resample
 from swarmnav.planning.messages import POSITION_BYTES, CommLog
 from swarmnav.planning.plan_log import PlanLog, sample_times
+from swarmnav.planning.scanned import scanner
 from swarmnav.planning.schedule import MAX_PLAN_STEPS, ReplanSchedule, plan_time_summary
 from swarmnav.planning.tracker import References, track
 from swarmnav.sensing.esdf import Esdf, grid_nodes
@@ -108,6 +109,7 @@ class Sph:
     name = "sph"
     dims = (2, 3)  # flies planar and 3-D scenes natively: every array is (N, d), d from the scene
     networked = True  # reads the others only through Observation.known (docs/network.md)
+    map_sensor = True  # can build its maps from its own scans (sense.map = scans; docs/sensing.md)
 
     def __init__(self, **overrides: Any):
         p = build(SphParams, overrides, context="sph")
@@ -173,6 +175,7 @@ class Sph:
         self._plan_ms: list[float] = []
         self._coord_ms: list[float] = []
         self._log_plans = PlanLog(scenario.dim)
+        self._scanner = None  # maps from scans (sense.map = scans): made at the first step
         self.close()  # a pool of an earlier run that was not closed
         if p.threads > 1:  # threads - 1 helpers: the stepping thread plans too
             self._pool = ThreadPoolExecutor(p.threads - 1, thread_name_prefix="sph-plan")
@@ -190,6 +193,14 @@ class Sph:
         n = x.shape[0]
         t0 = time.perf_counter()
         view = obs.view  # None: the ideal network, every robot's true state (docs/network.md)
+        if obs.step == 0 and obs.sensing is not None:
+            body = self.scenario.rules.body_radius  # the field is read up to the widest band of a term
+            reach = max(p.d_thr, p.env_safe + p.env_inflation, p.start_clearance, body + p.pair_margin,
+                        p.yield_clearance if p.yield_range > 0 else 0.0)
+            self._scanner = scanner(obs, self.geom, self.maps, p.R, p.dt, reach,
+                                    ("sph", map_bytes(self.scenario, p), p.max_map_bytes, "max_map_bytes"))
+        if self._scanner is not None:  # each robot's map and distance field from its own scans
+            self._scanner.sweep(obs, x)
         # Algorithm 2: raycast visibility, sub-swarms, split / merge
         if view is None:
             i, j, vis = visible_pairs(self.geom, x, p.R)
@@ -214,7 +225,7 @@ class Sph:
             _, _, parts = sph_forces(x, v, vi, vj, **terms)
         else:
             parts = directed_forces(x, v, kx, kv, vi, vj, **terms)
-        d, grad = self.esdf.query(x)
+        d, grad = self._field(x)
         push = parts["density"] + parts["repulsive"]
         if p.crowd_guard:  # ours: the swarm's push may not press a robot in the band into the obstacle
             push = band_guard(push, d, grad, p.d_thr)
@@ -306,6 +317,7 @@ class Sph:
             **({"sph_pair_guarded_fraction": self._pair_guarded / max(self._steps * len(self._hold), 1),
                 "sph_pair_infeasible_steps": float(self._pair_infeasible)} if self.flown.pair_guard else {}),
             **self._comm.summary(self._steps * self.params.dt),
+            **(self._scanner.summary() if self._scanner is not None else {}),
         }
 
     def timings(self) -> dict[str, float]:
@@ -322,6 +334,18 @@ class Sph:
         return self._log_plans.arrays()
 
     # ------------------------------------------------------------------ planning
+
+    def _field(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distance [m] and gradient of each robot's obstacle field at its row of ``x`` (N, d): the
+        world's ESDF, or (maps from scans) each robot's own field from its scans."""
+        if self._scanner is not None:
+            return self.maps.query(x)
+        return self.esdf.query(x)
+
+    def _esdf_of(self, r: int) -> Esdf:
+        """The distance field robot ``r``'s spline is optimised in (eq. 10): the world's ESDF, or
+        (maps from scans) its own."""
+        return self.esdf if self._scanner is None else self.maps.esdf(r)
 
     def _reference(self, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Reference samples ``tau_j = t_k + j dt`` (eq. 13) for the current step."""
@@ -349,7 +373,7 @@ class Sph:
                 if p.reset_velocity:  # ours: restart from the measured velocity as well
                     start_v[off] = v[off]
             if p.start_clearance > 0:  # ours: a reference at an obstacle is no start (docs: A start at an obstacle)
-                bad = self.esdf.query(start_q)[0] < p.start_clearance
+                bad = self._field(start_q)[0] < p.start_clearance
                 start_q[bad], start_v[bad], start_a[bad] = x[bad], v[bad], 0.0
         plans = []
         near = None
@@ -461,12 +485,13 @@ class Sph:
             end_v = self._plan_v * tangent / max(np.linalg.norm(tangent), 1e-9)
         end = (pts[-1], end_v, np.zeros_like(q))
         guide = self._guide(pts, reaches_end)
-        plan = optimize((q, v, a), end, guide, self._dt_knot, self.esdf, self._costs, p.max_iter)
+        esdf = self._esdf_of(r)
+        plan = optimize((q, v, a), end, guide, self._dt_knot, esdf, self._costs, p.max_iter)
         iterations = plan.iterations
         again = None
         if p.retime > 0 and len(guide):
             again = retimed(plan, (q, v, a), end, pts, p.retime, p.ctrl_spacing,
-                            lambda curve: self._guide(curve, reaches_end), self._dt_knot, self.esdf, self._costs,
+                            lambda curve: self._guide(curve, reaches_end), self._dt_knot, esdf, self._costs,
                             p.max_iter)
             if again is not None:
                 iterations += again.iterations
