@@ -286,11 +286,12 @@ class Sph:
             body = self.scenario.rules.body_radius
             safe = 2.0 * body + p.pair_margin
             walls = None
-            if p.pair_obstacles and x.shape[1] == 2:  # a row for every trunk near a robot, exact
+            if p.pair_obstacles and x.shape[1] == 2 and self._scanner is None:
+                # a row for every obstacle near a robot, from the known map (the world's geometry)
                 robots, gap, toward = surfaces_within(self.geom, x, pair_reach(body + p.pair_margin, p.pair_decel,
                                                                                p.pair_gamma, p.a_max, p.v_max))
                 walls = (gap, -toward, body + p.pair_margin, robots)
-            elif p.pair_obstacles:  # 3-D: the nearest obstacle, from the ESDF
+            elif p.pair_obstacles:  # 3-D, or maps from scans: the nearest obstacle, from the robot's field
                 walls = (d, grad, body + p.pair_margin)
             bound = bound_rows(x.shape[1], p.a_max, p.clip) if p.pair_bound else None
             if view is None:

@@ -138,7 +138,7 @@ class SphParams:
         "pair_guard: how fast a pair may use up its braking margin (dh/dt >= -pair_gamma h)")
     pair_obstacles: bool = param(True, "", None, "ours (Wang, Ames & Egerstedt, T-RO 2017, obstacles as static agents)",
         "pair_guard: each robot's QP also keeps the barrier against every obstacle near it (2-D: one row "
-        "per obstacle from the exact geometry; 3-D: the nearest, from the ESDF; stop body radius + "
+        "per obstacle of the known map; 3-D or sense.map=scans: the nearest, from the robot's field; stop body radius + "
         "pair_margin from its surface, the robot keeping the whole bound), so that the command the guard "
         "moves never drives a robot into a trunk")
     pair_bound: bool = param(False, "", None, "ours",
