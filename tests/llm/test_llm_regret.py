@@ -138,7 +138,12 @@ def test_labels_are_recomputed_from_the_run_and_a_changed_state_is_refused(tmp_p
     rows = probe_run("default_corridor", 1, steps=STEPS, params={}, select=pick)
     assert [r["k"] for r in rows] == [50, 98, 110] and rows[1]["rule"] == "split"
     bare = [{k: v for k, v in r.items() if k != "oracle"} for r in rows]
-    assert label_states(bare) == rows  # the same run, the same lookahead: the same labels
+    src, out = tmp_path / "bare.jsonl", tmp_path / "labelled.jsonl"
+    src.write_text("".join(json.dumps(r) + "\n" for r in bare))
+    assert main(["llm", "label", "--states", str(src), "--out", str(out)]) == 0
+    # the same run, the same lookahead: the same labels
+    assert [json.loads(line) for line in out.read_text().splitlines()] == rows
+    assert main(["llm", "label", "--states", str(src)]) == 2  # where to write is not optional
     bad = [dict(r) for r in bare]
     bad[1] = {**bad[1], "state": {**bad[1]["state"], "w_max": bad[1]["state"]["w_max"] + 1.0}}
     with pytest.raises(ConfigError, match="differs from the recorded one"):
