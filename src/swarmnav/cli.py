@@ -340,6 +340,8 @@ def _cmd_llm(args) -> int:
     from swarmnav.llm.config import LlmParams
     from swarmnav.params import build
 
+    if args.action == "label":
+        return _llm_label(args)
     params = _llm_sets(args, _parse_sets(args.set))
     params.setdefault("decision", "ollama")
     if args.action == "check":
@@ -347,13 +349,39 @@ def _cmd_llm(args) -> int:
     from swarmnav.llm import bench
 
     p = build(LlmParams, params, context="llm bench")
-    states = bench.load_states(args.states)[: args.limit or None]
+    states = bench.load_states(args.states)
+    if args.choice:  # the states where an answer can change the executed action
+        states = [r for r in states if len(r["feasible"]) > 1]
+    states = states[: args.limit or None]
     if args.transcript:
         with open(args.transcript, "w", encoding="utf-8") as sink:
             res = bench.bench(p, states, progress=sys.stderr, sink=sink)
     else:
         res = bench.bench(p, states, progress=sys.stderr)
     bench.report(res, sys.stdout)
+    if args.summary:
+        res.write_summary(args.summary)
+        print(f"  wrote {args.summary}")
+    return 0
+
+
+def _llm_label(args) -> int:
+    """``swarmnav llm label --states IN --out OUT``: the oracle's labels of recorded states."""
+    import json
+
+    from swarmnav.llm import bench
+    from swarmnav.llm.labels import label_states
+
+    if not args.out:
+        raise ConfigError("llm label needs --out FILE (the labelled states)")
+    rows = bench.load_states(args.states)[: args.limit or None]
+    rows = label_states([{k: v for k, v in r.items() if k != "oracle"} for r in rows], progress=sys.stderr)
+    try:
+        with open(args.out, "w", encoding="utf-8") as f:
+            f.writelines(json.dumps(r, allow_nan=False) + "\n" for r in rows)
+    except OSError as e:
+        raise ConfigError(f"--out {args.out}: cannot write it ({e.strerror})") from None
+    print(f"labelled {len(rows)} states, wrote {args.out}")
     return 0
 
 
@@ -581,11 +609,16 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=_cmd_merge)
 
     s = sub.add_parser("llm", help="LLM decision back ends: 'llm check' asks one a sample question, "
-                       "'llm bench' scores one on recorded decision states (docs/llm.md)")
-    s.add_argument("action", choices=["check", "bench"])
-    s.add_argument("--states", metavar="FILE", help="bench: decision states (.jsonl; default: the shipped set)")
-    s.add_argument("--limit", type=int, default=0, help="bench: only the first N states")
+                       "'llm bench' scores one on recorded decision states against the rule and the oracle, "
+                       "'llm label' labels recorded states with the oracle's lookahead (docs/llm-bench.md)")
+    s.add_argument("action", choices=["check", "bench", "label"])
+    s.add_argument("--states", metavar="FILE", help="bench, label: decision states (.jsonl; default: the shipped set)")
+    s.add_argument("--limit", type=int, default=0, help="bench, label: only the first N states")
     s.add_argument("--transcript", metavar="FILE", help="bench: write the answers (what --decision replay reads)")
+    s.add_argument("--choice", action="store_true",
+                   help="bench: only the states with two or more feasible actions (where an answer can matter)")
+    s.add_argument("--summary", metavar="FILE", help="bench: write the scores per scene and build (.json, else CSV)")
+    s.add_argument("--out", metavar="FILE", help="label: the labelled states (.jsonl)")
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="an llm_* parameter, e.g. llm_threads=1")
     _add_llm_flags(s)
     s.set_defaults(fn=_cmd_llm)

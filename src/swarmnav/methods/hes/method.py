@@ -84,6 +84,11 @@ class Hes:
         self._source_override = source
         return self
 
+    def rule_policy(self) -> RulePolicy:
+        """A fresh rule policy a_k^rule (Section 3.2) as this build decides by it (``core.merge_rule``)."""
+        p = self.params
+        return RulePolicy(p.paper.d_merge, p.paper.t_cd, merge=p.core.merge_rule)
+
     def part(self, name: str) -> Part | None:
         """The part of ours called ``name`` (``passage``, ``stall``, ``trail``, ``hold``, ``commit``,
         ``wall``, ``guard``, ``ring_yield``, ``projection``), or None when it is switched off."""
@@ -101,7 +106,7 @@ class Hes:
         n = len(positions)
         self.n = n
         self.arange = np.arange(n)  # agent indices (compared with per-agent indices every step)
-        rule = RulePolicy(p.paper.d_merge, p.paper.t_cd, merge=p.core.merge_rule)
+        rule = self.rule_policy()
         if self._source_override is not None:
             self.source: DecisionSource = self._source_override
         elif p.decision == "oracle":

@@ -19,6 +19,7 @@ from __future__ import annotations
 import copy
 import math
 import time
+from dataclasses import dataclass
 from typing import Any, Callable
 
 from swarmnav.errors import ConfigError
@@ -68,11 +69,14 @@ class OracleSource:
         """In a copied run: propose ``action`` at step ``k``; the rule decides at every other step."""
         self.forced = (int(k), action)
 
+    #: what a copy of the source does not take (a copy decides by the rule or a forced action)
+    _not_copied: tuple[str, ...] = ("lookahead",)
+
     def __deepcopy__(self, memo: dict) -> OracleSource:
-        new = OracleSource.__new__(OracleSource)
+        new = type(self).__new__(type(self))
         memo[id(self)] = new
         for key, value in self.__dict__.items():
-            setattr(new, key, None if key == "lookahead" else copy.deepcopy(value, memo))
+            setattr(new, key, None if key in self._not_copied else copy.deepcopy(value, memo))
         return new
 
     def propose(self, z: DecisionState, step: int) -> Proposal:
@@ -123,3 +127,64 @@ class OracleSource:
         d = self.decisions
         return {"oracle_ms_per_decision": 1e3 * self.wall / d if d else math.nan, "oracle_s": self.wall,
                 "oracle_copy_s": float(getattr(self.lookahead, "copy_wall", 0.0))}
+
+
+@dataclass(frozen=True, slots=True)
+class ProbePoint:
+    """One decision point a :class:`OracleProbe` flew ahead.
+
+    Attributes:
+        k: step; z: z(k) as the planner saw it; rule: the rule's proposal a_k^rule;
+        feasible: the actions Pi_feas lets through (A_STR order);
+        J: objective [m] of each feasible action (:func:`objective`);
+        outcomes: the lookahead outcome of each feasible action (``swarmnav.sim.flight.Outcome``).
+    """
+
+    k: int
+    z: DecisionState
+    rule: Proposal
+    feasible: tuple[str, ...]
+    J: dict[str, float]
+    outcomes: dict[str, Any]
+
+
+class OracleProbe(OracleSource):
+    """A rule run that flies every feasible action ahead at the steps ``select`` picks, and
+    keeps the objectives: the oracle's labels of the decision benchmark (docs/llm-bench.md).
+
+    It always returns the rule's proposal, so the run is the rule run bit for bit (the flights
+    are in copies). At a selected step it flies each action of the feasible set -- keep alone
+    too, where nothing else is feasible -- for ``oracle_horizon`` seconds with the rule deciding
+    afterwards, exactly as :class:`OracleSource` does at a decision point, and appends a
+    :class:`ProbePoint` to ``points``.
+
+    Args:
+        rule, params: as :class:`OracleSource`.
+        select: ``select(step, z, rule_action, feasible) -> bool``, the steps to fly ahead.
+    """
+
+    _not_copied = ("lookahead", "select", "points")
+
+    def __init__(self, rule: RulePolicy, params: Any, select: Callable[[int, DecisionState, str, tuple], bool]):
+        super().__init__(rule, params)
+        self.select = select
+        self.points: list[ProbePoint] = []
+
+    def propose(self, z: DecisionState, step: int) -> Proposal:
+        r = self.rule.propose(z, step)
+        if self.forced is not None:  # a copy flying one lookahead
+            return Proposal(self.forced[1], "oracle lookahead: forced action", "oracle") if self.forced[0] == step else r
+        if self.lookahead is None:
+            raise ConfigError("an oracle probe flies copies of the run: fly it with swarmnav.run")
+        feasible = tuple(a for a in A_STR if project(a, z) == a)
+        if self.select(step, z, r.action, feasible):
+            t0 = time.perf_counter()
+            J, outcomes = {}, {}
+            for a in feasible:
+                o = self.lookahead(a, step, self.horizon_steps)
+                self.flown += o.steps
+                J[a], outcomes[a] = objective(o, self.params), o
+            self.wall += time.perf_counter() - t0
+            self.decisions += 1
+            self.points.append(ProbePoint(int(step), z, r, feasible, J, outcomes))
+        return r
