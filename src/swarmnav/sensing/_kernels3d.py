@@ -119,55 +119,35 @@ def _cull2(bound):
     return b * b
 
 
-@njit(cache=True, inline="always")
-def obstacle_sd(k, px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r):
-    """Exact signed distance [m] of obstacle ``k`` (prisms, then cylinders, then spheres) at the
-    point, and what :func:`obstacle_offset` needs for its direction: ``(sd, d2, qx, qy)``."""
-    n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
-    if k < n_poly:
-        d2, qx, qy = _poly_sd2(px, py, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1])
-        return _extrude_sd(d2, pz, poly_z[k, 0], poly_z[k, 1]), d2, qx, qy
-    if k < n_poly + n_circ:
-        c = k - n_poly
-        cx = circ_c[c, 0] - px
-        cy = circ_c[c, 1] - py
-        dc = math.sqrt(cx * cx + cy * cy)
-        d2 = dc - circ_r[c]
-        # offset to the nearest rim point is u * d2, u the unit vector toward the axis (on the
-        # axis every rim point is nearest: pick +x)
-        ux = cx / dc if dc > 0.0 else -1.0
-        uy = cy / dc if dc > 0.0 else 0.0
-        return _extrude_sd(d2, pz, circ_z[c, 0], circ_z[c, 1]), d2, ux * d2, uy * d2
-    b = k - n_poly - n_circ
-    cx = sph_c[b, 0] - px
-    cy = sph_c[b, 1] - py
-    cz = sph_c[b, 2] - pz
-    dc = math.sqrt(cx * cx + cy * cy + cz * cz)
-    return dc - sph_r[b], 0.0, 0.0, 0.0
+@njit(cache=True)
+def cylinder_sd(px, py, pz, cx, cy, rc, z0, z1):
+    """Exact signed distance [m] of a vertical cylinder (centre (cx, cy), radius rc, over [z0, z1])
+    and its footprint values for :func:`_extrude_offset`: ``(sd, d2, qx, qy)``."""
+    cx = cx - px
+    cy = cy - py
+    dc = math.sqrt(cx * cx + cy * cy)
+    d2 = dc - rc
+    # offset to the nearest rim point is u * d2, u the unit vector toward the axis (on the axis
+    # every rim point is nearest: pick +x)
+    ux = cx / dc if dc > 0.0 else -1.0
+    uy = cy / dc if dc > 0.0 else 0.0
+    return _extrude_sd(d2, pz, z0, z1), d2, ux * d2, uy * d2
 
 
-@njit(cache=True, inline="always")
-def obstacle_offset(k, px, py, pz, sd, d2, qx, qy, poly_offsets, circ_r, poly_z, circ_z, sph_c):
-    """Offset (3 numbers) from the point to the nearest boundary point of obstacle ``k``, from
-    :func:`obstacle_sd`'s ``(sd, d2, qx, qy)`` there."""
-    n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
-    if k < n_poly:
-        return _extrude_offset(d2, qx, qy, pz, poly_z[k, 0], poly_z[k, 1])
-    if k < n_poly + n_circ:
-        return _extrude_offset(d2, qx, qy, pz, circ_z[k - n_poly, 0], circ_z[k - n_poly, 1])
-    b = k - n_poly - n_circ
-    cx = sph_c[b, 0] - px
-    cy = sph_c[b, 1] - py
-    cz = sph_c[b, 2] - pz
+@njit(cache=True)
+def sphere_sd(px, py, pz, sx, sy, sz, rs):
+    """Exact signed distance [m] of a sphere and the offset (3 numbers) to its nearest surface point."""
+    cx = sx - px
+    cy = sy - py
+    cz = sz - pz
     dc = math.sqrt(cx * cx + cy * cy + cz * cz)
+    sd = dc - rs
     if dc > 0.0:
-        return cx / dc * sd, cy / dc * sd, cz / dc * sd
-    return -sd, 0.0, 0.0
+        return sd, cx / dc * sd, cy / dc * sd, cz / dc * sd
+    return sd, -sd, 0.0, 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def unit_direction(best, vx, vy, vz, out_dir, i):
     """``out_dir[i]`` <- the offset (vx, vy, vz) made unit (zeros at distance 0 or inf)."""
     norm = math.sqrt(vx * vx + vy * vy + vz * vz)
@@ -187,7 +167,9 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
     """Signed distance [m] (minimum of the per-obstacle exact signed distances) and unit
     direction toward the nearest boundary point (outward inside, zeros at distance 0); where
     obstacles tie, the first of them (prisms, cylinders, spheres, in order) gives the direction."""
-    n_obs = poly_offsets.shape[0] - 1 + circ_r.shape[0] + sph_r.shape[0]
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
+    n_sph = sph_r.shape[0]
     for i in range(points.shape[0]):
         px = points[i, 0]
         py = points[i, 1]
@@ -196,18 +178,35 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
         vx = 0.0
         vy = 0.0
         vz = 0.0
-        for k in range(n_obs):
+        for p in range(n_poly):
             # Outside its box an obstacle is farther than the box: skip it when that is worse
             # than the best so far (every containing obstacle lies inside its box).
-            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, k) > _cull2(best):
+            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, p) > _cull2(best):
                 continue
-            sd, d2, qx, qy = obstacle_sd(k, px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
-                                         sph_c, sph_r)
+            d2, qx, qy = _poly_sd2(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1])
+            sd = _extrude_sd(d2, pz, poly_z[p, 0], poly_z[p, 1])
             if sd < best:
                 best = sd
                 if want_dir:
-                    vx, vy, vz = obstacle_offset(k, px, py, pz, sd, d2, qx, qy, poly_offsets, circ_r, poly_z, circ_z,
-                                                 sph_c)
+                    vx, vy, vz = _extrude_offset(d2, qx, qy, pz, poly_z[p, 0], poly_z[p, 1])
+        for c in range(n_circ):
+            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + c) > _cull2(best):
+                continue
+            sd, d2, qx, qy = cylinder_sd(px, py, pz, circ_c[c, 0], circ_c[c, 1], circ_r[c], circ_z[c, 0], circ_z[c, 1])
+            if sd < best:
+                best = sd
+                if want_dir:
+                    vx, vy, vz = _extrude_offset(d2, qx, qy, pz, circ_z[c, 0], circ_z[c, 1])
+        for b in range(n_sph):
+            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + n_circ + b) > _cull2(best):
+                continue
+            sd, ox, oy, oz = sphere_sd(px, py, pz, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2], sph_r[b])
+            if sd < best:
+                best = sd
+                if want_dir:
+                    vx = ox
+                    vy = oy
+                    vz = oz
         out_d[i] = best
         if want_dir:
             unit_direction(best, vx, vy, vz, out_dir, i)
@@ -218,39 +217,49 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
 # ---------------------------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
-def obstacle_contains(k, px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
-                      bbox_lo, bbox_hi):
-    """True if the point is inside or on the boundary of obstacle ``k``."""
-    n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
-    if k < n_poly:
-        if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, k) > 0.0:
-            return False
-        if pz < poly_z[k, 0] or pz > poly_z[k, 1]:
-            return False
-        return _polygon_status(px, py, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1]) != OUTSIDE
-    if k < n_poly + n_circ:
-        c = k - n_poly
-        if pz < circ_z[c, 0] or pz > circ_z[c, 1]:
-            return False
-        dx = px - circ_c[c, 0]
-        dy = py - circ_c[c, 1]
-        return dx * dx + dy * dy <= circ_r[c] * circ_r[c]
-    b = k - n_poly - n_circ
-    dx = px - sph_c[b, 0]
-    dy = py - sph_c[b, 1]
-    dz = pz - sph_c[b, 2]
-    return dx * dx + dy * dy + dz * dz <= sph_r[b] * sph_r[b]
+@njit(cache=True)
+def prism_contains(px, py, pz, seg_a, seg_b, k0, k1, z0, z1):
+    """True if the point is inside or on the prism with footprint edges ``k0:k1`` over [z0, z1]
+    (the caller has checked its bounding box)."""
+    if pz < z0 or pz > z1:
+        return False
+    return _polygon_status(px, py, seg_a, seg_b, k0, k1) != OUTSIDE
+
+
+@njit(cache=True)
+def cylinder_contains(px, py, pz, cx, cy, rc, z0, z1):
+    """True if the point is inside or on the vertical cylinder."""
+    if pz < z0 or pz > z1:
+        return False
+    dx = px - cx
+    dy = py - cy
+    return dx * dx + dy * dy <= rc * rc
+
+
+@njit(cache=True)
+def sphere_contains(px, py, pz, sx, sy, sz, rs):
+    """True if the point is inside or on the sphere."""
+    dx = px - sx
+    dy = py - sy
+    dz = pz - sz
+    return dx * dx + dy * dy + dz * dz <= rs * rs
 
 
 @njit(cache=True)
 def _in_collision3d(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
                     bbox_lo, bbox_hi):
     """True if the point is inside or on the boundary of any obstacle."""
-    for k in range(poly_offsets.shape[0] - 1 + circ_r.shape[0] + sph_r.shape[0]):
-        if obstacle_contains(k, px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
-                             bbox_lo, bbox_hi):
+    n_poly = poly_offsets.shape[0] - 1
+    for p in range(n_poly):
+        if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, p) > 0.0:
+            continue
+        if prism_contains(px, py, pz, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1], poly_z[p, 0], poly_z[p, 1]):
+            return True
+    for c in range(circ_r.shape[0]):
+        if cylinder_contains(px, py, pz, circ_c[c, 0], circ_c[c, 1], circ_r[c], circ_z[c, 0], circ_z[c, 1]):
+            return True
+    for b in range(sph_r.shape[0]):
+        if sphere_contains(px, py, pz, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2], sph_r[b]):
             return True
     return False
 
@@ -294,34 +303,35 @@ def _point_on(t, p0, p1, e):
     return p0 + t * e
 
 
-@njit(cache=True, inline="always")
-def obstacle_meets_segment(k, p0x, p0y, p0z, p1x, p1y, p1z, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z,
-                           circ_z, sph_c, sph_r):
-    """True if the closed segment p0-p1 meets obstacle ``k`` (the caller culls on its box)."""
-    n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
+@njit(cache=True)
+def extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, z0, z1, seg_a, seg_b, k0, k1, cx, cy, rc):
+    """True if the closed segment meets the footprint extruded over [z0, z1]: the polygon with edges
+    ``k0:k1`` if ``k1 > k0``, else the disc (cx, cy, rc). The part of the segment in the slab is
+    clipped and tested in the plane."""
     ex = p1x - p0x
     ey = p1y - p0y
     ez = p1z - p0z
-    if k < n_poly + n_circ:
-        if k < n_poly:
-            t0, t1 = _slab_clip(p0z, ez, poly_z[k, 0], poly_z[k, 1])
-        else:
-            t0, t1 = _slab_clip(p0z, ez, circ_z[k - n_poly, 0], circ_z[k - n_poly, 1])
-        if t0 > t1:
-            return False
-        ax = _point_on(t0, p0x, p1x, ex)
-        ay = _point_on(t0, p0y, p1y, ey)
-        bx = _point_on(t1, p0x, p1x, ex)
-        by = _point_on(t1, p0y, p1y, ey)
-        if k < n_poly:
-            return segment_meets_polygon(ax, ay, bx, by, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1])
-        c = k - n_poly
-        return segment_meets_disc(ax, ay, bx, by, circ_c[c, 0], circ_c[c, 1], circ_r[c])
-    b = k - n_poly - n_circ
-    wx = sph_c[b, 0] - p0x
-    wy = sph_c[b, 1] - p0y
-    wz = sph_c[b, 2] - p0z
+    t0, t1 = _slab_clip(p0z, ez, z0, z1)
+    if t0 > t1:
+        return False
+    ax = _point_on(t0, p0x, p1x, ex)
+    ay = _point_on(t0, p0y, p1y, ey)
+    bx = _point_on(t1, p0x, p1x, ex)
+    by = _point_on(t1, p0y, p1y, ey)
+    if k1 > k0:
+        return segment_meets_polygon(ax, ay, bx, by, seg_a, seg_b, k0, k1)
+    return segment_meets_disc(ax, ay, bx, by, cx, cy, rc)
+
+
+@njit(cache=True)
+def sphere_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, sx, sy, sz, rs):
+    """True if the closed segment's nearest point to the sphere's centre is within its radius."""
+    ex = p1x - p0x
+    ey = p1y - p0y
+    ez = p1z - p0z
+    wx = sx - p0x
+    wy = sy - p0y
+    wz = sz - p0z
     ee = ex * ex + ey * ey + ez * ez
     s = 0.0
     if ee > 0.0:
@@ -329,10 +339,10 @@ def obstacle_meets_segment(k, p0x, p0y, p0z, p1x, p1y, p1z, seg_a, seg_b, poly_o
     dx = wx - s * ex
     dy = wy - s * ey
     dz = wz - s * ez
-    return dx * dx + dy * dy + dz * dz <= sph_r[b] * sph_r[b]
+    return dx * dx + dy * dy + dz * dz <= rs * rs
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def box_misses(lox, hix, loy, hiy, loz, hiz, bbox_lo, bbox_hi, k):
     """True if the box [lo, hi] and bounding box ``k`` do not overlap."""
     return (hix < bbox_lo[k, 0] or lox > bbox_hi[k, 0] or hiy < bbox_lo[k, 1] or loy > bbox_hi[k, 1]
@@ -348,7 +358,9 @@ def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
     parameter range) meets the footprint in the plane; a sphere iff the segment's nearest point
     to the centre is within the radius.
     """
-    n_obs = poly_offsets.shape[0] - 1 + circ_r.shape[0] + sph_r.shape[0]
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
+    n_obs = n_poly + n_circ + sph_r.shape[0]
     for m in range(p.shape[0]):
         p0x = p[m, 0]
         p0y = p[m, 1]
@@ -366,9 +378,18 @@ def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
         for k in range(n_obs):
             if box_misses(lox, hix, loy, hiy, loz, hiz, bbox_lo, bbox_hi, k):
                 continue
-            if obstacle_meets_segment(k, p0x, p0y, p0z, p1x, p1y, p1z, seg_a, seg_b, poly_offsets, circ_c, circ_r,
-                                      poly_z, circ_z, sph_c, sph_r):
-                blocked = True
+            if k < n_poly:
+                blocked = extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, poly_z[k, 0], poly_z[k, 1], seg_a, seg_b,
+                                                 poly_offsets[k], poly_offsets[k + 1], 0.0, 0.0, 0.0)
+            elif k < n_poly + n_circ:
+                c = k - n_poly
+                blocked = extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, circ_z[c, 0], circ_z[c, 1], seg_a, seg_b,
+                                                 0, 0, circ_c[c, 0], circ_c[c, 1], circ_r[c])
+            else:
+                b = k - n_poly - n_circ
+                blocked = sphere_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2],
+                                               sph_r[b])
+            if blocked:
                 break
         out[m] = blocked
 
@@ -432,68 +453,66 @@ def _ray_slab(pz, uz, z0, z1, t_max):
     return max(ta, 0.0), min(tb, t_max)
 
 
-@njit(cache=True, inline="always")
-def obstacle_ray(k, px, py, pz, ux, uy, uz, t_max, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
-                 sph_c, sph_r, bbox_lo, bbox_hi):
-    """The smaller of ``t_max`` [m] and the distance along the ray (unit ``u``) from the point to
-    obstacle ``k``. A ray-box test that cannot beat ``t_max`` skips the exact test."""
-    n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
-    if _ray_box(px, py, pz, ux, uy, uz, bbox_lo, bbox_hi, k, t_max) == np.inf:
+@njit(cache=True)
+def prism_ray(px, py, pz, ux, uy, uz, t_max, seg_a, seg_b, k0, k1, z0, z1):
+    """The smaller of ``t_max`` [m] and the distance along the ray (unit u) to the prism with
+    footprint edges ``k0:k1`` over [z0, z1]. The footprint is met first either where the ray
+    enters the slab (if the projection is in the closed polygon there) or at an edge crossing."""
+    t_lo, t_hi = _ray_slab(pz, uz, z0, z1, t_max)
+    if t_lo > t_hi:
         return t_max
-    if k < n_poly + n_circ:
-        if k < n_poly:
-            t_lo, t_hi = _ray_slab(pz, uz, poly_z[k, 0], poly_z[k, 1], t_max)
-        else:
-            t_lo, t_hi = _ray_slab(pz, uz, circ_z[k - n_poly, 0], circ_z[k - n_poly, 1], t_max)
-        if t_lo > t_hi:
-            return t_max
-        if k < n_poly:
-            k0 = poly_offsets[k]
-            k1 = poly_offsets[k + 1]
-            # The footprint is met first either where the ray enters the slab (if the
-            # projection is in the closed polygon there) or at an edge crossing.
-            if _polygon_status(px + t_lo * ux, py + t_lo * uy, seg_a, seg_b, k0, k1) != OUTSIDE:
-                return t_lo
-            t_hit = np.inf
-            for j in range(k0, k1):
-                ax = seg_a[j, 0] - px
-                ay = seg_a[j, 1] - py
-                bx = seg_b[j, 0] - px
-                by = seg_b[j, 1] - py
-                sa = ux * ay - uy * ax
-                sb = ux * by - uy * bx
-                if (sa > 0.0 and sb > 0.0) or (sa < 0.0 and sb < 0.0):
-                    continue
-                den = sb - sa
-                if den == 0.0:
-                    continue  # parallel: a neighbouring edge reports the vertex
-                t = (ax * by - ay * bx) / den
-                if t >= t_lo and t <= t_hi and t < t_hit:
-                    t_hit = t
-            return t_hit if t_hit < t_max else t_max
-        c = k - n_poly
-        wx = px - circ_c[c, 0]
-        wy = py - circ_c[c, 1]
-        a = ux * ux + uy * uy
-        cc = wx * wx + wy * wy - circ_r[c] * circ_r[c]
-        if a == 0.0:
-            if cc <= 0.0:
-                return min(t_max, t_lo)
-            return t_max
-        ok, r0, r1 = _quad_roots(a, ux * wx + uy * wy, cc)
-        if not ok:
-            return t_max
-        t = max(t_lo, r0)
-        if t <= min(t_hi, r1) and t < t_max:
-            return t
+    if _polygon_status(px + t_lo * ux, py + t_lo * uy, seg_a, seg_b, k0, k1) != OUTSIDE:
+        return t_lo
+    t_hit = np.inf
+    for j in range(k0, k1):
+        ax = seg_a[j, 0] - px
+        ay = seg_a[j, 1] - py
+        bx = seg_b[j, 0] - px
+        by = seg_b[j, 1] - py
+        sa = ux * ay - uy * ax
+        sb = ux * by - uy * bx
+        if (sa > 0.0 and sb > 0.0) or (sa < 0.0 and sb < 0.0):
+            continue
+        den = sb - sa
+        if den == 0.0:
+            continue  # parallel: a neighbouring edge reports the vertex
+        t = (ax * by - ay * bx) / den
+        if t >= t_lo and t <= t_hi and t < t_hit:
+            t_hit = t
+    return t_hit if t_hit < t_max else t_max
+
+
+@njit(cache=True)
+def cylinder_ray(px, py, pz, ux, uy, uz, t_max, cx, cy, rc, z0, z1):
+    """The smaller of ``t_max`` [m] and the distance along the ray to the vertical cylinder."""
+    t_lo, t_hi = _ray_slab(pz, uz, z0, z1, t_max)
+    if t_lo > t_hi:
         return t_max
-    b = k - n_poly - n_circ
-    wx = px - sph_c[b, 0]
-    wy = py - sph_c[b, 1]
-    wz = pz - sph_c[b, 2]
+    wx = px - cx
+    wy = py - cy
+    a = ux * ux + uy * uy
+    cc = wx * wx + wy * wy - rc * rc
+    if a == 0.0:
+        if cc <= 0.0:
+            return min(t_max, t_lo)
+        return t_max
+    ok, r0, r1 = _quad_roots(a, ux * wx + uy * wy, cc)
+    if not ok:
+        return t_max
+    t = max(t_lo, r0)
+    if t <= min(t_hi, r1) and t < t_max:
+        return t
+    return t_max
+
+
+@njit(cache=True)
+def sphere_ray(px, py, pz, ux, uy, uz, t_max, sx, sy, sz, rs):
+    """The smaller of ``t_max`` [m] and the distance along the ray to the sphere."""
+    wx = px - sx
+    wy = py - sy
+    wz = pz - sz
     a = ux * ux + uy * uy + uz * uz
-    cc = wx * wx + wy * wy + wz * wz - sph_r[b] * sph_r[b]
+    cc = wx * wx + wy * wy + wz * wz - rs * rs
     ok, r0, r1 = _quad_roots(a, ux * wx + uy * wy + uz * wz, cc)
     if not ok:
         return t_max
@@ -510,9 +529,14 @@ def range_scan_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z
     to the first closed obstacle, ``max_range`` if none within it; 0 for a position in collision.
 
     Per position, obstacles whose box is out of range are dropped; per ray, a ray-box test
-    that cannot beat the best hit so far skips the exact test.
+    that cannot beat the best hit so far skips the exact test. The per-primitive tests are
+    :func:`prism_ray`, :func:`cylinder_ray` and :func:`sphere_ray` written out in the loop (the
+    calls cost a quarter more on the forests; ``tests/sensing/test_index3d.py`` holds the
+    two equal through the indexed scan, which calls them).
     """
-    n_obs = poly_offsets.shape[0] - 1 + circ_r.shape[0] + sph_r.shape[0]
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
+    n_obs = n_poly + n_circ + sph_r.shape[0]
     n_rays = dirs.shape[0]
     r2max = max_range * max_range
     for i in range(positions.shape[0]):
@@ -531,8 +555,73 @@ def range_scan_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z
             if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, k) >= r2max:
                 continue
             for r in range(n_rays):
-                row[r] = obstacle_ray(k, px, py, pz, dirs[r, 0], dirs[r, 1], dirs[r, 2], row[r], seg_a, seg_b,
-                                      poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r, bbox_lo, bbox_hi)
+                ux = dirs[r, 0]
+                uy = dirs[r, 1]
+                uz = dirs[r, 2]
+                if _ray_box(px, py, pz, ux, uy, uz, bbox_lo, bbox_hi, k, row[r]) == np.inf:
+                    continue
+                if k < n_poly + n_circ:
+                    if k < n_poly:
+                        t_lo, t_hi = _ray_slab(pz, uz, poly_z[k, 0], poly_z[k, 1], row[r])
+                    else:
+                        t_lo, t_hi = _ray_slab(pz, uz, circ_z[k - n_poly, 0], circ_z[k - n_poly, 1], row[r])
+                    if t_lo > t_hi:
+                        continue
+                    if k < n_poly:
+                        k0 = poly_offsets[k]
+                        k1 = poly_offsets[k + 1]
+                        # The footprint is met first either where the ray enters the slab (if
+                        # the projection is in the closed polygon there) or at an edge crossing.
+                        if _polygon_status(px + t_lo * ux, py + t_lo * uy, seg_a, seg_b, k0, k1) != OUTSIDE:
+                            row[r] = t_lo
+                            continue
+                        t_hit = np.inf
+                        for j in range(k0, k1):
+                            ax = seg_a[j, 0] - px
+                            ay = seg_a[j, 1] - py
+                            bx = seg_b[j, 0] - px
+                            by = seg_b[j, 1] - py
+                            sa = ux * ay - uy * ax
+                            sb = ux * by - uy * bx
+                            if (sa > 0.0 and sb > 0.0) or (sa < 0.0 and sb < 0.0):
+                                continue
+                            den = sb - sa
+                            if den == 0.0:
+                                continue  # parallel: a neighbouring edge reports the vertex
+                            t = (ax * by - ay * bx) / den
+                            if t >= t_lo and t <= t_hi and t < t_hit:
+                                t_hit = t
+                        if t_hit < row[r]:
+                            row[r] = t_hit
+                    else:
+                        c = k - n_poly
+                        wx = px - circ_c[c, 0]
+                        wy = py - circ_c[c, 1]
+                        a = ux * ux + uy * uy
+                        cc = wx * wx + wy * wy - circ_r[c] * circ_r[c]
+                        if a == 0.0:
+                            if cc <= 0.0:
+                                row[r] = min(row[r], t_lo)
+                            continue
+                        ok, r0, r1 = _quad_roots(a, ux * wx + uy * wy, cc)
+                        if not ok:
+                            continue
+                        t = max(t_lo, r0)
+                        if t <= min(t_hi, r1) and t < row[r]:
+                            row[r] = t
+                else:
+                    b = k - n_poly - n_circ
+                    wx = px - sph_c[b, 0]
+                    wy = py - sph_c[b, 1]
+                    wz = pz - sph_c[b, 2]
+                    a = ux * ux + uy * uy + uz * uz
+                    cc = wx * wx + wy * wy + wz * wz - sph_r[b] * sph_r[b]
+                    ok, r0, r1 = _quad_roots(a, ux * wx + uy * wy + uz * wz, cc)
+                    if not ok:
+                        continue
+                    t = max(0.0, r0)
+                    if t <= r1 and t < row[r]:
+                        row[r] = t
 
 
 # ---------------------------------------------------------------------------------------------

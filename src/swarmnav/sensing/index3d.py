@@ -8,7 +8,7 @@ distance visits the cells in cubic shells around the point until no unvisited pr
 nearer; the inside test reads the point's own cell; the line-of-sight test and the range scan
 walk the cells under each segment or ray, a cell-long piece at a time, a ray stopping once its
 nearest hit ends before the next piece. Per primitive they call the plain kernels' own
-functions (:mod:`._kernels3d`), and the results are minima (or any-of) over the same
+per-primitive functions (:mod:`._kernels3d`), and the results are minima (or any-of) over the same
 candidates, so distances, directions, ranges, inside and line-of-sight tests equal the plain
 kernels' bit for bit. Smaller geometries (every built-in and generated forest) keep the plain
 scan, and the ESDF of an indexed world is its exact signed distance node by node.
@@ -26,12 +26,21 @@ from numba import njit
 from swarmnav.sensing._kernels3d import (
     _bbox_gap2,
     _cull2,
+    _extrude_offset,
+    _extrude_sd,
+    _poly_sd2,
+    _ray_box,
     box_misses,
-    obstacle_contains,
-    obstacle_meets_segment,
-    obstacle_offset,
-    obstacle_ray,
-    obstacle_sd,
+    cylinder_contains,
+    cylinder_ray,
+    cylinder_sd,
+    extruded_meets_segment,
+    prism_contains,
+    prism_ray,
+    sphere_contains,
+    sphere_meets_segment,
+    sphere_ray,
+    sphere_sd,
     unit_direction,
 )
 from swarmnav.sensing.index import CELL_LOAD, MAX_CELL, _cell_range
@@ -120,12 +129,12 @@ def _build_kernel(lo, hi, x0, y0, z0, inv, nx, ny, nz):
     return start, items
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _cell_of(p, o, inv, n):
     return min(max(int(math.floor((p - o) * inv)), 0), n - 1)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _slack(px, py, pz, x0, y0, z0, cell, nx, ny, nz):
     """Rounding margin [m] of the cells' faces near the point."""
     return 1e-9 * (abs(px) + abs(py) + abs(pz) + abs(x0) + abs(y0) + abs(z0) + (nx + ny + nz) * cell + 1.0)
@@ -153,9 +162,9 @@ def _beyond3(px, py, pz, x0, y0, z0, cell, nx, ny, nz, cx, cy, cz, ring):
 
 @njit(cache=True)
 def _nearest_point(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
-                   bbox_lo, bbox_hi, x0, y0, z0, cell, nx, ny, nz, start, items, seen, stamp):
-    """``(best, k, sd, d2, qx, qy)``: the signed distance [m] at the point, the first primitive
-    (in the plain order) that has it, and that primitive's :func:`obstacle_sd` values.
+                   bbox_lo, bbox_hi, x0, y0, z0, cell, nx, ny, nz, start, items, seen, stamp, want_dir):
+    """``(best, vx, vy, vz)``: the signed distance [m] at the point and the offset to the nearest
+    boundary point of the first primitive (in the plain order) that has it.
 
     Cells are visited in cubic shells of growing size around the point's; once the best value is
     no farther than the nearest face of the visited block (beyond which every unvisited primitive
@@ -164,12 +173,13 @@ def _nearest_point(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_
     """
     inv = 1.0 / cell
     slack = _slack(px, py, pz, x0, y0, z0, cell, nx, ny, nz)
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
     best = np.inf
     bk = -1
-    b_sd = 0.0
-    b_d2 = 0.0
-    b_qx = 0.0
-    b_qy = 0.0
+    vx = 0.0
+    vy = 0.0
+    vz = 0.0
     cx = _cell_of(px, x0, inv, nx)
     cy = _cell_of(py, y0, inv, ny)
     cz = _cell_of(pz, z0, inv, nz)
@@ -190,22 +200,36 @@ def _nearest_point(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_
                         seen[k] = stamp
                         if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, k) > _cull2(best):
                             continue
-                        sd, d2, qx, qy = obstacle_sd(k, px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r,
-                                                     poly_z, circ_z, sph_c, sph_r)
+                        if k < n_poly:
+                            d2, qx, qy = _poly_sd2(px, py, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1])
+                            za = poly_z[k, 0]
+                            zb = poly_z[k, 1]
+                            sd = _extrude_sd(d2, pz, za, zb)
+                        elif k < n_poly + n_circ:
+                            c = k - n_poly
+                            za = circ_z[c, 0]
+                            zb = circ_z[c, 1]
+                            sd, d2, qx, qy = cylinder_sd(px, py, pz, circ_c[c, 0], circ_c[c, 1], circ_r[c], za, zb)
+                        else:
+                            b = k - n_poly - n_circ
+                            sd, ox, oy, oz = sphere_sd(px, py, pz, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2], sph_r[b])
                         if sd < best or (sd == best and k < bk):
                             best = sd
                             bk = k
-                            b_sd = sd
-                            b_d2 = d2
-                            b_qx = qx
-                            b_qy = qy
+                            if want_dir:
+                                if k < n_poly + n_circ:
+                                    vx, vy, vz = _extrude_offset(d2, qx, qy, pz, za, zb)
+                                else:
+                                    vx = ox
+                                    vy = oy
+                                    vz = oz
         # an unvisited primitive's box lies beyond a face of the visited block: its distance is
         # at least `bound` (less the cells' rounding and the 1e-9 m of _cull2)
         bound = _beyond3(px, py, pz, x0, y0, z0, cell, nx, ny, nz, cx, cy, cz, ring) - slack - 1e-9
         if bound == np.inf or best < bound:
             break
         ring += 1
-    return best, bk, b_sd, b_d2, b_qx, b_qy
+    return best, vx, vy, vz
 
 
 @njit(cache=True)
@@ -218,17 +242,11 @@ def nearest3d_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z,
         px = points[i, 0]
         py = points[i, 1]
         pz = points[i, 2]
-        best, k, sd, d2, qx, qy = _nearest_point(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z,
-                                                 circ_z, sph_c, sph_r, bbox_lo, bbox_hi, x0, y0, z0, cell, nx, ny,
-                                                 nz, start, items, seen, i)
+        best, vx, vy, vz = _nearest_point(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
+                                          sph_c, sph_r, bbox_lo, bbox_hi, x0, y0, z0, cell, nx, ny, nz, start, items,
+                                          seen, i, want_dir)
         out_d[i] = best
         if want_dir:
-            vx = 0.0
-            vy = 0.0
-            vz = 0.0
-            if k >= 0:
-                vx, vy, vz = obstacle_offset(k, px, py, pz, sd, d2, qx, qy, poly_offsets, circ_r, poly_z, circ_z,
-                                             sph_c)
             unit_direction(best, vx, vy, vz, out_dir, i)
 
 
@@ -246,9 +264,9 @@ def esdf3d_indexed_build_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly
             py = oy + res * iy
             for ix in range(gx):
                 px = ox + res * ix
-                best, _, _, _, _, _ = _nearest_point(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z,
-                                                     circ_z, sph_c, sph_r, bbox_lo, bbox_hi, x0, y0, z0, cell, nx,
-                                                     ny, nz, start, items, seen, stamp)
+                best, _, _, _ = _nearest_point(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
+                                               sph_c, sph_r, bbox_lo, bbox_hi, x0, y0, z0, cell, nx, ny, nz, start,
+                                               items, seen, stamp, False)
                 out[iz, iy, ix] = best
                 stamp += 1
 
@@ -258,12 +276,26 @@ def _in_collision_indexed(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r
                           bbox_lo, bbox_hi, x0, y0, z0, cell, nx, ny, nz, start, items):
     """As the plain inside test: a primitive holding the point lists the point's cell (its box,
     grown by the margin, holds the point; the cell is found by the same floor and clamp)."""
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
     inv = 1.0 / cell
     c = (_cell_of(pz, z0, inv, nz) * ny + _cell_of(py, y0, inv, ny)) * nx + _cell_of(px, x0, inv, nx)
     for j in range(start[c], start[c + 1]):
-        if obstacle_contains(items[j], px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c,
-                             sph_r, bbox_lo, bbox_hi):
-            return True
+        k = items[j]
+        if k < n_poly:
+            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, k) > 0.0:
+                continue
+            if prism_contains(px, py, pz, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1], poly_z[k, 0],
+                              poly_z[k, 1]):
+                return True
+        elif k < n_poly + n_circ:
+            q = k - n_poly
+            if cylinder_contains(px, py, pz, circ_c[q, 0], circ_c[q, 1], circ_r[q], circ_z[q, 0], circ_z[q, 1]):
+                return True
+        else:
+            b = k - n_poly - n_circ
+            if sphere_contains(px, py, pz, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2], sph_r[b]):
+                return True
     return False
 
 
@@ -277,7 +309,7 @@ def points_inside3d_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, p
                                        ny, nz, start, items)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _piece_cells(ax, ay, az, bx, by, bz, slack, x0, y0, z0, inv, nx, ny, nz):
     """Cell ranges under the box of the piece a-b grown by ``slack``."""
     ix0, ix1 = _cell_range(min(ax, bx) - slack, max(ax, bx) + slack, x0, inv, nx)
@@ -292,6 +324,8 @@ def segments_blocked3d_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r
     """As ``segments_blocked3d_kernel``: only the primitives listed in the cells under the segment,
     walked a cell-long piece at a time (each piece's box grown by the cells' rounding margin),
     can meet it."""
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
     inv = 1.0 / cell
     seen = np.full(bbox_lo.shape[0], -1, dtype=np.int64)
     cell_seen = np.full(nx * ny * nz, -1, dtype=np.int64)
@@ -334,9 +368,20 @@ def segments_blocked3d_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r
                             seen[k] = m
                             if box_misses(lox, hix, loy, hiy, loz, hiz, bbox_lo, bbox_hi, k):
                                 continue
-                            if obstacle_meets_segment(k, p0x, p0y, p0z, p1x, p1y, p1z, seg_a, seg_b, poly_offsets,
-                                                      circ_c, circ_r, poly_z, circ_z, sph_c, sph_r):
-                                blocked = True
+                            if k < n_poly:
+                                blocked = extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, poly_z[k, 0],
+                                                                 poly_z[k, 1], seg_a, seg_b, poly_offsets[k],
+                                                                 poly_offsets[k + 1], 0.0, 0.0, 0.0)
+                            elif k < n_poly + n_circ:
+                                c2 = k - n_poly
+                                blocked = extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, circ_z[c2, 0],
+                                                                 circ_z[c2, 1], seg_a, seg_b, 0, 0, circ_c[c2, 0],
+                                                                 circ_c[c2, 1], circ_r[c2])
+                            else:
+                                b = k - n_poly - n_circ
+                                blocked = sphere_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, sph_c[b, 0], sph_c[b, 1],
+                                                               sph_c[b, 2], sph_r[b])
+                            if blocked:
                                 break
                         if blocked:
                             break
@@ -361,6 +406,8 @@ def range_scan_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
     box, so the cell holding it lists the primitive: no hit is missed, and each primitive lowers
     the ray as the plain scan's does.
     """
+    n_poly = poly_offsets.shape[0] - 1
+    n_circ = circ_r.shape[0]
     inv = 1.0 / cell
     n_rays = dirs.shape[0]
     r2max = max_range * max_range
@@ -403,7 +450,18 @@ def range_scan_indexed_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
                                 seen[k] = stamp
                                 if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, k) >= r2max:
                                     continue  # as the plain scan: out of range from this position
-                                t_end = obstacle_ray(k, px, py, pz, ux, uy, uz, t_end, seg_a, seg_b, poly_offsets,
-                                                     circ_c, circ_r, poly_z, circ_z, sph_c, sph_r, bbox_lo, bbox_hi)
+                                if _ray_box(px, py, pz, ux, uy, uz, bbox_lo, bbox_hi, k, t_end) == np.inf:
+                                    continue
+                                if k < n_poly:
+                                    t_end = prism_ray(px, py, pz, ux, uy, uz, t_end, seg_a, seg_b, poly_offsets[k],
+                                                      poly_offsets[k + 1], poly_z[k, 0], poly_z[k, 1])
+                                elif k < n_poly + n_circ:
+                                    q = k - n_poly
+                                    t_end = cylinder_ray(px, py, pz, ux, uy, uz, t_end, circ_c[q, 0], circ_c[q, 1],
+                                                         circ_r[q], circ_z[q, 0], circ_z[q, 1])
+                                else:
+                                    b = k - n_poly - n_circ
+                                    t_end = sphere_ray(px, py, pz, ux, uy, uz, t_end, sph_c[b, 0], sph_c[b, 1],
+                                                       sph_c[b, 2], sph_r[b])
                 t = t1
             row[r] = t_end
