@@ -43,12 +43,16 @@ from swarmnav.sensing._kernels3d import (
     sphere_sd,
     unit_direction,
 )
-from swarmnav.sensing.index import CELL_LOAD, MAX_CELL, _cell_range
+from swarmnav.sensing.index import MAX_CELL, _cell_range
 
 #: Primitives from which a 3-D geometry is indexed (our choice: the SPH 3-D forests of Table II
 #: have about 100-200 and scan faster plainly, and stay on the plain kernels; a voxel map or a
 #: mockamap world has thousands).
 INDEX3D_MIN_PRIMITIVES = 256
+
+#: Primitives a cell lists on average, at most (our choice: on the default mockamap world 1 gave
+#: 0.65 m cells listing 3.8 primitives each and the fastest range scan of 0.25-4, `bench_maps.py --3d`).
+CELL_LOAD = 1.0
 
 #: Cells per primitive at most (our choice: bounds the grid's memory when the primitives'
 #: bounding boxes span a large, mostly empty volume).
