@@ -9,7 +9,9 @@ for today's corridor (benchmarks/bench_sensing.py) and a random_forest scene: th
 (20 agents x 360 rays, 20 m) per ray, signed distance per point, and an ESDF build per node
 (a 40 m x 40 m window at 0.25 m). It also checks the LiDAR ring and the signed distance on the
 merged random512-25 map against one box per occupied cell (the per-cell oracle), and times the
-3-D range scan on a 64 x 64 x 16 MovingAI-style voxel map beside the SPH 3-D forest.
+3-D range scan on a 64 x 64 x 16 MovingAI-style voxel map and the default mockamap world
+(``mockamap:type=1,seed=1``, 16 731 boxes) beside the Table II 3-D forest, with the 3-D ESDF build
+on the last two. ``python benchmarks/bench_maps.py --3d`` runs the 3-D part alone.
 
 Timings are the best of several repeats after a warm-up call (compilation excluded), pinned
 to CPU 0 where ``os.sched_setaffinity`` exists. The maps of 256 boxes or more are sensed through
@@ -88,31 +90,90 @@ def measure(name: str, geom: Geometry, window: tuple[float, float, float, float]
             "boxes": geom.n_polygons + geom.n_circles}
 
 
-def measure3d(rng) -> list[tuple[str, int, float]]:
-    """3-D range scan (20 agents x 360 random directions, 20 m) per ray [s]: a 64 x 64 x 16 voxel
-    map at 0.5 m (each voxel occupied with probability 0.1, seed 0) and the SPH 3-D forest."""
+#: The Table II forest in 3-D (experiments spec ``sph-table2-3d``: full-height trunks, 6 m).
+FOREST_3D = "random_forest:density=0.15,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0,height=6"
+#: The default mockamap world (docs/maps-generators.md): Perlin noise, 200 x 200 x 40 voxels of 0.1 m.
+MOCKAMAP = "mockamap:type=1,seed=1"
+
+
+def _free3d(geom: Geometry, lo, hi, n: int, rng) -> np.ndarray:
+    out = np.zeros((0, 3))
+    while len(out) < n:
+        p = rng.uniform(lo, hi, (8 * n, 3))
+        out = np.vstack([out, p[signed_distance(geom, p) > 0.05]])
+    return out[:n]
+
+
+def measure3d(rng) -> list[dict]:
+    """Per 3-D world: the range scan (20 agents x 360 random directions, 20 m) per ray [s], and for
+    the mockamap world and the forest the ESDF build over the scene's bounds at SPH's 0.1 m [s].
+    Worlds: a 64 x 64 x 16 voxel map at 0.5 m (each voxel occupied with probability 0.1, seed 0),
+    the default mockamap world and the Table II 3-D forest. Large worlds are indexed
+    (swarmnav.sensing.index3d); on the mockamap world the plain scan is timed too (4 agents)."""
+    import swarmnav.sensing.index3d as index3d
+
     occ = np.random.default_rng(0).random((16, 64, 64)) < 0.1
     z, y, x = np.nonzero(occ)
     dirs = rng.normal(size=(360, 3))
     dirs /= np.linalg.norm(dirs, axis=1)[:, None]
-    out = []
+    rows = []
     with tempfile.TemporaryDirectory() as d:
         f = Path(d) / "v.3dmap"
         f.write_text("voxel 64 64 16\n" + "".join(f"{a} {b} {c}\n" for a, b, c in zip(x, y, z)))
         voxels = Geometry.from_obstacles(load_grid(f, cell=0.5).boxes(), dim=3)
-    forest = load_scenario("random_forest_3d:density=0.15,seed=3")
-    for name, geom, lo, hi in ((f"voxel map 64x64x16 ({int(occ.sum())} voxels)", voxels, (0, 0, 0), (32, 32, 8)),
-                               ("random_forest_3d:density=0.15,seed=3", forest.geometry, forest.lower, forest.upper)):
-        agents = np.zeros((0, 3))
-        while len(agents) < 20:
-            p = rng.uniform(lo, hi, (80, 3))
-            agents = np.vstack([agents, p[signed_distance(geom, p) > 0.05]])
-        t = best_time(lambda: range_scan(geom, agents[:20], dirs, 20.0), repeats=3)
-        out.append((name, geom.n_polygons + geom.n_circles + geom.n_spheres, t / (20 * 360)))
-    return out
+    t0 = time.perf_counter()
+    mock = load_scenario(MOCKAMAP)
+    t_mock = time.perf_counter() - t0
+    forest = load_scenario(FOREST_3D)
+    worlds = ((f"voxel map 64x64x16 ({int(occ.sum())} voxels)", voxels, (0, 0, 0), (32, 32, 8), None),
+              (MOCKAMAP, mock.geometry, (-10, -10, 0.2), (10, 10, 3.8), mock.bounds),
+              (FOREST_3D.split(",min_passage")[0] + ",...,height=6", forest.geometry, forest.lower, forest.upper,
+               forest.bounds))
+    for name, geom, lo, hi, bounds in worlds:
+        agents = _free3d(geom, lo, hi, 20, rng)
+        r = {"name": name, "prims": geom.n_polygons + geom.n_circles + geom.n_spheres,
+             "indexed": index3d.box_index(geom) is not None,
+             "ray": best_time(lambda: range_scan(geom, agents, dirs, 20.0), repeats=3) / (20 * 360)}
+        if name == MOCKAMAP:
+            r["load"] = t_mock
+            with_plain = agents[:4]
+            try:
+                index3d.INDEX3D_MIN_PRIMITIVES, keep = 10**9, index3d.INDEX3D_MIN_PRIMITIVES
+                index3d._cache.clear()
+                r["plain_ray"] = best_time(lambda: range_scan(geom, with_plain, dirs, 20.0), repeats=1,
+                                           min_time=0.0) / (4 * 360)
+                pts = _free3d(geom, lo, hi, 500, rng)
+                r["plain_node"] = best_time(lambda: signed_distance(geom, pts), repeats=1, min_time=0.0) / 500
+            finally:
+                index3d.INDEX3D_MIN_PRIMITIVES = keep
+                index3d._cache.clear()
+        if bounds is not None:
+            Esdf.build(geom, (0.0, 0.0, 1.0, 0.5, 0.5, 1.5), 0.1)  # compile (or load) the kernels
+            t0 = time.perf_counter()
+            esdf = Esdf.build(geom, bounds, 0.1)  # one build: seconds, and the same work every time
+            r["esdf"] = time.perf_counter() - t0
+            r["nodes"] = esdf.values.size
+        rows.append(r)
+    return rows
+
+
+def report3d(rows: list[dict]) -> None:
+    forest = rows[-1]["ray"]
+    print("3-D range scan, 20 agents x 360 random directions, 20 m; ESDF over the scene's bounds at 0.1 m")
+    print(f"{'scene':<64}{'prims':>7}{'index':>6}{'ns/ray':>9}{'x forest':>9}{'ESDF s':>8}{'M nodes':>8}")
+    for r in rows:
+        esdf = f"{r['esdf']:.2f}" if "esdf" in r else "-"
+        nodes = f"{r['nodes'] / 1e6:.2f}" if "nodes" in r else "-"
+        print(f"{r['name']:<64}{r['prims']:>7}{'yes' if r['indexed'] else 'no':>6}{r['ray'] * 1e9:>9.0f}"
+              f"{r['ray'] / forest:>9.2f}{esdf:>8}{nodes:>8}")
+        if "plain_ray" in r:
+            print(f"  {r['name']} without the index: {r['plain_ray'] * 1e9:.0f} ns/ray (4 agents), exact signed "
+                  f"distance {r['plain_node'] * 1e6:.0f} us/point (an ESDF of {r['nodes'] / 1e6:.2f} M nodes point "
+                  f"by point ~{r['plain_node'] * r['nodes']:.0f} s); scene load {r['load']:.1f} s")
 
 
 def main() -> None:
+    only_3d = "--3d" in sys.argv[1:]
     pinned = False
     if hasattr(os, "sched_setaffinity"):
         try:
@@ -121,6 +182,10 @@ def main() -> None:
         except OSError:
             pass
     rng = np.random.default_rng(1)
+    if only_3d:
+        print(f"3-D worlds only ({'pinned to CPU 0' if pinned else 'not pinned'}; best of repeats)")
+        report3d(measure3d(rng))
+        return
     rows = [measure("corridor (bench_sensing)", corridor(), (-10.0, -9.0, 40.0, 9.0), rng)]
     forest = load_scenario("random_forest:density=0.25,seed=1")
     b = forest.bounds
@@ -157,10 +222,7 @@ def main() -> None:
         load = f"{r['load']:.2f}" if "load" in r else "-"
         print(f"{r['name']:<40}{r['boxes']:>8}{load:>8}{r['ray'] * 1e9:>9.1f}{r['ray'] / base:>8.1f}"
               f"{r['point'] * 1e6:>10.2f}{r['node'] * 1e6:>9.2f}")
-    rows3 = measure3d(rng)
-    print(f"3-D range scan, 20 agents x 360 directions, 20 m (no index in 3-D)\n{'scene':<40}{'boxes':>8}{'us/ray':>9}")
-    for name, n, t in rows3:
-        print(f"{name:<40}{n:>8}{t * 1e6:>9.2f}")
+    report3d(measure3d(rng))
 
 
 if __name__ == "__main__":

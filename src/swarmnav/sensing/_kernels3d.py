@@ -120,10 +120,53 @@ def _cull2(bound):
 
 
 @njit(cache=True)
+def cylinder_sd(px, py, pz, cx, cy, rc, z0, z1):
+    """Exact signed distance [m] of a vertical cylinder (centre (cx, cy), radius rc, over [z0, z1])
+    and its footprint values for :func:`_extrude_offset`: ``(sd, d2, qx, qy)``."""
+    cx = cx - px
+    cy = cy - py
+    dc = math.sqrt(cx * cx + cy * cy)
+    d2 = dc - rc
+    # offset to the nearest rim point is u * d2, u the unit vector toward the axis (on the axis
+    # every rim point is nearest: pick +x)
+    ux = cx / dc if dc > 0.0 else -1.0
+    uy = cy / dc if dc > 0.0 else 0.0
+    return _extrude_sd(d2, pz, z0, z1), d2, ux * d2, uy * d2
+
+
+@njit(cache=True)
+def sphere_sd(px, py, pz, sx, sy, sz, rs):
+    """Exact signed distance [m] of a sphere and the offset (3 numbers) to its nearest surface point."""
+    cx = sx - px
+    cy = sy - py
+    cz = sz - pz
+    dc = math.sqrt(cx * cx + cy * cy + cz * cz)
+    sd = dc - rs
+    if dc > 0.0:
+        return sd, cx / dc * sd, cy / dc * sd, cz / dc * sd
+    return sd, -sd, 0.0, 0.0
+
+
+@njit(cache=True)
+def unit_direction(best, vx, vy, vz, out_dir, i):
+    """``out_dir[i]`` <- the offset (vx, vy, vz) made unit (zeros at distance 0 or inf)."""
+    norm = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if best != 0.0 and norm > 0.0 and best < np.inf:
+        out_dir[i, 0] = vx / norm
+        out_dir[i, 1] = vy / norm
+        out_dir[i, 2] = vz / norm
+    else:
+        out_dir[i, 0] = 0.0
+        out_dir[i, 1] = 0.0
+        out_dir[i, 2] = 0.0
+
+
+@njit(cache=True)
 def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
                      bbox_lo, bbox_hi, points, out_d, out_dir, want_dir):
     """Signed distance [m] (minimum of the per-obstacle exact signed distances) and unit
-    direction toward the nearest boundary point (outward inside, zeros at distance 0)."""
+    direction toward the nearest boundary point (outward inside, zeros at distance 0); where
+    obstacles tie, the first of them (prisms, cylinders, spheres, in order) gives the direction."""
     n_poly = poly_offsets.shape[0] - 1
     n_circ = circ_r.shape[0]
     n_sph = sph_r.shape[0]
@@ -138,8 +181,7 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
         for p in range(n_poly):
             # Outside its box an obstacle is farther than the box: skip it when that is worse
             # than the best so far (every containing obstacle lies inside its box).
-            g2 = _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, p)
-            if g2 > _cull2(best):
+            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, p) > _cull2(best):
                 continue
             d2, qx, qy = _poly_sd2(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1])
             sd = _extrude_sd(d2, pz, poly_z[p, 0], poly_z[p, 1])
@@ -148,53 +190,26 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
                 if want_dir:
                     vx, vy, vz = _extrude_offset(d2, qx, qy, pz, poly_z[p, 0], poly_z[p, 1])
         for c in range(n_circ):
-            g2 = _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + c)
-            if g2 > _cull2(best):
+            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + c) > _cull2(best):
                 continue
-            cx = circ_c[c, 0] - px
-            cy = circ_c[c, 1] - py
-            dc = math.sqrt(cx * cx + cy * cy)
-            d2 = dc - circ_r[c]
-            sd = _extrude_sd(d2, pz, circ_z[c, 0], circ_z[c, 1])
+            sd, d2, qx, qy = cylinder_sd(px, py, pz, circ_c[c, 0], circ_c[c, 1], circ_r[c], circ_z[c, 0], circ_z[c, 1])
             if sd < best:
                 best = sd
                 if want_dir:
-                    # offset to the nearest rim point is u * d2, u the unit vector toward the
-                    # axis (on the axis every rim point is nearest: pick +x)
-                    ux = cx / dc if dc > 0.0 else -1.0
-                    uy = cy / dc if dc > 0.0 else 0.0
-                    vx, vy, vz = _extrude_offset(d2, ux * d2, uy * d2, pz, circ_z[c, 0], circ_z[c, 1])
+                    vx, vy, vz = _extrude_offset(d2, qx, qy, pz, circ_z[c, 0], circ_z[c, 1])
         for b in range(n_sph):
-            g2 = _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + n_circ + b)
-            if g2 > _cull2(best):
+            if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, n_poly + n_circ + b) > _cull2(best):
                 continue
-            cx = sph_c[b, 0] - px
-            cy = sph_c[b, 1] - py
-            cz = sph_c[b, 2] - pz
-            dc = math.sqrt(cx * cx + cy * cy + cz * cz)
-            sd = dc - sph_r[b]
+            sd, ox, oy, oz = sphere_sd(px, py, pz, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2], sph_r[b])
             if sd < best:
                 best = sd
                 if want_dir:
-                    if dc > 0.0:
-                        vx = cx / dc * sd
-                        vy = cy / dc * sd
-                        vz = cz / dc * sd
-                    else:
-                        vx = -sd
-                        vy = 0.0
-                        vz = 0.0
+                    vx = ox
+                    vy = oy
+                    vz = oz
         out_d[i] = best
         if want_dir:
-            norm = math.sqrt(vx * vx + vy * vy + vz * vz)
-            if best != 0.0 and norm > 0.0 and best < np.inf:
-                out_dir[i, 0] = vx / norm
-                out_dir[i, 1] = vy / norm
-                out_dir[i, 2] = vz / norm
-            else:
-                out_dir[i, 0] = 0.0
-                out_dir[i, 1] = 0.0
-                out_dir[i, 2] = 0.0
+            unit_direction(best, vx, vy, vz, out_dir, i)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -203,30 +218,48 @@ def nearest3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z,
 
 
 @njit(cache=True)
+def prism_contains(px, py, pz, seg_a, seg_b, k0, k1, z0, z1):
+    """True if the point is inside or on the prism with footprint edges ``k0:k1`` over [z0, z1]
+    (the caller has checked its bounding box)."""
+    if pz < z0 or pz > z1:
+        return False
+    return _polygon_status(px, py, seg_a, seg_b, k0, k1) != OUTSIDE
+
+
+@njit(cache=True)
+def cylinder_contains(px, py, pz, cx, cy, rc, z0, z1):
+    """True if the point is inside or on the vertical cylinder."""
+    if pz < z0 or pz > z1:
+        return False
+    dx = px - cx
+    dy = py - cy
+    return dx * dx + dy * dy <= rc * rc
+
+
+@njit(cache=True)
+def sphere_contains(px, py, pz, sx, sy, sz, rs):
+    """True if the point is inside or on the sphere."""
+    dx = px - sx
+    dy = py - sy
+    dz = pz - sz
+    return dx * dx + dy * dy + dz * dz <= rs * rs
+
+
+@njit(cache=True)
 def _in_collision3d(px, py, pz, seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
                     bbox_lo, bbox_hi):
     """True if the point is inside or on the boundary of any obstacle."""
     n_poly = poly_offsets.shape[0] - 1
-    n_circ = circ_r.shape[0]
     for p in range(n_poly):
         if _bbox_gap2(px, py, pz, bbox_lo, bbox_hi, p) > 0.0:
             continue
-        if pz < poly_z[p, 0] or pz > poly_z[p, 1]:
-            continue
-        if _polygon_status(px, py, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1]) != OUTSIDE:
+        if prism_contains(px, py, pz, seg_a, seg_b, poly_offsets[p], poly_offsets[p + 1], poly_z[p, 0], poly_z[p, 1]):
             return True
-    for c in range(n_circ):
-        if pz < circ_z[c, 0] or pz > circ_z[c, 1]:
-            continue
-        dx = px - circ_c[c, 0]
-        dy = py - circ_c[c, 1]
-        if dx * dx + dy * dy <= circ_r[c] * circ_r[c]:
+    for c in range(circ_r.shape[0]):
+        if cylinder_contains(px, py, pz, circ_c[c, 0], circ_c[c, 1], circ_r[c], circ_z[c, 0], circ_z[c, 1]):
             return True
     for b in range(sph_r.shape[0]):
-        dx = px - sph_c[b, 0]
-        dy = py - sph_c[b, 1]
-        dz = pz - sph_c[b, 2]
-        if dx * dx + dy * dy + dz * dz <= sph_r[b] * sph_r[b]:
+        if sphere_contains(px, py, pz, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2], sph_r[b]):
             return True
     return False
 
@@ -271,6 +304,52 @@ def _point_on(t, p0, p1, e):
 
 
 @njit(cache=True)
+def extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, z0, z1, seg_a, seg_b, k0, k1, cx, cy, rc):
+    """True if the closed segment meets the footprint extruded over [z0, z1]: the polygon with edges
+    ``k0:k1`` if ``k1 > k0``, else the disc (cx, cy, rc). The part of the segment in the slab is
+    clipped and tested in the plane."""
+    ex = p1x - p0x
+    ey = p1y - p0y
+    ez = p1z - p0z
+    t0, t1 = _slab_clip(p0z, ez, z0, z1)
+    if t0 > t1:
+        return False
+    ax = _point_on(t0, p0x, p1x, ex)
+    ay = _point_on(t0, p0y, p1y, ey)
+    bx = _point_on(t1, p0x, p1x, ex)
+    by = _point_on(t1, p0y, p1y, ey)
+    if k1 > k0:
+        return segment_meets_polygon(ax, ay, bx, by, seg_a, seg_b, k0, k1)
+    return segment_meets_disc(ax, ay, bx, by, cx, cy, rc)
+
+
+@njit(cache=True)
+def sphere_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, sx, sy, sz, rs):
+    """True if the closed segment's nearest point to the sphere's centre is within its radius."""
+    ex = p1x - p0x
+    ey = p1y - p0y
+    ez = p1z - p0z
+    wx = sx - p0x
+    wy = sy - p0y
+    wz = sz - p0z
+    ee = ex * ex + ey * ey + ez * ez
+    s = 0.0
+    if ee > 0.0:
+        s = min(max((wx * ex + wy * ey + wz * ez) / ee, 0.0), 1.0)
+    dx = wx - s * ex
+    dy = wy - s * ey
+    dz = wz - s * ez
+    return dx * dx + dy * dy + dz * dz <= rs * rs
+
+
+@njit(cache=True)
+def box_misses(lox, hix, loy, hiy, loz, hiz, bbox_lo, bbox_hi, k):
+    """True if the box [lo, hi] and bounding box ``k`` do not overlap."""
+    return (hix < bbox_lo[k, 0] or lox > bbox_hi[k, 0] or hiy < bbox_lo[k, 1] or loy > bbox_hi[k, 1]
+            or hiz < bbox_lo[k, 2] or loz > bbox_hi[k, 2])
+
+
+@njit(cache=True)
 def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
                               bbox_lo, bbox_hi, p, q, out):
     """``out[m]`` is True if the closed segment p[m]-q[m] meets any closed obstacle.
@@ -281,6 +360,7 @@ def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
     """
     n_poly = poly_offsets.shape[0] - 1
     n_circ = circ_r.shape[0]
+    n_obs = n_poly + n_circ + sph_r.shape[0]
     for m in range(p.shape[0]):
         p0x = p[m, 0]
         p0y = p[m, 1]
@@ -288,9 +368,6 @@ def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
         p1x = q[m, 0]
         p1y = q[m, 1]
         p1z = q[m, 2]
-        ex = p1x - p0x
-        ey = p1y - p0y
-        ez = p1z - p0z
         lox = min(p0x, p1x)
         hix = max(p0x, p1x)
         loy = min(p0y, p1y)
@@ -298,39 +375,20 @@ def segments_blocked3d_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z
         loz = min(p0z, p1z)
         hiz = max(p0z, p1z)
         blocked = False
-        for k in range(n_poly + n_circ + sph_r.shape[0]):
-            if (hix < bbox_lo[k, 0] or lox > bbox_hi[k, 0] or hiy < bbox_lo[k, 1] or loy > bbox_hi[k, 1]
-                    or hiz < bbox_lo[k, 2] or loz > bbox_hi[k, 2]):
+        for k in range(n_obs):
+            if box_misses(lox, hix, loy, hiy, loz, hiz, bbox_lo, bbox_hi, k):
                 continue
-            if k < n_poly + n_circ:
-                if k < n_poly:
-                    t0, t1 = _slab_clip(p0z, ez, poly_z[k, 0], poly_z[k, 1])
-                else:
-                    t0, t1 = _slab_clip(p0z, ez, circ_z[k - n_poly, 0], circ_z[k - n_poly, 1])
-                if t0 > t1:
-                    continue
-                ax = _point_on(t0, p0x, p1x, ex)
-                ay = _point_on(t0, p0y, p1y, ey)
-                bx = _point_on(t1, p0x, p1x, ex)
-                by = _point_on(t1, p0y, p1y, ey)
-                if k < n_poly:
-                    blocked = segment_meets_polygon(ax, ay, bx, by, seg_a, seg_b, poly_offsets[k], poly_offsets[k + 1])
-                else:
-                    c = k - n_poly
-                    blocked = segment_meets_disc(ax, ay, bx, by, circ_c[c, 0], circ_c[c, 1], circ_r[c])
+            if k < n_poly:
+                blocked = extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, poly_z[k, 0], poly_z[k, 1], seg_a, seg_b,
+                                                 poly_offsets[k], poly_offsets[k + 1], 0.0, 0.0, 0.0)
+            elif k < n_poly + n_circ:
+                c = k - n_poly
+                blocked = extruded_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, circ_z[c, 0], circ_z[c, 1], seg_a, seg_b,
+                                                 0, 0, circ_c[c, 0], circ_c[c, 1], circ_r[c])
             else:
                 b = k - n_poly - n_circ
-                wx = sph_c[b, 0] - p0x
-                wy = sph_c[b, 1] - p0y
-                wz = sph_c[b, 2] - p0z
-                ee = ex * ex + ey * ey + ez * ez
-                s = 0.0
-                if ee > 0.0:
-                    s = min(max((wx * ex + wy * ey + wz * ez) / ee, 0.0), 1.0)
-                dx = wx - s * ex
-                dy = wy - s * ey
-                dz = wz - s * ez
-                blocked = dx * dx + dy * dy + dz * dz <= sph_r[b] * sph_r[b]
+                blocked = sphere_meets_segment(p0x, p0y, p0z, p1x, p1y, p1z, sph_c[b, 0], sph_c[b, 1], sph_c[b, 2],
+                                               sph_r[b])
             if blocked:
                 break
         out[m] = blocked
@@ -396,13 +454,85 @@ def _ray_slab(pz, uz, z0, z1, t_max):
 
 
 @njit(cache=True)
+def prism_ray(px, py, pz, ux, uy, uz, t_max, seg_a, seg_b, k0, k1, z0, z1):
+    """The smaller of ``t_max`` [m] and the distance along the ray (unit u) to the prism with
+    footprint edges ``k0:k1`` over [z0, z1]. The footprint is met first either where the ray
+    enters the slab (if the projection is in the closed polygon there) or at an edge crossing."""
+    t_lo, t_hi = _ray_slab(pz, uz, z0, z1, t_max)
+    if t_lo > t_hi:
+        return t_max
+    if _polygon_status(px + t_lo * ux, py + t_lo * uy, seg_a, seg_b, k0, k1) != OUTSIDE:
+        return t_lo
+    t_hit = np.inf
+    for j in range(k0, k1):
+        ax = seg_a[j, 0] - px
+        ay = seg_a[j, 1] - py
+        bx = seg_b[j, 0] - px
+        by = seg_b[j, 1] - py
+        sa = ux * ay - uy * ax
+        sb = ux * by - uy * bx
+        if (sa > 0.0 and sb > 0.0) or (sa < 0.0 and sb < 0.0):
+            continue
+        den = sb - sa
+        if den == 0.0:
+            continue  # parallel: a neighbouring edge reports the vertex
+        t = (ax * by - ay * bx) / den
+        if t >= t_lo and t <= t_hi and t < t_hit:
+            t_hit = t
+    return t_hit if t_hit < t_max else t_max
+
+
+@njit(cache=True)
+def cylinder_ray(px, py, pz, ux, uy, uz, t_max, cx, cy, rc, z0, z1):
+    """The smaller of ``t_max`` [m] and the distance along the ray to the vertical cylinder."""
+    t_lo, t_hi = _ray_slab(pz, uz, z0, z1, t_max)
+    if t_lo > t_hi:
+        return t_max
+    wx = px - cx
+    wy = py - cy
+    a = ux * ux + uy * uy
+    cc = wx * wx + wy * wy - rc * rc
+    if a == 0.0:
+        if cc <= 0.0:
+            return min(t_max, t_lo)
+        return t_max
+    ok, r0, r1 = _quad_roots(a, ux * wx + uy * wy, cc)
+    if not ok:
+        return t_max
+    t = max(t_lo, r0)
+    if t <= min(t_hi, r1) and t < t_max:
+        return t
+    return t_max
+
+
+@njit(cache=True)
+def sphere_ray(px, py, pz, ux, uy, uz, t_max, sx, sy, sz, rs):
+    """The smaller of ``t_max`` [m] and the distance along the ray to the sphere."""
+    wx = px - sx
+    wy = py - sy
+    wz = pz - sz
+    a = ux * ux + uy * uy + uz * uz
+    cc = wx * wx + wy * wy + wz * wz - rs * rs
+    ok, r0, r1 = _quad_roots(a, ux * wx + uy * wy + uz * wz, cc)
+    if not ok:
+        return t_max
+    t = max(0.0, r0)
+    if t <= r1 and t < t_max:
+        return t
+    return t_max
+
+
+@njit(cache=True)
 def range_scan_kernel(seg_a, seg_b, poly_offsets, circ_c, circ_r, poly_z, circ_z, sph_c, sph_r,
                       bbox_lo, bbox_hi, positions, dirs, max_range, out):
     """Fill ``out[i, r]`` with the distance [m] along ray ``dirs[r]`` (unit) from ``positions[i]``
     to the first closed obstacle, ``max_range`` if none within it; 0 for a position in collision.
 
     Per position, obstacles whose box is out of range are dropped; per ray, a ray-box test
-    that cannot beat the best hit so far skips the exact test.
+    that cannot beat the best hit so far skips the exact test. The per-primitive tests are
+    :func:`prism_ray`, :func:`cylinder_ray` and :func:`sphere_ray` written out in the loop (the
+    calls cost a quarter more on the forests; ``tests/sensing/test_index3d.py`` holds the
+    two equal through the indexed scan, which calls them).
     """
     n_poly = poly_offsets.shape[0] - 1
     n_circ = circ_r.shape[0]

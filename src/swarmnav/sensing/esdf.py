@@ -20,6 +20,7 @@ import numpy as np
 from swarmnav.sensing._kernels import as_points, esdf_query_kernel
 from swarmnav.sensing._kernels3d import esdf3d_build_kernel, esdf3d_query_kernel, geom_arrays3d
 from swarmnav.sensing.geometry import as_points_nd, signed_distance
+from swarmnav.sensing.index3d import box_index, esdf3d_indexed_build_kernel
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
@@ -77,7 +78,8 @@ class Esdf:
         In 3-D every node value is exact (bit for bit :func:`signed_distance` at the node),
         computed column by column: each obstacle's planar part once per (x, y) column, then
         per node only the few obstacles that can be nearest in that column (see
-        :func:`swarmnav.sensing._kernels3d.esdf3d_build_kernel`).
+        :func:`swarmnav.sensing._kernels3d.esdf3d_build_kernel`); a world indexed by
+        :mod:`swarmnav.sensing.index3d` searches each node's nearest primitives through its grid.
 
         Raises:
             ValueError: bounds of the wrong length or inverted, bad resolution, or bounds whose
@@ -110,7 +112,11 @@ class Esdf:
         else:
             n = [_nodes(lo[a], hi[a], resolution) for a in range(3)]
             values = np.empty((n[2], n[1], n[0]))
-            esdf3d_build_kernel(*geom_arrays3d(geom), lo[0], lo[1], lo[2], resolution, values)
+            index = box_index(geom)
+            if index is not None:  # a large 3-D map: each node searches the grid cells round it
+                esdf3d_indexed_build_kernel(*geom_arrays3d(geom), *index, lo[0], lo[1], lo[2], resolution, values)
+            else:
+                esdf3d_build_kernel(*geom_arrays3d(geom), lo[0], lo[1], lo[2], resolution, values)
         values.setflags(write=False)
         origin = lo.copy()
         origin.setflags(write=False)

@@ -29,6 +29,12 @@ from swarmnav.sensing._kernels3d import (
     segments_blocked3d_kernel,
 )
 
+from swarmnav.sensing.index3d import (
+    box_index,
+    nearest3d_indexed_kernel,
+    points_inside3d_indexed_kernel,
+    segments_blocked3d_indexed_kernel,
+)
 from swarmnav.sensing.index import (
     nearest_indexed_kernel,
     points_inside_indexed_kernel,
@@ -72,7 +78,7 @@ def signed_distance(geom: Geometry, points: np.ndarray) -> np.ndarray:
     if geom.dim == 3:
         pts = as_points_nd(points, 3)
         d = np.empty(pts.shape[0])
-        nearest3d_kernel(*geom_arrays3d(geom), pts, d, _NO_DIR3, False)
+        _nearest3d(geom, pts, d, _NO_DIR3, False)
         return d
     pts = as_points(points)
     d = np.empty(pts.shape[0])
@@ -86,6 +92,14 @@ def _nearest(geom: Geometry, pts: np.ndarray, d: np.ndarray, v: np.ndarray, want
         nearest_indexed_kernel(*geom_arrays(geom), *index, pts, d, v, want_dir)
     else:
         nearest_kernel(*geom_arrays(geom), pts, d, v, want_dir)
+
+
+def _nearest3d(geom: Geometry, pts: np.ndarray, d: np.ndarray, v: np.ndarray, want_dir: bool) -> None:
+    index = box_index(geom)
+    if index is not None:  # a large 3-D map: the same values, visiting only the primitives near each point
+        nearest3d_indexed_kernel(*geom_arrays3d(geom), *index, pts, d, v, want_dir)
+    else:
+        nearest3d_kernel(*geom_arrays3d(geom), pts, d, v, want_dir)
 
 
 def nearest_obstacle(geom: Geometry, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -105,7 +119,7 @@ def nearest_obstacle(geom: Geometry, points: np.ndarray) -> tuple[np.ndarray, np
         pts = as_points_nd(points, 3)
         d = np.empty(pts.shape[0])
         v = np.empty((pts.shape[0], 3))
-        nearest3d_kernel(*geom_arrays3d(geom), pts, d, v, True)
+        _nearest3d(geom, pts, d, v, True)
         return d, v
     pts = as_points(points)
     d = np.empty(pts.shape[0])
@@ -147,7 +161,11 @@ def points_inside(geom: Geometry, points: np.ndarray) -> np.ndarray:
     if geom.dim == 3:
         pts = as_points_nd(points, 3)
         out = np.empty(pts.shape[0], dtype=np.bool_)
-        points_inside3d_kernel(*geom_arrays3d(geom), pts, out)
+        index = box_index(geom)
+        if index is not None:
+            points_inside3d_indexed_kernel(*geom_arrays3d(geom), *index, pts, out)
+        else:
+            points_inside3d_kernel(*geom_arrays3d(geom), pts, out)
         return out
     pts = as_points(points)
     out = np.empty(pts.shape[0], dtype=np.bool_)
@@ -179,7 +197,11 @@ def segments_blocked(geom: Geometry, p: np.ndarray, q: np.ndarray) -> np.ndarray
         if a.shape != b.shape:
             raise ValueError(f"p and q must have the same shape, got {a.shape} and {b.shape}")
         out = np.empty(a.shape[0], dtype=np.bool_)
-        segments_blocked3d_kernel(*geom_arrays3d(geom), a, b, out)
+        index = box_index(geom)
+        if index is not None:
+            segments_blocked3d_indexed_kernel(*geom_arrays3d(geom), *index, a, b, out)
+        else:
+            segments_blocked3d_kernel(*geom_arrays3d(geom), a, b, out)
         return out
     a = as_points(p, "p")
     b = as_points(q, "q")

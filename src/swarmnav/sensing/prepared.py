@@ -15,6 +15,12 @@ import numpy as np
 
 from swarmnav.sensing._kernels import geom_arrays, lidar_kernel, nearest_kernel, segments_blocked_kernel
 from swarmnav.sensing._kernels3d import geom_arrays3d, nearest3d_kernel, range_scan_kernel, segments_blocked3d_kernel
+from swarmnav.sensing.index3d import (
+    box_index,
+    nearest3d_indexed_kernel,
+    range_scan_indexed_kernel,
+    segments_blocked3d_indexed_kernel,
+)
 from swarmnav.sensing.index import (
     lidar_indexed_kernel,
     nearest_indexed_kernel,
@@ -37,13 +43,14 @@ class PreparedGeometry:
     (M, d) arrays, ``d = geom.dim``, and ``out`` a buffer of the documented shape and dtype.
     """
 
-    __slots__ = ("geom", "_arrays", "_arrays3d", "_index")
+    __slots__ = ("geom", "_arrays", "_arrays3d", "_index", "_index3d")
 
     def __init__(self, geom: Geometry):
         self.geom = geom
         self._arrays = geom_arrays(geom) if geom.dim == 2 else None
         self._arrays3d = geom_arrays3d(geom) if geom.dim == 3 else None
         self._index = polygon_index(geom)  # None but for a large planar map (sensing.index)
+        self._index3d = box_index(geom)  # None but for a large 3-D map (sensing.index3d)
 
     @property
     def is_empty(self) -> bool:
@@ -73,6 +80,9 @@ class PreparedGeometry:
     def blocked_into(self, p: np.ndarray, q: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out`` (M,) bool <- whether segment p[m] -> q[m] meets an obstacle, as
         :func:`swarmnav.sensing.segments_blocked` (either dimension)."""
+        if self._index3d is not None:
+            segments_blocked3d_indexed_kernel(*self._arrays3d, *self._index3d, p, q, out)
+            return out
         if self._arrays3d is not None:
             segments_blocked3d_kernel(*self._arrays3d, p, q, out)
             return out
@@ -85,7 +95,9 @@ class PreparedGeometry:
     def distance_into(self, points: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out`` (M,) float64 <- the signed distance [m] of every point (M, d) to the obstacles, as
         :func:`swarmnav.sensing.signed_distance` (either dimension; the geometry must not be empty)."""
-        if self._arrays3d is not None:
+        if self._index3d is not None:
+            nearest3d_indexed_kernel(*self._arrays3d, *self._index3d, points, out, _NO_DIR3, False)
+        elif self._arrays3d is not None:
             nearest3d_kernel(*self._arrays3d, points, out, _NO_DIR3, False)
         elif self._index is not None:
             nearest_indexed_kernel(*self._arrays, *self._index, points, out, _NO_DIR, False)
@@ -99,5 +111,8 @@ class PreparedGeometry:
         position (N, 3), as :func:`swarmnav.sensing.range_scan` in a 3-D world."""
         if self._arrays3d is None:
             raise ValueError("range_into needs a 3-D world; use lidar_into in the plane")
-        range_scan_kernel(*self._arrays3d, positions, directions, float(max_range), out)
+        if self._index3d is not None:
+            range_scan_indexed_kernel(*self._arrays3d, *self._index3d, positions, directions, float(max_range), out)
+        else:
+            range_scan_kernel(*self._arrays3d, positions, directions, float(max_range), out)
         return out

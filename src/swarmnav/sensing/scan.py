@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from swarmnav.sensing._kernels3d import geom_arrays3d, planar_as_3d, range_scan_kernel
+from swarmnav.sensing.index3d import box_index, range_scan_indexed_kernel
 
 if TYPE_CHECKING:
     from swarmnav.world.obstacles import Geometry
@@ -65,5 +66,9 @@ def range_scan(geom: Geometry, positions: np.ndarray, directions: np.ndarray, ma
         arrays = geom_arrays3d(geom)
     u = np.ascontiguousarray(u)
     out = np.empty((pos.shape[0], u.shape[0]))
-    range_scan_kernel(*arrays, pos, u, max_range, out)
+    index = box_index(geom) if d == 3 else None
+    if index is not None:  # a large 3-D map: each ray walks the grid cells under it (sensing.index3d)
+        range_scan_indexed_kernel(*arrays, *index, pos, u, max_range, out)
+    else:
+        range_scan_kernel(*arrays, pos, u, max_range, out)
     return out
