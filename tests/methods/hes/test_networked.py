@@ -184,7 +184,11 @@ def picture_control(h, step):
     kx, kv = np.broadcast_to(step.x, (n, n, 2)), np.broadcast_to(step.v, (n, n, 2))
     labels, group, sl_idx, wp, nav, planned = NW.plan_rows(h, step)
     lab, coh = (np.ascontiguousarray(np.broadcast_to(a, (n, n))) for a in (labels, group))
-    return NW.control_known(h, step, kx, kv, np.ones((n, n), dtype=bool), lab, coh, sl_idx, wp, nav, planned)
+    heard = np.ones((n, n), dtype=bool)
+    trail = h.part("trail")
+    if trail is not None:  # each agent's trail of its pictures: here the true positions
+        trail.observe_known(step, NW.Picture(step.k, kx, kv, heard, lab, [None] * n))
+    return NW.control_known(h, step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned)
 
 
 @pytest.mark.parametrize("preset", [None, "paper"])
