@@ -26,8 +26,15 @@ of that plan (subleader, c_s, mode, slot, speed).
 
 Fed every agent's true state and one plan for all, the control stage and the report give the
 ideal path's values bit for bit (tests/methods/hes/test_networked.py). ``Hes._act_networked``
-wires them into one step; passage mode, the stall planner and trail following read other agents'
-true states in their hooks and are refused on a network (``TRUE_STATE_PARTS``).
+wires them into one step.
+
+- **Our default build's parts**: their planner hooks run in the leader's planner on its picture;
+  the plan carries what their control hooks need of it (passage mode's throats and queues, the
+  stall planner's look-ahead for each engaged member: :func:`plan_of`), and the control hooks
+  read that plan and the agent's pictures (``steer_known``, ``brake_known``, :class:`Picture`);
+  the leader applies passage mode's report hooks to the reports it receives (:func:`leader_view`)
+  and maps the rings it holds (:func:`leader_rings`); trail following keeps each agent's trail of
+  its pictures.
 """
 
 from __future__ import annotations
