@@ -79,8 +79,10 @@ def test_late_and_lost_messages_never_give_an_agent_a_plan_it_has_not_received()
     assert again.positions.tobytes() == r.positions.tobytes()
 
 
-def test_with_every_message_lost_each_agent_flies_alone():
-    h, r = fly(steps=80, loss=1.0)
+@pytest.mark.parametrize("preset", ["paper", None])
+def test_with_every_message_lost_each_agent_flies_alone(preset):
+    h = Recorder(**({} if preset is None else {"preset": preset}))
+    r = run(h, SCENE, seed=1, steps=80, **{"net.loss": 1.0})
     assert np.isfinite(r.positions).all()
     check_plans(h)
     for _, flown, _, _, _ in h.log:
