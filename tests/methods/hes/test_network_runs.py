@@ -17,7 +17,8 @@ SCENE = "narrow_alternating_gates"
 
 class Recorder(Hes):
     """HES that keeps, each step, every plan each agent has received from the leader so far, the
-    plan each agent flies, the plan the leader published and the labels it returned."""
+    plan each agent flies, the plan the leader published and the labels it returned; and the
+    reports sent at the last step."""
 
     def reset(self, scenario, positions, velocities, rng):
         super().reset(scenario, positions, velocities, rng)
@@ -32,6 +33,7 @@ class Recorder(Hes):
                     self.got[i].add(id(q))
         a, info = super().act(obs, rng)
         plan = info["publish"][NW.PLAN][self.leader]
+        self.reports = [m for m in info["publish"][NW.REPORT] if m is not None]  # the reports sent this step
         self.got[self.leader].add(id(plan))
         self.log.append((obs.step, list(self.flown), plan, info["labels"], [set(g) for g in self.got]))
         return a, info
@@ -144,6 +146,8 @@ def test_the_default_build_routes_queued_members_through_the_throats_its_plan_ca
                                         q.own, q.routed))
     assert q.nbytes == base + 44 * sum(map(len, q.throats.values())) + (
         0 if q.field_pt is None else q.field_pt.nbytes + q.field_half.nbytes)
+    # a report counts its ring (360 rays of 8 B) and the members' nearest returns passage mode adds
+    assert h.reports and all(m.nbytes > 8 * 360 + m.ring_min.nbytes for m in h.reports)
 
 
 def test_the_cli_flies_hes_on_a_lossy_late_network(tmp_path):

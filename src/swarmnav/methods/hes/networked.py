@@ -508,6 +508,16 @@ class Sent:
     at: np.ndarray | None = None
     ring_min: np.ndarray | None = None
 
+    @property
+    def nbytes(self) -> int:
+        """[B] the report's size in a message (docs/network.md): its steps (2 x 8 B), sub-swarm and
+        subleader ids (2 x 4 B), the Pack (a 4 B id, position and velocity, 8 B a float, a
+        member; the centroid), 65 B a corridor (8 floats and a flag), the clearance, the ring (8 B
+        a ray) and what the parts add (``at``, ``ring_min``)."""
+        pack = self.report.pack
+        size = 16 + 8 + len(pack.members) * (4 + 32) + 16 + 65 * len(self.report.corridors) + 8 + self.ring.nbytes
+        return size + sum(a.nbytes for a in (self.at, self.ring_min) if a is not None)
+
 
 def reports_sent(h, step: Step, plans: list, kx, kv, heard, ring_min_seen) -> list:
     """The ``REPORT`` rows of this step: agent a sends a :class:`Sent` when the plan it flies makes
