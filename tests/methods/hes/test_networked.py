@@ -184,7 +184,39 @@ def picture_control(h, step):
     kx, kv = np.broadcast_to(step.x, (n, n, 2)), np.broadcast_to(step.v, (n, n, 2))
     labels, group, sl_idx, wp, nav, planned = NW.plan_rows(h, step)
     lab, coh = (np.ascontiguousarray(np.broadcast_to(a, (n, n))) for a in (labels, group))
-    return NW.control_known(h, step, kx, kv, np.ones((n, n), dtype=bool), lab, coh, sl_idx, wp, nav, planned)
+    heard = np.ones((n, n), dtype=bool)
+    trail = h.part("trail")
+    if trail is not None:  # each agent's trail of its pictures: here the true positions
+        trail.observe_known(step, NW.Picture(step.k, kx, kv, heard, lab, [None] * n))
+    return NW.control_known(h, step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned)
+
+
+@pytest.mark.parametrize("scene, overrides, steps", [
+    ("dense_cross_blocks", {}, 600),  # trail following: members cut off in the crosses' corners
+    ("narrow_alternating_gates", {"stall.time": 1.0}, 300),  # the stall planner engaged early
+])
+def test_the_default_builds_parts_on_true_pictures_fly_the_ideal_run_bit_for_bit(scene, overrides, steps, monkeypatch):
+    """Trail following and the stall planner through their network hooks (each agent's trail of
+    its pictures, the field's look-ahead carried by the plan), fed the true states: the ideal run."""
+    from swarmnav.methods.hes import method as M
+    from swarmnav.methods.hes.method import Hes
+    from swarmnav.sim.rollout import run
+
+    ref_h = Hes(**overrides)
+    ref = run(ref_h, scene, seed=2, steps=steps)
+    cut, engaged = [], []
+
+    def control(h, step):
+        a = picture_control(h, step)
+        cut.append(int(h.part("trail").last_cut.sum()))
+        engaged.append(any(h.part("stall").engaged(s) for s in h.subs))
+        return a
+
+    monkeypatch.setattr(M, "control", control)
+    got = run(Hes(**overrides), scene, seed=2, steps=steps)
+    assert any(cut) if scene == "dense_cross_blocks" else any(engaged)
+    assert got.positions.tobytes() == ref.positions.tobytes()
+    assert got.velocities.tobytes() == ref.velocities.tobytes()
 
 
 @pytest.mark.parametrize("preset", [None, "paper"])

@@ -73,12 +73,7 @@ def test_bad_oracle_parameters_are_config_errors(bad):
         swarmnav.run("hes", SCENE, seed=SEED, steps=2, decision="oracle", **bad)
 
 
-#: the parts of ours that read true states, off: the build that may fly a non-ideal network
-_NETWORKABLE = {"guard.on": False, "stall.on": False, "trail.on": False, "passage.on": False, "hold.on": False,
-                "commit.on": False, "width.on": False}
-
-
-@pytest.mark.parametrize("option", [{"net.latency": 0.2, **_NETWORKABLE}, {"vehicle": "quadrotor"}])
+@pytest.mark.parametrize("option", [{"net.latency": 0.2}, {"vehicle": "quadrotor"}])
 def test_the_oracle_needs_the_ideal_network_and_the_point_vehicle(option):
     with pytest.raises(ConfigError, match="ideal network"):
         swarmnav.run("hes", SCENE, seed=SEED, steps=2, decision="oracle", **option)

@@ -379,7 +379,7 @@ def newest_visible(ring, sx, sy, cos_t, sin_t, trail, count, members, rho, reach
             dx = trail[t, j, 0] - sx
             dy = trail[t, j, 1] - sy
             d2 = dx * dx + dy * dy
-            if d2 > r2 or d2 >= best:
+            if not d2 <= r2 or d2 >= best:  # (a NaN point: a mate not heard at that sample, on a network)
                 continue
             if segment_clear(ring, sx, sy, cos_t, sin_t, sx, sy, trail[t, j, 0], trail[t, j, 1], rho, max_range):
                 best, jb = d2, j

@@ -33,6 +33,12 @@ stage / hook                 what a part may do there
             ``brake``        bound the command before saturation (eq. 39)
             ``guard``        bound the command after saturation
 ===========================  ====================================================================
+
+On a non-ideal network (``networked.py``, docs/methods/hes-network.md) the planner's hooks run in
+the leader's planner on its picture of the agents, and three hooks have a version on what each
+agent received (``net``: a :class:`~swarmnav.methods.hes.networked.Picture`): ``observe_known``
+(default: ``observe`` of the rings the leader holds), ``steer_known`` and ``brake_known`` (default:
+``steer`` / ``brake``, for parts that read only each agent's own state and ring).
 """
 
 from __future__ import annotations
@@ -55,6 +61,12 @@ class Part:
 
     # 1. perceive
     def observe(self, step) -> None: ...
+
+    def observe_known(self, step, net) -> None:
+        """On a network: ``step`` the rings the leader holds (its own, its reports'), at the
+        positions where they were sensed; ``net`` each agent's picture."""
+        self.observe(step)
+
     def elect(self, step, col: np.ndarray) -> None: ...
 
     # 2. report
@@ -99,6 +111,10 @@ class Part:
     # 5. control
     def steer(self, step) -> None: ...
 
+    def steer_known(self, step, net) -> None:
+        """``steer`` on a network, reading the others only through ``net``."""
+        self.steer(step)
+
     def push_back(self, step) -> bool:
         """True if the part edits the eight terms this step (then :meth:`edit_terms` is called)."""
         return False
@@ -107,6 +123,10 @@ class Part:
 
     def brake(self, step, a: np.ndarray) -> np.ndarray:
         return a
+
+    def brake_known(self, step, a: np.ndarray, net) -> np.ndarray:
+        """``brake`` on a network, reading the others only through ``net``."""
+        return self.brake(step, a)
 
     def guard(self, step, a: np.ndarray) -> np.ndarray:
         return a

@@ -34,8 +34,9 @@ from swarmnav.methods.hes.decision import DecisionSource, DecisionState, RulePol
 from swarmnav.methods.hes.hierarchy import Report
 from swarmnav.methods.hes.navigate import navigate
 from swarmnav.methods.hes.oracle import OracleSource
-from swarmnav.methods.hes.networked import (PLAN, REPORT, RING_MIN, TRUE_STATE_PARTS, control_known, flown_rows,
-                                            plan_of, plans_flown, publication, reports_received, reports_sent)
+from swarmnav.methods.hes.networked import (PLAN, REPORT, RING_MIN, Picture, control_known, flown_rows,
+                                            leader_rings, leader_view, part_rows, plan_of, plans_flown,
+                                            publication, reports_received, reports_sent)
 from swarmnav.methods.hes.params import HesParams
 from swarmnav.methods.hes.parts import build_parts
 from swarmnav.methods.hes.hooks import Part, hook_table
@@ -73,11 +74,6 @@ class Hes:
         self.at: dict[str, list[Part]] = hook_table([])  # hook name -> the parts that override it
         self._part_key: tuple | None = None  # the labels and ids the cached Partition was built for
         self._part: Partition | None = None
-        on = [name for name in TRUE_STATE_PARTS if getattr(self.params, name).on]
-        #: why this build cannot fly a non-ideal network (None: it can); the rollout refuses with it
-        self.network_refusal = None if not on else (
-            f"hes flies a non-ideal network (net.*) only without the parts that read other agents' true states: "
-            f"set {' '.join(f'{name}.on=false' for name in on)} (or preset=paper)")
 
     def use_source(self, source: DecisionSource) -> Hes:
         """Decide structure with ``source`` instead of the rule policy (from the next reset)."""
@@ -234,6 +230,12 @@ class Hes:
         sent = reports_sent(self, step, plans, kx, kv, heard, obs.received(RING_MIN))
         got = obs.received(REPORT)
         kept = reports_received(self, None if got is None else got[lead], sent, k, self.kept)
+        # the parts' perception: the leader's map of the rings it holds, each agent's trail of its pictures
+        if self.at["observe"]:
+            seen = leader_rings(self, x[lead], step.ring[lead], kept, k)
+            net = Picture(k, kx, kv, heard, None, plans)
+            for q in self.at["observe"]:
+                q.observe_known(seen, net)
         # the leader's picture: agents it has never heard where they started (the mission plan)
         hx = np.where(heard[lead][:, None], kx[lead], self.start_x)
         hv = np.where(heard[lead][:, None], kv[lead], self.start_v)
@@ -252,13 +254,16 @@ class Hes:
         reassign_followers(self, hx, k)
         self._route_agents(ps, final=True)
         references(self, ps)
+        passage = self.part("passage")
+        if passage is not None:  # the next reports' cruise mask: the members' safety distances as the leader pictures them
+            passage.planned_dsafe(ps.x, self.labels)
         plan = plan_of(self, ps)
         plans[lead] = plan
         self.flown = plans
         lab, coh, sl_idx, wp, nav, planned, step.slot, step.speed = flown_rows(plans, x)
-        step.own = np.full(n, -1, dtype=np.int64)
-        step.own_target, step.routed = np.zeros((n, 2)), np.zeros(n, dtype=np.bool_)
-        a = control_known(self, step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned)
+        step.own, step.routed = part_rows(plans, n)
+        step.own_target = np.where((step.own >= 0)[:, None], wp, 0.0)
+        a = control_known(self, step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned, plans)
         self.last_step = step
         publish = {PLAN: publication(plan, lead, n), REPORT: sent, RING_MIN: step.ring_min.copy()}
         return a, {"labels": self.labels.copy(), "events": events, "roles": self.roles(),
@@ -268,7 +273,7 @@ class Hes:
         """Stages 2-3 on the leader's reports: z(k) and the source's proposal through Pi_feas only
         when it holds a report of every sub-swarm (else it keeps the structure); after a split or a
         merge it drops every report and waits for reports made on the new plan."""
-        ps.reports = {s: kept[s].report for s in sorted(self.subs) if s in kept}
+        ps.reports = {s: leader_view(self, ps, kept[s]) for s in sorted(self.subs) if s in kept}
         if len(ps.reports) < len(self.subs):
             return []
         k, events = ps.k, []

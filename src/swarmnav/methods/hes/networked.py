@@ -26,13 +26,20 @@ of that plan (subleader, c_s, mode, slot, speed).
 
 Fed every agent's true state and one plan for all, the control stage and the report give the
 ideal path's values bit for bit (tests/methods/hes/test_networked.py). ``Hes._act_networked``
-wires them into one step; passage mode, the stall planner and trail following read other agents'
-true states in their hooks and are refused on a network (``TRUE_STATE_PARTS``).
+wires them into one step.
+
+- **Our default build's parts**: their planner hooks run in the leader's planner on its picture;
+  the plan carries what their control hooks need of it (passage mode's throats and queues, the
+  stall planner's look-ahead for each engaged member: :func:`plan_of`), and the control hooks
+  read that plan and the agent's pictures (``steer_known``, ``brake_known``, :class:`Picture`);
+  the leader applies passage mode's report hooks to the reports it receives (:func:`leader_view`)
+  and maps the rings it holds (:func:`leader_rings`); trail following keeps each agent's trail of
+  its pictures.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
@@ -219,19 +226,20 @@ def plan_rows(h, step: Step) -> tuple:
     return h.labels, group, sl_idx, wp, nav, planned
 
 
-def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned) -> np.ndarray:
+def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, planned, plans=None) -> np.ndarray:
     """``control.control`` with every other agent read from the receiving agent's picture (``kx``,
     ``kv``, ``heard`` as ``Observation.known``) and each agent flying the plan it holds (``lab``,
     ``coh`` (N, N): row i the sub-swarms and cohesion groups of agent i's plan; ``sl_idx``, ``wp``, ``nav``, ``planned`` (N,) its
     own rows, as :func:`plan_rows` gives them). The commanded acceleration (N, 2) [m/s^2].
 
-    The parts' hooks (``steer``, ``push_back``, ``brake``, ``guard``) are called as on the ideal
-    path; the contact guard brakes for each agent's pictures (:func:`agent_guard_known`). The
-    others read only each agent's own state and ring, except passage mode's and the stall
-    planner's, which read the true states (``Step.x``, ``Step.rows``): a build with those on does
-    not fly a network (``TRUE_STATE_PARTS``)."""
+    ``plans``: the plan each agent flies (default: the planner's current plan for every agent);
+    the parts read it and the pictures through ``steer_known`` and ``brake_known``
+    (:class:`Picture`); the contact guard brakes for each agent's pictures
+    (:func:`agent_guard_known`); ``push_back`` and the other ``guard`` hooks read only each
+    agent's own state, ring and plan rows (``step.own``, ``step.dsafe``)."""
     p = h.params
     x, v, n = step.x, step.v, h.n
+    net = Picture(step.k, kx, kv, heard, lab, [plan_of(h, step)] * n if plans is None else plans)
     cent, nn, nn_pos, sl_pos, sl_vel, follower = couple_known(x, v, kx, kv, heard, coh, sl_idx, planned)
     step.rows = neighbour_rows(x, h.pair_radius)
     step.col = h.partition().col
@@ -249,7 +257,7 @@ def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, plann
     step.exit_dir = np.zeros((n, 2))
     step.exit_free = np.zeros(n, dtype=np.bool_)
     for part in h.at["steer"]:
-        part.steer(step)
+        part.steer_known(step, net)
     args = (x, v, kx, heard, lab, sl_pos, sl_vel, step.follower, step.cent, step.nn, nn_pos, step.wp, step.nav,
             step.slot, step.speed, p.core.eps_v, step.sig, step.ring, h.cos, h.sin, h.gains, step.dsafe)
     edit = [part for part in h.at["push_back"] if part.push_back(step)]
@@ -261,7 +269,7 @@ def control_known(h, step: Step, kx, kv, heard, lab, coh, sl_idx, wp, nav, plann
     else:
         a = eq38_known(*args)
     for part in h.at["brake"]:
-        a = part.brake(step, a)
+        a = part.brake_known(step, a, net)
     a = F.saturate(a, p.a_bound)
     for part in h.at["guard"]:
         if part.name == "guard":  # the contact guard: each agent brakes for its pictures of the others
@@ -292,14 +300,78 @@ class Plan:
     planned: np.ndarray
     slot: np.ndarray
     speed: np.ndarray
+    #: the default build's parts (None when off): ``own`` (N,) int an agent's passage queue (-1:
+    #: none) and ``routed`` (N,) bool routed by a part (passage mode); ``throats`` {sid: tuple of
+    #: Corridor} the passages each sub-swarm is routed through (passage mode); ``field_pt`` (N, 2)
+    #: [m] and ``field_half`` (N,) [m] the stall planner's look-ahead point and narrow half-width
+    #: for each member of an engaged sub-swarm (NaN: not engaged), from the leader's picture
+    own: np.ndarray | None = None
+    routed: np.ndarray | None = None
+    throats: dict | None = None
+    field_pt: np.ndarray | None = None
+    field_half: np.ndarray | None = None
+
+    @property
+    def nbytes(self) -> int:
+        """[B] the plan's size in a message (docs/network.md): 8 B the step, every row's array,
+        and per throat its sub-swarm id (4 B) and mid, normal and width (5 floats of 8 B)."""
+        rows = (self.labels, self.group, self.sl_idx, self.wp, self.nav, self.planned, self.slot, self.speed,
+                self.own, self.routed, self.field_pt, self.field_half)
+        size = 8 + sum(a.nbytes for a in rows if a is not None)
+        return size + sum(44 * len(t) for t in (self.throats or {}).values())
 
 
 def plan_of(h, step: Step) -> Plan:
     """The planner's plan of this step (after the references of eq. 23), copied: what the leader
-    sends."""
+    sends. With passage mode on it carries each agent's queue and routing and each sub-swarm's
+    throats; with the stall planner on, each engaged member's look-ahead down the planner's field
+    from the leader's picture of it (``step.x``)."""
     labels, group, sl_idx, wp, nav, planned = plan_rows(h, step)
+    extra = {}
+    passage, stall = h.part("passage"), h.part("stall")
+    if passage is not None:
+        extra.update(own=np.array(step.own, dtype=np.int64), routed=np.array(step.routed, dtype=np.bool_),
+                     throats=passage.throats())
+    if stall is not None:
+        rows = stall.field_rows(step.x, labels)
+        if rows is not None:
+            extra.update(field_pt=rows[0], field_half=rows[1])
     return Plan(step.k, labels.copy(), np.array(group, copy=True), sl_idx.copy(), wp.copy(), nav.copy(),
-                planned.copy(), step.slot.copy(), step.speed.copy())
+                planned.copy(), step.slot.copy(), step.speed.copy(), **extra)
+
+
+def by_plan(plans: list):
+    """The distinct plans among the agents' (None skipped), each with the agents flying it: a list
+    of (plan, (M,) int rows), in order of first appearance."""
+    distinct: dict[int, tuple] = {}
+    for i, q in enumerate(plans):
+        if q is not None:
+            distinct.setdefault(id(q), (q, []))[1].append(i)
+    return [(q, np.array(r)) for q, r in distinct.values()]
+
+
+def part_rows(plans: list, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each agent's passage queue ``own`` (N,) int (-1: none) and ``routed`` (N,) bool from the
+    plan it flies (an agent with no plan, or a plan without them: -1 and False)."""
+    own, routed = np.full(n, -1, dtype=np.int64), np.zeros(n, dtype=np.bool_)
+    for q, r in by_plan(plans):
+        if q.own is not None:
+            own[r], routed[r] = q.own[r], q.routed[r]
+    return own, routed
+
+
+@dataclass(frozen=True, slots=True)
+class Picture:
+    """What each agent holds on a network, for the parts' ``*_known`` hooks: ``kx``, ``kv`` (N, N, 2)
+    and ``heard`` (N, N) as ``Observation.known``, ``lab`` (N, N) int row i the sub-swarm labels of
+    agent i's plan, ``plans`` the plan each agent flies (None: none), ``k`` the step."""
+
+    k: int
+    kx: np.ndarray
+    kv: np.ndarray
+    heard: np.ndarray
+    lab: np.ndarray
+    plans: list
 
 
 def publication(plan: Plan, leader: int, n: int) -> list:
@@ -333,12 +405,7 @@ def flown_rows(plans: list, x: np.ndarray) -> tuple:
     wp, slot = x.copy(), x.copy()
     nav, planned = np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_)
     speed = np.zeros(n)
-    distinct: dict[int, tuple] = {}
-    for i, q in enumerate(plans):  # a few distinct plans among the N agents: fill their rows at once
-        if q is not None:
-            distinct.setdefault(id(q), (q, []))[1].append(i)
-    for q, rows in distinct.values():
-        r = np.array(rows)
+    for q, r in by_plan(plans):  # a few distinct plans among the N agents: fill their rows at once
         lab[r], coh[r] = q.labels, q.group
         sl_idx[r], wp[r], nav[r], planned[r] = q.sl_idx[r], q.wp[r], q.nav[r], q.planned[r]
         slot[r], speed[r] = q.slot[r], q.speed[r]
@@ -422,12 +489,6 @@ def report_known(h, step: Step, s: int, kx, kv, heard, ring_min_seen):
 #: The name a subleader publishes its report under (a :class:`Sent`).
 REPORT = "hes_report"
 
-#: The parts whose hooks read other agents' true states (passage mode's queues and throats, the
-#: stall planner's progress and plans, trail following's trails): a build with any of them on
-#: does not fly a network (``Hes.network_refusal``).
-TRUE_STATE_PARTS = ("passage", "stall", "trail")
-
-
 @dataclass(frozen=True, slots=True)
 class Sent:
     """A subleader's report as it travels: sent at step ``k`` by agent ``subleader`` for sub-swarm
@@ -441,6 +502,21 @@ class Sent:
     subleader: int
     report: object
     ring: np.ndarray
+    #: (2,) [m] where the subleader sensed ``ring`` (its own position; the leader's map of returns
+    #: with the stall planner) and (m,) [m] the nearest returns of the reported members as the
+    #: subleader holds them (the leader's cruise mask with passage mode); None without those parts
+    at: np.ndarray | None = None
+    ring_min: np.ndarray | None = None
+
+    @property
+    def nbytes(self) -> int:
+        """[B] the report's size in a message (docs/network.md): its steps (2 x 8 B), sub-swarm and
+        subleader ids (2 x 4 B), the Pack (a 4 B id, position and velocity, 8 B a float, a
+        member; the centroid), 65 B a corridor (8 floats and a flag), the clearance, the ring (8 B
+        a ray) and what the parts add (``at``, ``ring_min``)."""
+        pack = self.report.pack
+        size = 16 + 8 + len(pack.members) * (4 + 32) + 16 + 65 * len(self.report.corridors) + 8 + self.ring.nbytes
+        return size + sum(a.nbytes for a in (self.at, self.ring_min) if a is not None)
 
 
 def reports_sent(h, step: Step, plans: list, kx, kv, heard, ring_min_seen) -> list:
@@ -461,8 +537,53 @@ def reports_sent(h, step: Step, plans: list, kx, kv, heard, ring_min_seen) -> li
         rm[a] = step.ring_min[a]
         rm[np.isnan(rm)] = np.inf
         pic = Step(step.k, np.ascontiguousarray(kx[a]), np.ascontiguousarray(kv[a]), step.ring, ring_min=rm)
-        rows[a] = Sent(step.k, q.k, s, a, report(h, pic, s, members, subleader=a), step.ring[a].copy())
+        # passage mode's corridor filter and cruise mask read the planner's memory of throats: the
+        # leader applies them to the report it receives (leader_view)
+        rep = report(h, pic, s, members, subleader=a, planner_hooks=False)
+        extra = {}
+        if h.part("stall") is not None:
+            extra["at"] = step.x[a].copy()
+        if h.part("passage") is not None:
+            extra["ring_min"] = rm[members].copy()
+        rows[a] = Sent(step.k, q.k, s, a, rep, step.ring[a].copy(), **extra)
     return rows
+
+
+def leader_view(h, ps: Step, m: Sent):
+    """The report ``m`` as the leader's planner reads it: passage mode's corridor filter and cruise
+    mask (hooks ``corridors``, ``cruise_mask``), which read the planner's memory of throats, applied
+    by the leader to what the subleader sent (the cruise mask to the members' nearest returns the
+    report carries). The report itself without those parts."""
+    rep = m.report
+    if not (h.at["corridors"] or h.at["cruise_mask"]):
+        return rep
+    sub = h.subs[m.sid]
+    cors = list(rep.corridors)
+    for q in h.at["corridors"]:
+        cors = q.corridors(ps, sub, cors)
+    clear = rep.clearance
+    clr = None
+    for q in h.at["cruise_mask"]:
+        free = q.cruise_mask(rep.pack.members)
+        if free is not None and m.ring_min is not None:
+            clr = m.ring_min if clr is None else clr
+            clr = clr[free] if np.count_nonzero(free) else clr
+    if clr is not None:
+        clear = min(clr.tolist())
+    return replace(rep, corridors=tuple(cors), clearance=clear)
+
+
+def leader_rings(h, x_lead, ring_lead, kept: dict, k: int) -> Step:
+    """The rings the leader holds this step, as a step of their own for the parts' ``observe``
+    hooks (the stall planner's map of returns): its own at its position and each kept report's
+    at the position where its subleader sensed it."""
+    xs, rings = [x_lead], [ring_lead]
+    for m in kept.values():
+        if m.at is not None:
+            xs.append(m.at)
+            rings.append(m.ring)
+    x = np.array(xs, dtype=float)
+    return Step(k, x, np.zeros_like(x), np.ascontiguousarray(np.array(rings, dtype=float)))
 
 
 def reports_received(h, got, own: list, k: int, kept: dict) -> dict:

@@ -87,12 +87,15 @@ def handed_over(x, col, sl, stray, check, seg_a, seg_b, poly_offsets, circ_c, ci
     return k
 
 
-def report(h, step: Step, s: int, members: np.ndarray | None = None, subleader: int | None = None) -> Report:
+def report(h, step: Step, s: int, members: np.ndarray | None = None, subleader: int | None = None,
+           planner_hooks: bool = True) -> Report:
     """Subleader s's report: its Pack and the corridors toward the goal its ring shows (those
     whose throat is reachable straight from the centroid), and its members' nearest return.
     ``members``: the members it reports (ascending; default: every member of the partition);
     ``subleader``: the agent reporting (default: the planner's subleader of s; on a network the
-    agent whose plan makes it s's subleader, which the planner may have relieved since)."""
+    agent whose plan makes it s's subleader, which the planner may have relieved since);
+    ``planner_hooks``: False leaves out the hooks that read the planner's memory (``corridors``,
+    ``cruise_mask``), which on a network the leader applies to the report it receives."""
     p = h.params
     x = step.x
     sub = h.subs.get(s)
@@ -117,10 +120,10 @@ def report(h, step: Step, s: int, members: np.ndarray | None = None, subleader: 
     widths, costs = rows[:, 4].tolist(), rows[:, 7].tolist()
     cors = [Corridor(rows[j, 0:2], rows[j, 2:4], widths[j], rows[j, 5:7], costs[j])
             for j in sorted(range(len(costs)), key=costs.__getitem__)]  # by cost, stable
-    for q in h.at["corridors"]:
+    for q in (h.at["corridors"] if planner_hooks else ()):
         cors = q.corridors(step, sub, cors)
     clr = None  # the members' returns a part's cruise mask keeps (None: every member's, as `clear`)
-    for q in h.at["cruise_mask"]:
+    for q in (h.at["cruise_mask"] if planner_hooks else ()):
         free = q.cruise_mask(members)
         if free is not None:
             clr = step.ring_min[members] if clr is None else clr

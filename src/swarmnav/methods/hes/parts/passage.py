@@ -325,21 +325,72 @@ class PassageMode(Part):
         (:func:`passage_dsafe`; the smallest value where tubes overlap). ``exit_dir`` gets the exit
         direction of the tube each member is in and lined up with (within w/2 - margin of its
         centre line)."""
-        p = self.p
         for s, mem in self.mem.items():  # a loop over (at most a few) sub-swarms and throats, not agents
             if not mem.passages:
                 continue
             members = np.flatnonzero(labels == s)
             for q in mem.passages:
-                c = q.throat
-                eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.paper.d_safe, p.passage.margin,
-                                    p.passage.length, p.passage.reach, p.passage.relief)
-                inside = members[eff < out[members]]
-                rel = x[inside] - c.mid
-                lined = np.abs(rel @ np.array([-c.normal[1], c.normal[0]])) <= 0.5 * c.width - p.passage.margin
-                exit_dir[inside] = np.where(lined[:, None], c.normal, 0.0)
-                out[members] = np.minimum(out[members], eff)
+                self._lower(x, members, q.throat, out, exit_dir)
         return out
+
+    def _lower(self, x, members, c, out, exit_dir) -> None:
+        """:meth:`safe_distance` for the ``members`` (ascending indices) routed through throat ``c``."""
+        p = self.p
+        eff = passage_dsafe(x[members], c.mid, c.normal, c.width, p.paper.d_safe, p.passage.margin,
+                            p.passage.length, p.passage.reach, p.passage.relief)
+        inside = members[eff < out[members]]
+        rel = x[inside] - c.mid
+        lined = np.abs(rel @ np.array([-c.normal[1], c.normal[0]])) <= 0.5 * c.width - p.passage.margin
+        exit_dir[inside] = np.where(lined[:, None], c.normal, 0.0)
+        out[members] = np.minimum(out[members], eff)
+
+    # ------------------------------------------------------------ on a network (docs/methods/hes-network.md)
+    def throats(self) -> dict:
+        """{sid: tuple of throats} of the sub-swarms routed through passages (the leader's plan
+        carries them to the members)."""
+        return {s: tuple(q.throat for q in mem.passages) for s, mem in self.mem.items() if mem.passages}
+
+    def planned_dsafe(self, x: np.ndarray, labels: np.ndarray) -> None:
+        """The leader's cruise mask on a network: its members' safety distances from its picture of
+        them (``x``), in place of the ones the agents computed (which it does not receive)."""
+        d = np.empty(len(x))
+        d.fill(self.p.paper.d_safe)
+        self.last_dsafe = self.safe_distance(x, labels, d, np.zeros((len(x), 2)))
+        self.lowered = n_below(self.last_dsafe, self.p.paper.d_safe) > 0
+
+    def steer_known(self, step, net):
+        """:meth:`steer` on a network: each agent's safety distance from the throats of the plan it
+        flies, at its own position."""
+        from swarmnav.methods.hes.networked import by_plan
+
+        for q, rows in by_plan(net.plans):
+            if not q.throats:
+                continue
+            sid = q.labels[rows]
+            for s, throats in q.throats.items():
+                members = rows[sid == s]
+                for c in throats:
+                    self._lower(step.x, members, c, step.dsafe, step.exit_dir)
+        # as steer (the ideal path's next cruise mask); on a network the leader replaces them
+        # with its own picture's before it reads them (planned_dsafe)
+        self.last_dsafe = step.dsafe
+        self.lowered = True
+
+    def chained_known(self, net) -> np.ndarray:
+        """(N,) bool on a network: the plan the agent flies routes its sub-swarm through throats."""
+        n = len(net.plans)
+        out = np.zeros(n, dtype=np.bool_)
+        for i, q in enumerate(net.plans):
+            out[i] = q is not None and bool(q.throats) and int(q.labels[i]) in q.throats
+        return out
+
+    def queue_barrier_known(self, step, a: np.ndarray, active: np.ndarray, net) -> np.ndarray:
+        """:meth:`queue_barrier` on a network: each active member brakes for its pictures of the others."""
+        from swarmnav.methods.hes.networked import agent_barrier_known
+
+        p = self.p
+        return agent_barrier_known(np.ascontiguousarray(a), step.x, step.v, net.kx, net.kv, net.heard, active,
+                                   p.paper.dt, p.passage.agent_brake, p.passage.agent_margin, p.a_bound)
 
     def push_back(self, step):
         self.lowered = n_below(step.dsafe, self.p.paper.d_safe) > 0

@@ -49,6 +49,17 @@ class WallBarrier(Part):
         a = self.wall(step, self.queue.queue_barrier(step, a, chained))
         return self.wall(step, self.queue.queue_barrier(step, a, chained))
 
+    def brake_known(self, step, a, net):
+        """:meth:`brake` on a network: the queue barrier for the members whose plan routes them
+        through throats, each braking for its pictures of the others."""
+        if self.queue is None:
+            return self.wall(step, a)
+        chained = self.queue.chained_known(net)
+        if not np.count_nonzero(chained):
+            return self.wall(step, a)
+        a = self.wall(step, self.queue.queue_barrier_known(step, a, chained, net))
+        return self.wall(step, self.queue.queue_barrier_known(step, a, chained, net))
+
 
 class ContactGuard(Part):
     """The contact guard (see the module docstring)."""

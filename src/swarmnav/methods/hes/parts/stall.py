@@ -218,6 +218,12 @@ class StallPlanner(Part):
         idx = np.flatnonzero(act)
         pt, half = lookahead(self.ctg, self.clr, np.ascontiguousarray(x[idx]), self.map0[0], self.map0[1],
                              p.stall.cell, p.stall.look, p.passage.length)
+        self._follow(step, idx, pt, half)
+
+    def _follow(self, step, idx, pt, half) -> None:
+        """:meth:`steer` for the members ``idx`` (ascending) of engaged sub-swarms, with their
+        look-ahead points ``pt`` (M, 2) [m] and narrow half-widths ``half`` (M,) [m]."""
+        p, x = self.p, step.x
         narrow = 2.0 * half < self.w_passage
         b = step.blocked[idx]
         use = (b[:, SIG_SLOT] | narrow) & np.isfinite(half)
@@ -236,6 +242,39 @@ class StallPlanner(Part):
             ok = un > 1e-6
             step.exit_dir[j[ok]] = u[ok] / un[ok, None]
             step.exit_free[j[ok]] = True
+
+
+    # ------------------------------------------------------------ on a network (docs/methods/hes-network.md)
+    def field_rows(self, x: np.ndarray, labels: np.ndarray):
+        """What the leader's plan carries of the field: for each member of an engaged sub-swarm
+        (``labels``) the look-ahead point (N, 2) [m] and narrow half-width (N,) [m] of
+        :meth:`steer`, from the leader's picture ``x`` of it (NaN for the others); None while the
+        planner is engaged for no sub-swarm."""
+        p = self.p
+        if self.ctg_step == NEVER or not any(mem.planned for mem in self.mem.values()):
+            return None
+        act = np.zeros(len(x), dtype=np.bool_)
+        for s, mem in self.mem.items():
+            if mem.planned:
+                act |= labels == s
+        idx = np.flatnonzero(act)
+        pt, half = np.full((len(x), 2), np.nan), np.full(len(x), np.nan)
+        pt[idx], half[idx] = lookahead(self.ctg, self.clr, np.ascontiguousarray(x[idx]), self.map0[0],
+                                       self.map0[1], p.stall.cell, p.stall.look, p.passage.length)
+        return pt, half
+
+    def steer_known(self, step, net):
+        """:meth:`steer` on a network: a member of an engaged sub-swarm follows the look-ahead its
+        plan carries (the leader's field read at its picture of the member); the narrow place's
+        safety distance and way out are taken from its own position."""
+        from swarmnav.methods.hes.networked import by_plan
+
+        for q, rows in by_plan(net.plans):
+            if q.field_half is None:
+                continue
+            r = rows[~np.isnan(q.field_half[rows])]
+            if len(r):
+                self._follow(step, r, q.field_pt[r], q.field_half[r])
 
 
 @njit(cache=True)

@@ -37,6 +37,8 @@ class TrailFollow(Part):
         self.count = 0
         self.cut_steps = np.zeros(n, dtype=np.int64)  # consecutive steps cut off from the sub-swarm
         self.last_cut = np.zeros(n, dtype=np.bool_)  # members following the trail this step
+        self.pictured = None  # on a network: (length, N, N, 2) each agent's trail of its pictures (NaN: not heard) ...
+        self.n_pictured = 0  # ... and how many samples it holds
 
     def record(self, x: np.ndarray) -> None:
         """Append one sample of every agent's position (the oldest is dropped when full)."""
@@ -50,7 +52,29 @@ class TrailFollow(Part):
         if step.k % self.p.trail.every == 0:
             self.record(step.x)
 
+    def observe_known(self, step, net):
+        """On a network each agent keeps its own trail: its pictures of the others (``net.kx``,
+        NaN where it has not heard them) every ``trail_every`` steps; its own row its own position."""
+        if net.k % self.p.trail.every:
+            return
+        n = len(net.kx)
+        if self.pictured is None:
+            self.pictured = np.full((self.p.trail.length, n, n, 2), np.nan)
+        if self.n_pictured == len(self.pictured):
+            self.pictured[:-1] = self.pictured[1:]
+            self.n_pictured -= 1
+        self.pictured[self.n_pictured] = np.where(net.heard[:, :, None], net.kx, np.nan)
+        self.n_pictured += 1
+
+    def steer_known(self, step, net):
+        """:meth:`steer` on a network: a member cut off retraces its own trail of its pictures of
+        the mates of the plan it flies."""
+        self._steer(step, net)
+
     def steer(self, step):
+        self._steer(step, None)
+
+    def _steer(self, step, net):
         """A member cut off from its sub-swarm -- the segments to its slot, its subleader and its
         centroid all blocked for ``cut_time``, farther than ``d_c`` from the centroid, not the
         subleader, not routed by another part -- takes as slot and corridor-centering target the
@@ -70,15 +94,20 @@ class TrailFollow(Part):
         self.cut_steps = np.where(cut, self.cut_steps + 1, 0)
         cut &= self.cut_steps * p.paper.dt >= p.trail.cut_time
         self.last_cut = cut
-        if not cut.any() or self.count == 0:
+        count = self.count if net is None else self.n_pictured
+        if not cut.any() or count == 0:
             return
         x, sig = step.x, step.sig
         for i in np.flatnonzero(cut):
-            mates = np.flatnonzero((h.labels == h.labels[i]) & ~cut)
-            t, j = newest_visible(step.ring[i], x[i, 0], x[i, 1], h.cos, h.sin, self.trail, self.count,
+            if net is None:
+                trail, mates = self.trail, np.flatnonzero((h.labels == h.labels[i]) & ~cut)
+            else:  # its own trail, the mates of its own plan
+                trail = np.ascontiguousarray(self.pictured[:count, i])
+                mates = np.flatnonzero((net.lab[i] == net.lab[i, i]) & ~cut)
+            t, j = newest_visible(step.ring[i], x[i, 0], x[i, 1], h.cos, h.sin, trail, count,
                                   mates, p.core.rho_vis, p.trail.reach, p.paper.lidar_range)
             if t >= 0:
-                step.slot[i] = step.wp[i] = self.trail[t, j]
+                step.slot[i] = step.wp[i] = trail[t, j]
                 sig[i, SIG_SLOT] = 1.0
                 # the couplings it cannot see (subleader, centroid, nearest neighbour) no longer
                 # pull it at the wall: attenuated by eq. (30) they still pinned it there
