@@ -388,8 +388,8 @@ def test_run_into_a_directory_of_other_files_needs_no_force(tmp_path):
 
 @pytest.mark.parametrize("method, default, n_diff, differs", [
     ("hes", "swarmnav", 16, ["passage.on              true -> false", "core.merge_rule         swarmnav -> paper_cooldown"]),
-    ("sph", "swarmnav", 10, ["retime       0.8 -> 0", "band_guard   true -> false", "rep_cutoff   3 -> 0",
-             "crowd_guard  true -> false", "pair_guard   true -> false"]),
+    ("sph", "swarmnav", 11, ["retime          0.8 -> 0", "band_guard      true -> false", "rep_cutoff      3 -> 0",
+             "crowd_guard     true -> false", "pair_guard      true -> false", "pair_obstacles  true -> false"]),
     ("hwvem", "mission", 1, ["wrap_neighbours  true -> false"]),
     ("ego-swarm", "swarmnav", 2, ["retry_guide     astar -> previous"]),
 ])
