@@ -135,6 +135,7 @@ def test_known_maps_are_the_default_bit_for_bit_and_scans_change_the_flight(meth
 @pytest.mark.parametrize("setting, words", [
     ("sense.map=lidar", "map"), ("sense.scan_rays=3", "scan_rays"), ("sense.scan_range=-1", "scan_range"),
     ("sense.scan_rate=0", "scan_rate"), ("sense.scan_rays=720", "sense.map=known"),
+    ("sense.scan_fill=-1", "scan_fill"), ("sense.scan_fill=1", "sense.map=known"),
 ])
 def test_bad_scan_settings_are_one_line(setting, words):
     key, value = setting.split("=")
@@ -178,3 +179,39 @@ def test_maps_from_scans_past_the_memory_limit_are_refused_in_one_line():
     assert "max_map_bytes" in str(e.value) and "sense.map=known" in str(e.value) and "\n" not in str(e.value)
     assert swarmnav.run("sph", "random_forest:density=0.35,seed=1,length=12,r_min=1.0,r_max=2.0,min_passage=1.0",
                         seed=1, steps=2, max_map_bytes=12_000_000).positions.shape[0] == 3
+
+
+def test_filling_behind_the_returns_makes_a_seen_disc_solid_and_adds_nothing_outside_it():
+    disc = Circle((0.0, 0.0), 1.0)
+    robot = [[4.0, 0.0]]
+    hollow = _scan([disc], robot)
+    solid = _scan([disc], robot, **{"sense.scan_fill": 2.0})  # the disc's diameter
+    pts = _centres(solid)
+    dist = np.linalg.norm(pts - disc.center, axis=1) - disc.radius  # exact clearance of each centre [m]
+    top = len(solid.levels) + 1
+    inside = dist < -0.15
+    # without filling the seen face is a shell and the inside beyond the inflation is free
+    assert np.any(hollow.grids[0].ravel()[inside] == 0)
+    # filled along the normals to the depth of the diameter: no cell of the disc is free, the unseen
+    # back half included, and nearly all are within the inflation of a marked cell (the lines from the
+    # seen arc, about 150 deg of it from 4 m, spread apart towards the back)
+    inner = solid.grids[0].ravel()[inside]
+    assert np.all(inner > 0) and np.mean(inner == top) > 0.98
+    # nothing outside the disc is marked: each cell's field is at least its true clearance less half
+    # a cell diagonal (a marked cell's centre lies within that of a point on or in the disc)
+    field = solid.esdf(0).values.ravel()
+    out = dist > 0
+    assert np.all(field[out] >= np.minimum(dist[out], solid.reach) - 0.5 * np.sqrt(2.0) * RES - 1e-9)
+
+
+def test_filling_behind_a_flat_face_goes_as_deep_as_asked_and_no_deeper():
+    wall = Box((1.0, -3.0), (4.0, 3.0))  # 3 m thick, its face 1 m ahead of the robot
+    maps = _scan([wall], [[0.0, 0.0]], **{"sense.scan_fill": 1.0})
+    field = maps.esdf(0).values.ravel()
+    pts = _centres(maps)
+    row = np.abs(pts[:, 1]) < 0.5  # in front of the robot: the face seen head-on
+    filled = row & (pts[:, 0] > 1.05) & (pts[:, 0] < 1.95)
+    assert filled.sum() > 50 and np.all(field[filled] < 0.5 * np.sqrt(2.0) * RES + 1e-9)
+    # 1 m of fill behind the face at x = 1 m: the field 0.5 m beyond x = 2 m is at least ~0.5 m
+    deep = row & (pts[:, 0] > 2.45) & (pts[:, 0] < 2.55)
+    assert np.all(field[deep] >= 0.5 - 0.5 * np.sqrt(2.0) * RES - 1e-9)

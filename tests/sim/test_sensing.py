@@ -238,6 +238,7 @@ def test_methods_lists_the_perception_options_a_method_honours(capsys):
     main(["methods", "sph"])  # no range sensor of its own, but the scans of its map from scans
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("perception"))
     assert "sense.map [-] known | scans" in line and "sense.scan_rate [Hz] (0, 1000]" in line
+    assert "sense.scan_fill [m] [0, 100]" in line
     assert "sense.dropout" in line and "apply to the scans of sense.map=scans" in line
 
 

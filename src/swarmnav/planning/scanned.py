@@ -11,11 +11,15 @@ placed in the world from the robot's *estimated* pose, ``p_hat + r u``, and the 
 in is marked in that robot's :class:`~swarmnav.planning.maps.OccupancyMaps` grid for good
 (accumulated; no free-space clearing: a cell once hit stays occupied). The clearance classes the
 grid search reads and the distance field the optimisers read follow from the hit cells, updated
-around each newly hit cell only (:meth:`OccupancyMaps.integrate`). Unknown space is free.
+around each newly hit cell only (:meth:`OccupancyMaps.integrate`). Unknown space is free, but
+with ``sense.scan_fill`` = D > 0 each return also marks the cells up to D behind it along the
+surface's inward normal (:meth:`Scanner._inward`), so a seen face has a solid inside: on a map of
+faces alone EGO-Swarm's collision repair routes through the free inside and its plans fail.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -45,6 +49,12 @@ class Scanner:
             self.directions = fibonacci_sphere(self.rays)
             self._cast = lambda at: range_scan(geom, at, self.directions, self.max_range)
         maps.use_scans(reach)
+        self.fill = float(sense.scan_fill)  # [m] depth marked behind each return
+        # the depths behind a return that are marked: every half cell up to the fill depth
+        half = 0.5 * maps.resolution
+        self._depths = half * np.arange(1, int(math.ceil(self.fill / half)) + 1) if self.fill > 0 else np.zeros(0)
+        if len(self._depths):
+            self._depths[-1] = self.fill
         self.scans = 0
         self.returns = 0
 
@@ -58,10 +68,37 @@ class Scanner:
         ranges = obs.scan(self._cast, x, self.directions, self.max_range)  # (N, R) [m]
         hit = ranges < self.max_range
         points = x[:, None, :] + ranges[:, :, None] * self.directions[None, :, :]
+        if len(self._depths):
+            inward, filled = self._inward(points, ranges, hit)
+            behind = points[:, :, None, :] + self._depths[None, None, :, None] * inward[:, :, None, :]
+            points = np.concatenate([points, behind.reshape(n, -1, points.shape[2])], axis=1)
+            hit = np.concatenate([hit, np.repeat(filled, len(self._depths), axis=1)], axis=1)
         gained = self.maps.integrate(points, hit)
         self.scans += 1
         self.returns += int(hit.sum())
         return gained
+
+    def _inward(self, points: np.ndarray, ranges: np.ndarray, hit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The direction into the obstacle behind each return, (N, R, dim) unit vectors, and (N, R)
+        bool the returns to fill behind. 2-D: the surface normal from the neighbouring returns of the
+        ring (the chord through both, or the one neighbour at a silhouette's edge), turned away
+        from the sensor; a return with no neighbour on the same surface (farther apart than three
+        ray spacings at its range plus two cells) is not filled, as its surface is unknown. 3-D: the
+        ray direction (the Fibonacci sphere has no ordered neighbours)."""
+        u = np.broadcast_to(self.directions[None], points.shape)
+        if self.maps.dim != 2:
+            return u, hit
+        lim = 3.0 * ranges * (2.0 * math.pi / self.rays) + 2.0 * self.maps.resolution  # [m]
+        prev, nxt = np.roll(points, 1, axis=1), np.roll(points, -1, axis=1)
+        ok_p = hit & np.roll(hit, 1, axis=1) & (np.linalg.norm(points - prev, axis=2) < lim)
+        ok_n = hit & np.roll(hit, -1, axis=1) & (np.linalg.norm(nxt - points, axis=2) < lim)
+        tangent = np.where((ok_p & ok_n)[..., None], nxt - prev,
+                           np.where(ok_n[..., None], nxt - points, np.where(ok_p[..., None], points - prev, 0.0)))
+        length = np.linalg.norm(tangent, axis=2)
+        filled = (ok_p | ok_n) & (length > 1e-12)
+        normal = np.stack([-tangent[..., 1], tangent[..., 0]], axis=2) / np.maximum(length, 1e-12)[..., None]
+        normal *= np.where(np.sum(normal * u, axis=2) < 0.0, -1.0, 1.0)[..., None]  # away from the sensor
+        return normal, filled
 
     def summary(self) -> dict[str, float]:
         """Run metrics of the scans: scans taken per robot, and the mean fraction of each robot's

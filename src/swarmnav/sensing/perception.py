@@ -46,7 +46,7 @@ TAG = 0x73656E
 #: The options a method honours only if it reads a range sensor (``range_sensor = True``).
 RANGE_OPTIONS = ("range_noise", "dropout", "fov")
 #: The options that shape the scans a map-based planner builds its map from (``sense.map = scans``).
-SCAN_OPTIONS = ("scan_rays", "scan_range", "scan_rate")
+SCAN_OPTIONS = ("scan_rays", "scan_range", "scan_rate", "scan_fill")
 #: The options a method honours only if it can build its map from scans (``map_sensor = True``).
 MAP_OPTIONS = ("map", *SCAN_OPTIONS)
 #: [m/s] below this speed an agent's heading is the one it last had.
@@ -89,6 +89,10 @@ class SenseParams:
                               "sense.map = scans only")
     scan_rate: float = param(10.0, "Hz", "(0, 1000]", "ours (10 Hz: a Livox Mid-360 / Velodyne VLP-16 default)",
                              "scans per second, every robot at once, at most one a control step; sense.map = scans only")
+    scan_fill: float = param(0.0, "m", "[0, 100]", "ours (docs/sensing.md, Filling behind a return)",
+                             "depth behind each return also marked hit, along the surface's inward normal (2-D: "
+                             "from the neighbouring returns of the ring; 3-D: along the ray), so a seen face has a "
+                             "solid inside instead of a free one; 0: the hit cell only; sense.map = scans only")
 
     @property
     def perfect(self) -> bool:
