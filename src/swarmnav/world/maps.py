@@ -510,7 +510,8 @@ def _ply_points(p: Path, src: str) -> np.ndarray:
         missing = [a for a in "xyz" if a not in (v.dtype.names or ())]
         if missing:
             raise ScenarioError(f"{src}: the vertices have no {', '.join(missing)} property")
-        return np.column_stack([np.asarray(v[a], dtype=np.float64) for a in "xyz"])
+        with np.errstate(invalid="ignore", over="ignore"):  # a damaged value becomes NaN or inf: refused below
+            return np.column_stack([np.asarray(v[a], dtype=np.float64) for a in "xyz"])
     except ScenarioError:
         raise
     except (PlyParseError, ValueError, TypeError, KeyError, IndexError, EOFError, OSError, UnicodeError,
